@@ -1,0 +1,63 @@
+// A PDSM in memory: its header (geometry and bake metadata) and one attenuation function per
+// pixel, stored two-level as the thesis proposes (4.2.4): offsets into one vertex array.
+#ifndef PDSM_CORE_PDSM_PDSM_IMAGE_H_
+#define PDSM_CORE_PDSM_PDSM_IMAGE_H_
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/pdsm/attenuation_function.h"
+#include "core/pdsm/pdsm_geometry.h"
+#include "core/scene/scene.h"
+
+namespace pdsm {
+
+inline constexpr int kPdsmFormatVersion = 1;
+
+// Everything a reader needs to evaluate the PDSM and to know how it was made.
+struct PdsmHeader {
+  int format_version = kPdsmFormatVersion;
+  std::string scene_name;
+  LightShape light_shape = LightShape::kRect;
+  double light_half_width = 0, light_half_height = 0, light_radius = 0, tan_half_angle = 0;
+  PdsmGeometry geometry;
+  int samples = 0;
+  int shadow_map_resolution = 0;
+  double epsilon = 0;
+  CompressionMetric compression_metric = CompressionMetric::kVertical;
+  double depth_bias = 0;   // world units, as applied
+  double slope_bias = 0;
+  SamplingPattern sampling = SamplingPattern::kStratified;
+  uint64_t seed = 0;
+  int tile_size = 0;       // PDSM pixels per tile side, also the EXR tile size
+};
+
+// One rectangle of pixels with their functions: the unit of writing and of assembling.
+struct PdsmTile {
+  int x0 = 0, y0 = 0;       // first pixel
+  int width = 0, height = 0;
+  std::vector<uint64_t> offsets;  // width * height + 1, row-major from (x0, y0)
+  std::vector<Vertex> vertices;
+
+  std::span<const Vertex> Function(int local_x, int local_y) const {
+    const size_t p = static_cast<size_t>(local_y) * width + local_x;
+    return {vertices.data() + offsets[p], vertices.data() + offsets[p + 1]};
+  }
+};
+
+struct PdsmImage {
+  PdsmHeader header;
+  std::vector<uint64_t> offsets;  // width * height + 1, row-major
+  std::vector<Vertex> vertices;
+
+  std::span<const Vertex> Function(int x, int y) const {
+    const size_t p = static_cast<size_t>(y) * header.geometry.width + x;
+    return {vertices.data() + offsets[p], vertices.data() + offsets[p + 1]};
+  }
+};
+
+}  // namespace pdsm
+
+#endif  // PDSM_CORE_PDSM_PDSM_IMAGE_H_

@@ -1,0 +1,32 @@
+// Exact attenuation for planar polygonal lights and triangle occluders: the fraction of the
+// light's area hidden from a point p is area(light ∩ ∪ projections of the occluders from p
+// onto the light plane) / area(light). Computed with Boost.Geometry's polygon booleans in
+// double precision. This is the ground truth the bake is measured against.
+#ifndef PDSM_CORE_REFERENCE_EXACT_VISIBILITY_H_
+#define PDSM_CORE_REFERENCE_EXACT_VISIBILITY_H_
+
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "absl/status/statusor.h"
+#include "core/scene/scene.h"
+
+namespace pdsm {
+
+// All in light space (light plane z = 0, scene at z > 0). `light_polygon` is a simple polygon
+// in the plane (x, y), either orientation. `triangles` holds 3 vertices per triangle; parts
+// of triangles at z <= 0 or at z >= p.z (not between light and point) are clipped away.
+// Returns a value in [0, 1].
+double ExactHiddenFraction(std::span<const glm::dvec2> light_polygon,
+                           std::span<const glm::dvec3> triangles, const glm::dvec3& p_light);
+
+// Exact attenuation of world points for a scene's casters. Rect lights are exact; disk lights
+// use an inscribed 512-gon (relative area error < 3e-5). Sun: UNIMPLEMENTED.
+absl::StatusOr<std::vector<double>> ExactAttenuation(const Scene& scene,
+                                                     std::span<const glm::dvec3> points_world);
+
+}  // namespace pdsm
+
+#endif  // PDSM_CORE_REFERENCE_EXACT_VISIBILITY_H_

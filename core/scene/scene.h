@@ -1,0 +1,82 @@
+// The validated, in-memory scene a bake works on: world-space triangles in double precision,
+// one light with its frame, and the bake settings with every default filled in.
+#ifndef PDSM_CORE_SCENE_SCENE_H_
+#define PDSM_CORE_SCENE_SCENE_H_
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "core/geometry/light_frame.h"
+
+namespace pdsm {
+
+enum class MeshRole { kCasterAndReceiver, kCasterOnly, kReceiverOnly };
+
+inline bool Casts(MeshRole role) { return role != MeshRole::kReceiverOnly; }
+inline bool Receives(MeshRole role) { return role != MeshRole::kCasterOnly; }
+
+struct TriangleMesh {
+  std::string label;                        // "meshes[2] (models/dragon.ply)", for messages
+  MeshRole role = MeshRole::kCasterAndReceiver;
+  std::vector<glm::dvec3> positions_world;  // transformed, double
+  std::vector<uint32_t> indices;            // 3 per triangle
+};
+
+enum class LightShape { kRect, kDisk, kSun };
+
+struct LightSpec {
+  LightShape shape = LightShape::kRect;
+  // Rect and disk: the light's own frame (centre on the light, n into the scene).
+  // Sun: only the axes are meaningful here; the bake plan chooses the centre.
+  LightFrame frame;
+  double half_width = 0;      // rect, along u, world units
+  double half_height = 0;     // rect, along v, world units
+  double radius = 0;          // disk, world units
+  double tan_half_angle = 0;  // sun: tan(angular diameter / 2)
+};
+
+enum class SamplingPattern { kStratified, kUniform };
+enum class CompressionMetric { kVertical, kPerpendicular };
+
+struct FrustumOverride {
+  double s_min, s_max, t_min, t_max;
+  double z_near, z_far;
+};
+
+// Documented in docs/scene_format.md; ValidateBakeSettings enforces the limits.
+struct BakeSettings {
+  int width = 512;
+  int height = 512;
+  int samples = 64;
+  int shadow_map_resolution = 512;
+  double epsilon = 0.01;
+  std::optional<double> depth_bias;  // unset: derived from the scene size by the plan
+  double slope_bias = 1.0;
+  int tile_size = 64;
+  uint64_t seed = 1;
+  SamplingPattern sampling = SamplingPattern::kStratified;
+  CompressionMetric compression_metric = CompressionMetric::kVertical;
+  std::optional<FrustumOverride> frustum;
+};
+
+struct Scene {
+  std::string name;
+  std::string source_path;  // the scene file, for messages
+  std::vector<TriangleMesh> meshes;
+  LightSpec light;
+  BakeSettings bake;
+};
+
+// Limits on user input (docs/scene_format.md). Larger requests are refused, not clamped.
+inline constexpr int kMaxPdsmResolution = 16384;
+inline constexpr int kMaxSamples = 65536;
+inline constexpr int kMaxShadowMapResolution = 16384;
+inline constexpr int kMaxTileSize = 4096;
+
+}  // namespace pdsm
+
+#endif  // PDSM_CORE_SCENE_SCENE_H_

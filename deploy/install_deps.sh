@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Installs every build, test and runtime dependency of pdsm from Debian 12's archive.
+# Run as root on a fresh Debian 12 (bookworm) machine. Idempotent.
+set -euo pipefail
+
+packages=(
+  # toolchain
+  build-essential cmake ninja-build pkg-config git ca-certificates
+  # RPC and schema: the scene is a protobuf message read with its JSON mapping
+  libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc libabsl-dev
+  # math, rendering, files
+  libglm-dev libosmesa6-dev libgl-dev libopenexr-dev openexr libpng-dev
+  # meshes, flags, logs, tests
+  libassimp-dev libcli11-dev libspdlog-dev libfmt-dev libgtest-dev libgmock-dev
+  # exact polygon clipping for the reference, job state
+  libboost-dev libsqlite3-dev
+)
+
+export DEBIAN_FRONTEND=noninteractive
+if [[ "${PDSM_SKIP_APT_UPDATE:-0}" != 1 ]]; then
+  apt-get update -q
+fi
+apt-get install -y -q --no-install-recommends "${packages[@]}"

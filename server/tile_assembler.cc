@@ -1,0 +1,1 @@
+namespace pdsm {}  // being written

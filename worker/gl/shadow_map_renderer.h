@@ -1,0 +1,57 @@
+// Renders one parallel shadow map (DESIGN.md "Geometry of the bake") with OSMesa, headless:
+// the shadow map of light sample k has the PDSM's orientation, so a light-space point
+// (x, y, z) lands at ((x - a) / z, (y - b) / z) (perspective, sample at (a, b, 0)) or at
+// (x - a z, y - b z) (sun, sample direction (a, b, 1)), and its depth is the same light-space
+// z as the PDSM's. Each texel stores the biased light-space depth of the nearest caster, or
+// +infinity where there is none.
+#ifndef PDSM_WORKER_GL_SHADOW_MAP_RENDERER_H_
+#define PDSM_WORKER_GL_SHADOW_MAP_RENDERER_H_
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "core/bake/shadow_map_lattice.h"
+#include "core/pdsm/pdsm_geometry.h"
+
+namespace pdsm {
+
+struct ShadowMapCamera {
+  Projection projection = Projection::kPerspective;
+  glm::dvec2 sample{0.0};  // perspective: (a, b) on the light plane; sun: direction slopes
+  ShadowMapLattice lattice;
+  ShadowMapWindow window;  // the texels to render
+  double z_clip_near = 0;  // light-space depth; nearer geometry is clipped
+  double z_clip_far = 0;   // sun only: farther geometry is clipped
+  // Bias (one function: BiasedDepth in shadow_map.frag): stored depth =
+  //   z + depth_bias + slope_bias * footprint_scale * (|dz/dx| + |dz/dy|) per texel.
+  double depth_bias = 0;
+  double slope_bias = 0;
+  double footprint_scale = 1;
+};
+
+// Owns an OSMesa core-profile context and the GL objects made in it. Not thread-safe; make one
+// per thread. Move-only.
+class ShadowMapRenderer {
+ public:
+  static absl::StatusOr<std::unique_ptr<ShadowMapRenderer>> Create();
+  virtual ~ShadowMapRenderer() = default;
+
+  // Uploads the casters, light-space positions relative to the light centre (float is
+  // enough there). Replaces the previous geometry.
+  virtual absl::Status SetGeometry(std::span<const glm::vec3> positions_light,
+                                   std::span<const uint32_t> indices) = 0;
+
+  // Renders `camera.window` into `depth` (resized to width * height, row-major, row 0 at the
+  // window's lowest t). Windows larger than the GL limits are rendered in pieces.
+  virtual absl::Status Render(const ShadowMapCamera& camera, std::vector<float>* depth) = 0;
+};
+
+}  // namespace pdsm
+
+#endif  // PDSM_WORKER_GL_SHADOW_MAP_RENDERER_H_
