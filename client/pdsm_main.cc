@@ -1,1 +1,21 @@
-int main() { return 0; }
+// `pdsm`: bake, query and inspect penumbra deep shadow maps.
+#include <CLI/CLI.hpp>
+
+#include "client/cli_common.h"
+#include "client/commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"pdsm: penumbra deep shadow maps (soft shadows from area lights)"};
+  app.require_subcommand(1);
+  int exit_code = pdsm::kExitOk;
+  pdsm::RegisterBakeCommand(app, &exit_code);
+  pdsm::RegisterQueryCommand(app, &exit_code);
+  pdsm::RegisterInfoCommand(app, &exit_code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? pdsm::kExitOk : pdsm::kExitBadInput;
+  }
+  return exit_code;
+}

@@ -1,1 +1,103 @@
-namespace pdsm {}  // being written
+#include "worker/scan_convert.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace pdsm {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Depth at fraction f of the segment: linear in w = 1/z for perspective shadow maps, in z for
+// the sun's orthographic ones.
+class DepthAlongRay {
+ public:
+  DepthAlongRay(const RayInShadowMap& ray, Projection projection)
+      : perspective_(projection == Projection::kPerspective),
+        near_(perspective_ ? 1.0 / ray.z_near : ray.z_near),
+        far_(perspective_ ? (std::isinf(ray.z_far) ? 0.0 : 1.0 / ray.z_far) : ray.z_far) {}
+
+  double operator()(double f) const {
+    if (f >= 1.0) return perspective_ ? (far_ == 0.0 ? kInf : 1.0 / far_) : far_;
+    const double p = near_ + f * (far_ - near_);
+    return perspective_ ? 1.0 / p : p;
+  }
+
+ private:
+  bool perspective_;
+  double near_, far_;
+};
+
+// Follows the ray's shadow state through successive texel pieces and emits its events.
+class EventEmitter {
+ public:
+  explicit EventEmitter(std::vector<Event>* events) : events_(events) {}
+
+  void Piece(double z_in, double z_out, double z_sm) {
+    if (z_sm <= z_in) {
+      if (!shadowed_) Emit(z_in, +1);
+      shadowed_ = true;
+    } else if (z_sm < z_out) {
+      if (shadowed_) Emit(z_in, -1);
+      Emit(z_sm, +1);
+      shadowed_ = true;
+    } else if (shadowed_) {
+      Emit(z_in, -1);
+      shadowed_ = false;
+    }
+  }
+
+ private:
+  void Emit(double z, int32_t count) { events_->push_back(Event{static_cast<float>(z), count}); }
+
+  std::vector<Event>* events_;
+  bool shadowed_ = false;
+};
+
+}  // namespace
+
+void ScanConvertRay(const ShadowMapView& sm, const RayInShadowMap& ray, Projection projection,
+                    std::vector<Event>* events) {
+  const ShadowMapLattice& lat = sm.lattice;
+  const ShadowMapWindow& win = sm.window;
+  // Window-relative continuous texel coordinates of the segment's ends.
+  const glm::dvec2 origin(lat.s_origin + win.x0 * lat.pitch_s, lat.t_origin + win.y0 * lat.pitch_t);
+  const glm::dvec2 pitch(lat.pitch_s, lat.pitch_t);
+  const glm::dvec2 p0 = (ray.st_near - origin) / pitch;
+  const glm::dvec2 p1 = (ray.st_far - origin) / pitch;
+  const glm::dvec2 d = p1 - p0;
+
+  // Amanatides–Woo traversal over f in [0, 1].
+  int ix = std::clamp(static_cast<int>(std::floor(p0.x)), 0, win.width - 1);
+  int iy = std::clamp(static_cast<int>(std::floor(p0.y)), 0, win.height - 1);
+  const int step_x = d.x > 0 ? 1 : -1;
+  const int step_y = d.y > 0 ? 1 : -1;
+  const double delta_x = d.x != 0 ? std::abs(1.0 / d.x) : kInf;
+  const double delta_y = d.y != 0 ? std::abs(1.0 / d.y) : kInf;
+  double next_x = d.x != 0 ? ((d.x > 0 ? ix + 1 : ix) - p0.x) / d.x : kInf;
+  double next_y = d.y != 0 ? ((d.y > 0 ? iy + 1 : iy) - p0.y) / d.y : kInf;
+
+  const DepthAlongRay depth_at(ray, projection);
+  EventEmitter emitter(events);
+  double z_in = ray.z_near;
+  while (true) {
+    const double f_out = std::min({next_x, next_y, 1.0});
+    const double z_out = depth_at(f_out);
+    const double z_sm = sm.depth[static_cast<size_t>(iy) * win.width + ix];
+    emitter.Piece(z_in, z_out, z_sm);
+    if (f_out >= 1.0) break;
+    // Step into the next texel; stepping out of the window can only be rounding at the end.
+    if (next_x <= next_y) {
+      ix += step_x;
+      next_x += delta_x;
+    } else {
+      iy += step_y;
+      next_y += delta_y;
+    }
+    if (ix < 0 || ix >= win.width || iy < 0 || iy >= win.height) break;
+    z_in = z_out;
+  }
+}
+
+}  // namespace pdsm

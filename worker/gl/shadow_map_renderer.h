@@ -39,16 +39,32 @@ struct ShadowMapCamera {
 // per thread. Move-only.
 class ShadowMapRenderer {
  public:
+  struct Options {
+    // Largest piece, in texels per side, that one draw renders; larger windows are split.
+    // 0: the GL limits (GL_MAX_TEXTURE_SIZE, GL_MAX_VIEWPORT_DIMS), at most 8192. Odd values
+    // are rounded down to even (pieces keep 2x2 derivative quads aligned with the window).
+    // Tests set it small to exercise the splitting.
+    int max_piece_size = 0;
+  };
+
+  // Creates the OSMesa context, current on the calling thread from then on, and the program.
+  // INTERNAL when OSMesa or GL fails; INVALID_ARGUMENT for bad options.
   static absl::StatusOr<std::unique_ptr<ShadowMapRenderer>> Create();
+  static absl::StatusOr<std::unique_ptr<ShadowMapRenderer>> Create(const Options& options);
   virtual ~ShadowMapRenderer() = default;
 
   // Uploads the casters, light-space positions relative to the light centre (float is
-  // enough there). Replaces the previous geometry.
+  // enough there), as triangles (3 indices each). Replaces the previous geometry; empty is
+  // fine. INVALID_ARGUMENT (geometry unchanged) for an index out of range, a count not a
+  // multiple of 3, or a non-finite position.
   virtual absl::Status SetGeometry(std::span<const glm::vec3> positions_light,
                                    std::span<const uint32_t> indices) = 0;
 
   // Renders `camera.window` into `depth` (resized to width * height, row-major, row 0 at the
-  // window's lowest t). Windows larger than the GL limits are rendered in pieces.
+  // window's lowest t). Windows larger than the GL limits are rendered in pieces. Output is
+  // bit-identical for the same camera and geometry. INVALID_ARGUMENT for a bad camera
+  // (perspective needs z_clip_near > 0; orthographic z_clip_far > z_clip_near; pitches > 0);
+  // INTERNAL when GL fails. REQUIRES: called on the thread that created the renderer.
   virtual absl::Status Render(const ShadowMapCamera& camera, std::vector<float>* depth) = 0;
 };
 

@@ -1,0 +1,141 @@
+// `pdsm bake SCENE.json -o OUT.exr [overrides]`: a local single-node bake.
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <regex>
+#include <string>
+
+#include "absl/strings/str_format.h"
+#include "client/cli_common.h"
+#include "client/commands.h"
+#include "client/local_bake.h"
+#include "client/progress_reporter.h"
+#include "core/scene/scene_loader.h"
+
+namespace pdsm {
+namespace {
+
+struct BakeFlags {
+  std::string scene_path;
+  std::string output_path;
+  std::string preview_path;
+  bool no_preview = false;
+  std::string resolution;
+  std::optional<int64_t> samples, sm_resolution, tile_size;
+  std::optional<double> epsilon;
+  int threads = 0, samples_per_task = 0;
+};
+
+absl::StatusOr<pdsm::v1::BakeParams> Overrides(const BakeFlags& flags) {
+  pdsm::v1::BakeParams params;
+  if (!flags.resolution.empty()) {
+    std::smatch m;
+    static const std::regex kWxH(R"((\d{1,9})x(\d{1,9}))");
+    if (!std::regex_match(flags.resolution, m, kWxH)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "--resolution: expected WIDTHxHEIGHT, e.g. 512x512 (got \"%s\")", flags.resolution));
+    }
+    params.add_resolution(std::stoul(m[1]));
+    params.add_resolution(std::stoul(m[2]));
+  }
+  // Values are range-checked with the scene's own fields (bake.samples, ...).
+  auto set_count = [](const char* flag, const std::optional<int64_t>& value,
+                      auto setter) -> absl::Status {
+    if (!value) return absl::OkStatus();
+    if (*value < 0 || *value > UINT32_MAX) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("%s: must be a positive count (got %d)", flag, *value));
+    }
+    setter(static_cast<uint32_t>(*value));
+    return absl::OkStatus();
+  };
+  absl::Status s = set_count("--samples", flags.samples,
+                             [&](uint32_t v) { params.set_samples(v); });
+  if (s.ok()) {
+    s = set_count("--sm-resolution", flags.sm_resolution,
+                  [&](uint32_t v) { params.set_shadow_map_resolution(v); });
+  }
+  if (s.ok()) {
+    s = set_count("--tile-size", flags.tile_size, [&](uint32_t v) { params.set_tile_size(v); });
+  }
+  if (!s.ok()) return s;
+  if (flags.epsilon) params.set_epsilon(*flags.epsilon);
+  return params;
+}
+
+std::string HumanBytes(uint64_t bytes) {
+  if (bytes >= (1u << 20)) return absl::StrFormat("%.1f MiB", bytes / 1048576.0);
+  if (bytes >= 1024) return absl::StrFormat("%.1f KiB", bytes / 1024.0);
+  return absl::StrFormat("%d B", bytes);
+}
+
+void PrintSummary(const Scene& scene, const BakeFlags& flags, const std::string& preview,
+                  const BakeSummary& s) {
+  std::fprintf(stderr,
+               "baked \"%s\": %dx%d PDSM, %d samples, %d tiles (%d all lit), %lld tasks\n"
+               "  time %.2fs; shadow maps %.2f thread-s (%lld maps, %.1f Mtexels), "
+               "scan conversion %.2f thread-s, merge+compress %.2f thread-s\n"
+               "  events %lld -> %lld merged -> %lld consolidated -> %lld vertices\n",
+               scene.name.c_str(), scene.bake.width, scene.bake.height, scene.bake.samples, s.tiles,
+               s.tiles_all_lit, static_cast<long long>(s.tasks), s.seconds,
+               s.tasks_stats.shadow_map_seconds, static_cast<long long>(s.tasks_stats.shadow_maps),
+               s.tasks_stats.shadow_map_texels / 1e6, s.tasks_stats.scan_seconds,
+               s.assembly.seconds, static_cast<long long>(s.tasks_stats.events),
+               static_cast<long long>(s.assembly.merged_events),
+               static_cast<long long>(s.assembly.consolidated_events),
+               static_cast<long long>(s.assembly.vertices));
+  std::printf("pdsm: %s (%s)\n", flags.output_path.c_str(), HumanBytes(s.file_bytes).c_str());
+  if (!preview.empty()) std::printf("preview: %s\n", preview.c_str());
+}
+
+int RunBake(const BakeFlags& flags) {
+  absl::StatusOr<pdsm::v1::BakeParams> overrides = Overrides(flags);
+  if (!overrides.ok()) return ReportError(overrides.status());
+  absl::StatusOr<Scene> scene = LoadSceneFile(flags.scene_path, *overrides);
+  if (!scene.ok()) return ReportError(scene.status());
+
+  LocalBakeOptions options;
+  options.output_path = flags.output_path;
+  if (!flags.no_preview) {
+    options.preview_path = !flags.preview_path.empty()
+                               ? flags.preview_path
+                               : std::filesystem::path(flags.output_path)
+                                     .replace_extension(".png")
+                                     .string();
+  }
+  options.threads = flags.threads;
+  options.samples_per_task = flags.samples_per_task;
+  ProgressReporter progress("bake " + scene->name);
+  options.on_progress = [&progress](const BakeProgress& p) {
+    progress.Update(p.tasks_done, p.tasks_total, p.seconds);
+  };
+  absl::StatusOr<BakeSummary> summary = RunLocalBake(*scene, options);
+  progress.Finish();
+  if (!summary.ok()) return ReportError(summary.status());
+  PrintSummary(*scene, flags, options.preview_path, *summary);
+  return kExitOk;
+}
+
+}  // namespace
+
+void RegisterBakeCommand(CLI::App& app, int* exit_code) {
+  auto flags = std::make_shared<BakeFlags>();
+  CLI::App* cmd = app.add_subcommand("bake", "Bake a PDSM locally (no server needed)");
+  cmd->add_option("scene", flags->scene_path, "Scene file (JSON)")->required();
+  cmd->add_option("-o,--output", flags->output_path, "Output PDSM (.exr)")->required();
+  cmd->add_option("--resolution", flags->resolution, "PDSM resolution WIDTHxHEIGHT");
+  cmd->add_option("--samples", flags->samples, "Light samples");
+  cmd->add_option("--sm-resolution", flags->sm_resolution, "Shadow-map texels across the window");
+  cmd->add_option("--epsilon", flags->epsilon, "Compression tolerance in [0, 1]");
+  cmd->add_option("--tile-size", flags->tile_size, "PDSM pixels per tile side");
+  cmd->add_option("--threads", flags->threads, "Worker threads (default: one per core)")
+      ->check(CLI::Range(1, 1024));
+  cmd->add_option("--samples-per-task", flags->samples_per_task,
+                  "Light samples per task (default: all); does not change the result")
+      ->check(CLI::Range(1, 1 << 20));
+  cmd->add_option("--preview", flags->preview_path, "Preview PNG (default: OUT with .png)");
+  cmd->add_flag("--no-preview", flags->no_preview, "Write no preview image");
+  cmd->callback([flags, exit_code] { *exit_code = RunBake(*flags); });
+}
+
+}  // namespace pdsm

@@ -1,0 +1,16 @@
+// The `pdsm` subcommands. Each registers itself on the app; its callback stores the process
+// exit code in *exit_code.
+#ifndef PDSM_CLIENT_COMMANDS_H_
+#define PDSM_CLIENT_COMMANDS_H_
+
+#include <CLI/CLI.hpp>
+
+namespace pdsm {
+
+void RegisterBakeCommand(CLI::App& app, int* exit_code);
+void RegisterQueryCommand(CLI::App& app, int* exit_code);
+void RegisterInfoCommand(CLI::App& app, int* exit_code);
+
+}  // namespace pdsm
+
+#endif  // PDSM_CLIENT_COMMANDS_H_

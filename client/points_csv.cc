@@ -1,0 +1,38 @@
+#include "client/points_csv.h"
+
+#include <cmath>
+#include <fstream>
+
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "absl/strings/str_split.h"
+#include "absl/strings/strip.h"
+
+namespace pdsm {
+
+absl::StatusOr<std::vector<QueryPoint>> ReadPointsCsv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) return absl::NotFoundError(absl::StrFormat("%s: cannot open points file", path));
+  std::vector<QueryPoint> points;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    const absl::string_view text = absl::StripAsciiWhitespace(line);
+    if (text.empty() || text[0] == '#') continue;
+    std::vector<absl::string_view> fields = absl::StrSplit(text, ',');
+    double xyz[3];
+    bool ok = fields.size() == 3;
+    for (size_t k = 0; ok && k < 3; ++k) {
+      fields[k] = absl::StripAsciiWhitespace(fields[k]);
+      ok = absl::SimpleAtod(fields[k], &xyz[k]) && std::isfinite(xyz[k]);
+    }
+    if (!ok) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s:%d: expected three finite numbers \"x,y,z\", got \"%s\"", path, number, text));
+    }
+    points.push_back(QueryPoint{{xyz[0], xyz[1], xyz[2]}, absl::StrJoin(fields, ",")});
+  }
+  return points;
+}
+
+}  // namespace pdsm

@@ -1,0 +1,24 @@
+// Query points: a text file with one "x,y,z" per line (world units). Blank lines and lines
+// starting with '#' are skipped. Errors name the file and line.
+#ifndef PDSM_CLIENT_POINTS_CSV_H_
+#define PDSM_CLIENT_POINTS_CSV_H_
+
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "absl/status/statusor.h"
+
+namespace pdsm {
+
+struct QueryPoint {
+  glm::dvec3 world;
+  std::string text;  // the line's x,y,z as written, echoed in the output
+};
+
+absl::StatusOr<std::vector<QueryPoint>> ReadPointsCsv(const std::string& path);
+
+}  // namespace pdsm
+
+#endif  // PDSM_CLIENT_POINTS_CSV_H_

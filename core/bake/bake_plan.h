@@ -1,0 +1,62 @@
+// The bake plan: everything fixed before any shadow map is rendered. The PDSM frustum fitted
+// to the scene, the global shadow-map lattice, the light samples, the tile grid, and the
+// scene's triangles in light space. A plan depends only on the scene, so every process of a
+// distributed bake computes the same plan.
+#ifndef PDSM_CORE_BAKE_BAKE_PLAN_H_
+#define PDSM_CORE_BAKE_BAKE_PLAN_H_
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "absl/status/statusor.h"
+#include "core/bake/shadow_map_lattice.h"
+#include "core/pdsm/pdsm_image.h"
+#include "core/scene/scene.h"
+
+namespace pdsm {
+
+struct TileRect {
+  int index = 0;
+  int x0 = 0, y0 = 0, width = 0, height = 0;  // PDSM pixels
+};
+
+// Triangles in light space, relative to the light centre: small numbers, so float suffices
+// for rendering even when the world sits 1e6 units from its origin.
+struct LightSpaceMesh {
+  std::vector<glm::vec3> positions;
+  std::vector<uint32_t> indices;
+  size_t TriangleCount() const { return indices.size() / 3; }
+};
+
+struct BakePlan {
+  PdsmHeader header;                // geometry and knobs, as the file will store them
+  std::vector<glm::dvec2> samples;  // see core/sampling/light_samples.h
+  ShadowMapLattice lattice;
+  double z_clip_near = 0;           // shadow maps clip geometry nearer than this
+  std::vector<TileRect> tiles;      // row-major grid of header.tile_size
+  int tiles_x = 0, tiles_y = 0;
+  LightSpaceMesh casters;
+  LightSpaceMesh receivers;
+
+  const PdsmGeometry& geometry() const { return header.geometry; }
+  bool has_casters() const { return !casters.indices.empty(); }
+};
+
+// The constant depth bias used when the scene sets none: float32 depths round at about
+// 6e-8 relative, the rasterizer's interpolation adds a few ulps; 1e-5 of the farthest depth
+// covers both with margin. The slope-scaled part is added per texel by the renderer.
+double DefaultDepthBias(double z_far);
+
+// Widest field of view a perspective PDSM is fitted to: |s|, |t| <= tan(85 degrees).
+inline constexpr double kMaxWindowTangent = 11.430052302761343;
+
+// A scene with nothing in front of the light gets a default frustum (window [-1, 1]^2,
+// depths [1, 2]) and bakes to an all-lit PDSM. Errors: INVALID_ARGUMENT for a frustum
+// override the projection cannot use.
+absl::StatusOr<BakePlan> PlanBake(const Scene& scene);
+
+}  // namespace pdsm
+
+#endif  // PDSM_CORE_BAKE_BAKE_PLAN_H_

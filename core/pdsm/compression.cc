@@ -1,0 +1,130 @@
+#include "core/pdsm/compression.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace pdsm {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Output values are stored as float: shrink the tolerance by float's rounding of values in
+// [0, 1] so the stored result still meets epsilon.
+double StoredTolerance(double epsilon) { return std::max(0.0, epsilon - 0x1.0p-23); }
+
+std::vector<Vertex> RemoveDuplicates(std::span<const Vertex> function) {
+  std::vector<Vertex> out;
+  for (const Vertex& v : function) {
+    if (out.empty() || !(out.back() == v)) out.push_back(v);
+  }
+  return out;
+}
+
+// The admissible set of lines through the origin, as an interval of a line parameter:
+// slope for kVertical, angle in (z / depth_scale, A) for kPerpendicular.
+class LineCone {
+ public:
+  LineCone(CompressionMetric metric, double tolerance, double depth_scale)
+      : metric_(metric), tolerance_(tolerance), inv_scale_(1.0 / depth_scale) {}
+
+  void Reset(double z, double a) {
+    z0_ = z;
+    a0_ = a;
+    lo_ = -kInf;
+    hi_ = kInf;
+  }
+  double origin_z() const { return z0_; }
+  double origin_a() const { return a0_; }
+
+  // Narrows the cone to lines passing within tolerance of (z, a), z > origin; false (and no
+  // change) when that would leave no line.
+  bool Admit(double z, double a) {
+    double lo, hi;
+    const double dz = z - z0_;
+    const double da = a - a0_;
+    if (metric_ == CompressionMetric::kVertical) {
+      lo = (da - tolerance_) / dz;
+      hi = (da + tolerance_) / dz;
+    } else {
+      const double dzn = dz * inv_scale_;
+      const double dist = std::hypot(dzn, da);
+      if (dist <= tolerance_) return true;
+      constexpr double kSteepest = std::numbers::pi / 2 - 1e-9;
+      const double angle = std::clamp(std::atan2(da, dzn), -kSteepest, kSteepest);
+      const double half = std::asin(tolerance_ / dist);
+      lo = std::max(angle - half, -kSteepest);
+      hi = std::min(angle + half, kSteepest);
+    }
+    lo = std::max(lo, lo_);
+    hi = std::min(hi, hi_);
+    if (lo > hi) return false;
+    lo_ = lo;
+    hi_ = hi;
+    return true;
+  }
+
+  // Value of the middle admissible line at depth z.
+  double ValueAt(double z) const {
+    if (lo_ == -kInf) return a0_;  // unconstrained: flat
+    const double mid = 0.5 * (lo_ + hi_);
+    if (metric_ == CompressionMetric::kVertical) return a0_ + mid * (z - z0_);
+    return a0_ + std::tan(mid) * (z - z0_) * inv_scale_;
+  }
+
+ private:
+  CompressionMetric metric_;
+  double tolerance_;
+  double inv_scale_;
+  double z0_ = 0, a0_ = 0;
+  double lo_ = -kInf, hi_ = kInf;
+};
+
+}  // namespace
+
+std::vector<Vertex> CompressFunction(std::span<const Vertex> function, double epsilon,
+                                     CompressionMetric metric, double depth_scale) {
+  if (epsilon <= 0.0 || function.size() <= 2) return RemoveDuplicates(function);
+  std::vector<Vertex> out;
+  out.push_back(function[0]);
+  LineCone cone(metric, StoredTolerance(epsilon), depth_scale);
+  cone.Reset(function[0].z, function[0].a);
+  size_t last_admitted = 0;  // index of the last input vertex the current segment covers
+  auto emit_segment_end = [&](size_t index) {
+    const double z = function[index].z;
+    const double a = std::clamp(cone.ValueAt(z), 0.0, 1.0);
+    out.push_back(Vertex{function[index].z, static_cast<float>(a)});
+    cone.Reset(z, out.back().a);
+  };
+  for (size_t i = 1; i < function.size();) {
+    const Vertex& v = function[i];
+    if (static_cast<double>(v.z) == cone.origin_z()) {
+      // A jump at the origin's depth: within tolerance it is absorbed, else it stays a jump.
+      if (std::abs(v.a - cone.origin_a()) > StoredTolerance(epsilon)) {
+        out.push_back(v);
+        cone.Reset(v.z, v.a);
+      }
+      last_admitted = i++;
+      continue;
+    }
+    if (cone.Admit(v.z, v.a)) {
+      last_admitted = i++;
+      continue;
+    }
+    if (static_cast<double>(function[last_admitted].z) == cone.origin_z()) {
+      // Nothing spans depth yet (only the perpendicular metric's clamp gets here): keep v.
+      out.push_back(v);
+      cone.Reset(v.z, v.a);
+      last_admitted = i++;
+      continue;
+    }
+    emit_segment_end(last_admitted);  // i is retried from the new origin
+  }
+  if (static_cast<double>(function[last_admitted].z) != cone.origin_z()) {
+    emit_segment_end(last_admitted);
+  }
+  return out;
+}
+
+}  // namespace pdsm

@@ -1,0 +1,575 @@
+#include "core/pdsm/pdsm_file.h"
+
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfDeepFrameBuffer.h>
+#include <OpenEXR/ImfDeepTiledOutputFile.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfIntAttribute.h>
+#include <OpenEXR/ImfMultiPartInputFile.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfPartType.h>
+#include <OpenEXR/ImfTileDescription.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <numbers>
+#include <ostream>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace pdsm {
+
+// Readable failures for vertex comparisons.
+void PrintTo(const Vertex& v, std::ostream* os) { *os << "(z=" << v.z << ", a=" << v.a << ")"; }
+
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+// Every field differs from its default, and doubles are ones a decimal round trip would
+// break (1/3, pi, values near 1e6).
+PdsmHeader FullHeader(int width, int height, int tile_size) {
+  PdsmHeader h;
+  h.scene_name = "plates \"quoted\" \xc3\xa9t\xc3\xa9";
+  h.light_shape = LightShape::kDisk;
+  h.light_half_width = 0.1 + 0.2;
+  h.light_half_height = 1.0 / 3.0;
+  h.light_radius = std::numbers::sqrt2;
+  h.tan_half_angle = std::nextafter(0.00465, 1.0);
+  PdsmGeometry& g = h.geometry;
+  g.projection = Projection::kOrthographic;
+  g.frame.center = {1e6 + 0.1, -2.5e5 - 1.0 / 7.0, std::numbers::pi};
+  g.frame.u = {0.5 * std::numbers::sqrt2, 0.5 * std::numbers::sqrt2, 0.0};
+  g.frame.v = {0.0, 0.0, -1.0};
+  g.frame.n = {-0.5 * std::numbers::sqrt2, 0.5 * std::numbers::sqrt2, 0.0};
+  g.width = width;
+  g.height = height;
+  g.s_min = -0.7;
+  g.s_max = 0.9;
+  g.t_min = -1.0 / 3.0;
+  g.t_max = std::numbers::pi / 4;
+  g.z_near = 0.01;
+  g.z_far = 1e5 + 1.0 / 7.0;
+  h.samples = 65536;
+  h.shadow_map_resolution = 2048;
+  h.epsilon = 0.02;
+  h.compression_metric = CompressionMetric::kPerpendicular;
+  h.depth_bias = 1e-4 / 3.0;
+  h.slope_bias = 2.5;
+  h.sampling = SamplingPattern::kUniform;
+  h.seed = 0xFEDCBA9876543210ull;  // above INT64_MAX
+  h.tile_size = tile_size;
+  return h;
+}
+
+void ExpectVec3Eq(const glm::dvec3& a, const glm::dvec3& b) {
+  EXPECT_EQ(a.x, b.x);
+  EXPECT_EQ(a.y, b.y);
+  EXPECT_EQ(a.z, b.z);
+}
+
+void ExpectHeadersEqual(const PdsmHeader& a, const PdsmHeader& b) {
+  EXPECT_EQ(a.format_version, b.format_version);
+  EXPECT_EQ(a.scene_name, b.scene_name);
+  EXPECT_EQ(a.light_shape, b.light_shape);
+  EXPECT_EQ(a.light_half_width, b.light_half_width);
+  EXPECT_EQ(a.light_half_height, b.light_half_height);
+  EXPECT_EQ(a.light_radius, b.light_radius);
+  EXPECT_EQ(a.tan_half_angle, b.tan_half_angle);
+  EXPECT_EQ(a.geometry.projection, b.geometry.projection);
+  ExpectVec3Eq(a.geometry.frame.center, b.geometry.frame.center);
+  ExpectVec3Eq(a.geometry.frame.u, b.geometry.frame.u);
+  ExpectVec3Eq(a.geometry.frame.v, b.geometry.frame.v);
+  ExpectVec3Eq(a.geometry.frame.n, b.geometry.frame.n);
+  EXPECT_EQ(a.geometry.width, b.geometry.width);
+  EXPECT_EQ(a.geometry.height, b.geometry.height);
+  EXPECT_EQ(a.geometry.s_min, b.geometry.s_min);
+  EXPECT_EQ(a.geometry.s_max, b.geometry.s_max);
+  EXPECT_EQ(a.geometry.t_min, b.geometry.t_min);
+  EXPECT_EQ(a.geometry.t_max, b.geometry.t_max);
+  EXPECT_EQ(a.geometry.z_near, b.geometry.z_near);
+  EXPECT_EQ(a.geometry.z_far, b.geometry.z_far);
+  EXPECT_EQ(a.samples, b.samples);
+  EXPECT_EQ(a.shadow_map_resolution, b.shadow_map_resolution);
+  EXPECT_EQ(a.epsilon, b.epsilon);
+  EXPECT_EQ(a.compression_metric, b.compression_metric);
+  EXPECT_EQ(a.depth_bias, b.depth_bias);
+  EXPECT_EQ(a.slope_bias, b.slope_bias);
+  EXPECT_EQ(a.sampling, b.sampling);
+  EXPECT_EQ(a.seed, b.seed);
+  EXPECT_EQ(a.tile_size, b.tile_size);
+}
+
+// Random functions: about a quarter of the pixels empty, repeated depths (jumps) included,
+// and optionally one pixel with `big_count` vertices.
+PdsmImage RandomImage(const PdsmHeader& header, uint32_t seed, int big_count = 0) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> count_dist(-3, 9);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  PdsmImage image;
+  image.header = header;
+  const size_t pixels = static_cast<size_t>(header.geometry.width) * header.geometry.height;
+  const size_t big_pixel = pixels / 2;
+  image.offsets.push_back(0);
+  for (size_t p = 0; p < pixels; ++p) {
+    const int count = p == big_pixel && big_count > 0 ? big_count : std::max(0, count_dist(rng));
+    float z = 0.5f + unit(rng);
+    for (int k = 0; k < count; ++k) {
+      if (unit(rng) > 0.2f) z += unit(rng) * 3.0f;  // else a jump: same depth again
+      image.vertices.push_back({z, unit(rng)});
+    }
+    image.offsets.push_back(image.vertices.size());
+  }
+  return image;
+}
+
+PdsmTile CutTile(const PdsmImage& image, int x0, int y0) {
+  const int ts = image.header.tile_size;
+  PdsmTile tile;
+  tile.x0 = x0;
+  tile.y0 = y0;
+  tile.width = std::min(ts, image.header.geometry.width - x0);
+  tile.height = std::min(ts, image.header.geometry.height - y0);
+  tile.offsets.push_back(0);
+  for (int y = y0; y < y0 + tile.height; ++y) {
+    for (int x = x0; x < x0 + tile.width; ++x) {
+      for (const Vertex& v : image.Function(x, y)) tile.vertices.push_back(v);
+      tile.offsets.push_back(tile.vertices.size());
+    }
+  }
+  return tile;
+}
+
+std::vector<PdsmTile> CutTiles(const PdsmImage& image) {
+  std::vector<PdsmTile> tiles;
+  const int ts = image.header.tile_size;
+  for (int y0 = 0; y0 < image.header.geometry.height; y0 += ts) {
+    for (int x0 = 0; x0 < image.header.geometry.width; x0 += ts) {
+      tiles.push_back(CutTile(image, x0, y0));
+    }
+  }
+  return tiles;
+}
+
+absl::Status WriteTiles(const std::string& path, const PdsmHeader& header,
+                        const std::vector<PdsmTile>& tiles) {
+  absl::StatusOr<std::unique_ptr<PdsmWriter>> writer = PdsmWriter::Create(path, header);
+  if (!writer.ok()) return writer.status();
+  for (const PdsmTile& tile : tiles) {
+    if (absl::Status s = (*writer)->WriteTile(tile); !s.ok()) return s;
+  }
+  return (*writer)->Finish();
+}
+
+void ExpectImagesEqual(const PdsmImage& expected, const PdsmImage& actual) {
+  ExpectHeadersEqual(expected.header, actual.header);
+  EXPECT_EQ(expected.offsets, actual.offsets);
+  ASSERT_EQ(expected.vertices.size(), actual.vertices.size());
+  EXPECT_TRUE(expected.vertices == actual.vertices);
+}
+
+std::string ReadBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void WriteBytes(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+// Writes a deep tiled EXR with OpenEXR directly: `header` as given, every pixel holding
+// the same `samples` (Z, attenuation) pairs. For files the PdsmWriter refuses to make.
+void WriteRawDeepTiled(const std::string& path, const Imf::Header& header,
+                       const std::vector<Vertex>& samples) {
+  const Imath::Box2i window = header.dataWindow();
+  const int width = window.max.x - window.min.x + 1;
+  const int height = window.max.y - window.min.y + 1;
+  const size_t pixels = static_cast<size_t>(width) * height;
+  std::vector<uint32_t> counts(pixels, static_cast<uint32_t>(samples.size()));
+  std::vector<Vertex> data(samples);
+  char* base = samples.empty() ? nullptr : reinterpret_cast<char*>(data.data());
+  std::vector<char*> z(pixels, base), a(pixels, base ? base + sizeof(float) : nullptr);
+  Imf::DeepFrameBuffer fb;
+  fb.insertSampleCountSlice(Imf::Slice(Imf::UINT, reinterpret_cast<char*>(counts.data()),
+                                       sizeof(uint32_t), sizeof(uint32_t) * width));
+  for (const auto& [name, pointers] : {std::pair{"Z", &z}, std::pair{"attenuation", &a}}) {
+    if (header.channels().findChannel(name) == nullptr) continue;
+    fb.insert(name, Imf::DeepSlice(Imf::FLOAT, reinterpret_cast<char*>(pointers->data()),
+                                   sizeof(char*), sizeof(char*) * width, sizeof(Vertex)));
+  }
+  Imf::DeepTiledOutputFile out(path.c_str(), header);
+  out.setFrameBuffer(fb);
+  out.writeTiles(0, out.numXTiles(0) - 1, 0, out.numYTiles(0) - 1);
+}
+
+Imf::Header PlainDeepTiledHeader(int width, int height) {
+  Imf::Header header(width, height);
+  header.setType(Imf::DEEPTILE);
+  header.compression() = Imf::ZIPS_COMPRESSION;
+  header.setTileDescription(Imf::TileDescription(16, 16, Imf::ONE_LEVEL));
+  header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
+  header.channels().insert("attenuation", Imf::Channel(Imf::FLOAT));
+  return header;
+}
+
+Imf::Header HeaderOf(const std::string& path) {
+  Imf::MultiPartInputFile file(path.c_str());
+  return file.header(0);
+}
+
+class PdsmFileTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = std::string("pdsm_file_test_") + std::to_string(::getpid()) + "_" +
+                       info->test_suite_name() + "_" + info->name();
+    std::replace(name.begin(), name.end(), '/', '_');  // parameterized names hold '/'
+    dir_ = (fs::temp_directory_path() / name).string();
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string Path(const std::string& name) const { return (fs::path(dir_) / name).string(); }
+  std::vector<std::string> Files() const {
+    std::vector<std::string> names;
+    for (const auto& entry : fs::directory_iterator(dir_)) {
+      names.push_back(entry.path().filename().string());
+    }
+    return names;
+  }
+  // A small valid PDSM on disk.
+  std::string WriteSample(const std::string& name, int width = 40, int height = 24) {
+    const PdsmImage image = RandomImage(FullHeader(width, height, 16), 7);
+    const std::string path = Path(name);
+    EXPECT_TRUE(WriteTiles(path, image.header, CutTiles(image)).ok());
+    return path;
+  }
+
+  std::string dir_;
+};
+
+TEST_F(PdsmFileTest, RoundTripsHeaderAndFunctions) {
+  const PdsmImage image = RandomImage(FullHeader(150, 90, 32), 1, /*big_count=*/4000);
+  const std::string path = Path("round_trip.exr");
+  ASSERT_TRUE(WriteTiles(path, image.header, CutTiles(image)).ok());
+
+  absl::StatusOr<PdsmImage> read = ReadPdsm(path);
+  ASSERT_TRUE(read.ok()) << read.status();
+  ExpectImagesEqual(image, *read);
+  EXPECT_EQ(read->Function(0, 45).size(), 4000u);  // RandomImage's big pixel: the middle one
+
+  absl::StatusOr<PdsmHeader> header = ReadPdsmHeader(path);
+  ASSERT_TRUE(header.ok()) << header.status();
+  ExpectHeadersEqual(image.header, *header);
+}
+
+TEST_F(PdsmFileTest, RoundTripsDefaultHeaderAndEmptyImage) {
+  PdsmHeader header;  // every enum at its first value, zeros
+  header.geometry.width = 20;
+  header.geometry.height = 10;
+  header.tile_size = 8;
+  PdsmImage image;
+  image.header = header;
+  image.offsets.assign(201, 0);  // no vertex anywhere
+  const std::string path = Path("empty.exr");
+  ASSERT_TRUE(WriteTiles(path, header, CutTiles(image)).ok());
+  absl::StatusOr<PdsmImage> read = ReadPdsm(path);
+  ASSERT_TRUE(read.ok()) << read.status();
+  ExpectImagesEqual(image, *read);
+}
+
+TEST_F(PdsmFileTest, RoundTripsPixelWithManyVertices) {
+  // One pixel holding what an unconsolidated million-event ray would leave.
+  const PdsmImage image = RandomImage(FullHeader(1, 1, 64), 3, /*big_count=*/300000);
+  const std::string path = Path("deep.exr");
+  ASSERT_TRUE(WriteTiles(path, image.header, CutTiles(image)).ok());
+  absl::StatusOr<PdsmImage> read = ReadPdsm(path);
+  ASSERT_TRUE(read.ok()) << read.status();
+  ExpectImagesEqual(image, *read);
+}
+
+struct EdgeCase {
+  int width, height, tile_size;
+};
+
+class PdsmFileEdgeTest : public PdsmFileTest, public ::testing::WithParamInterface<EdgeCase> {};
+
+TEST_P(PdsmFileEdgeTest, RoundTripsPartialEdgeTiles) {
+  const EdgeCase c = GetParam();
+  const PdsmImage image = RandomImage(FullHeader(c.width, c.height, c.tile_size), 11);
+  const std::string path = Path("edge.exr");
+  ASSERT_TRUE(WriteTiles(path, image.header, CutTiles(image)).ok());
+  absl::StatusOr<PdsmImage> read = ReadPdsm(path);
+  ASSERT_TRUE(read.ok()) << read.status();
+  ExpectImagesEqual(image, *read);
+}
+
+INSTANTIATE_TEST_SUITE_P(PdsmFileSizes, PdsmFileEdgeTest,
+                         ::testing::Values(EdgeCase{1, 1, 64}, EdgeCase{1000, 3, 64},
+                                           EdgeCase{130, 70, 64}, EdgeCase{64, 64, 64},
+                                           EdgeCase{7, 5, 1}, EdgeCase{3, 1000, 64}));
+
+TEST_F(PdsmFileTest, BytesDoNotDependOnTileOrder) {
+  const PdsmImage image = RandomImage(FullHeader(130, 70, 16), 5, 1000);
+  std::vector<PdsmTile> tiles = CutTiles(image);
+  ASSERT_TRUE(WriteTiles(Path("in_order.exr"), image.header, tiles).ok());
+
+  std::vector<PdsmTile> reversed(tiles.rbegin(), tiles.rend());
+  ASSERT_TRUE(WriteTiles(Path("reversed.exr"), image.header, reversed).ok());
+
+  std::mt19937 rng(42);
+  std::shuffle(tiles.begin(), tiles.end(), rng);
+  ASSERT_TRUE(WriteTiles(Path("shuffled.exr"), image.header, tiles).ok());
+
+  const std::string in_order = ReadBytes(Path("in_order.exr"));
+  ASSERT_FALSE(in_order.empty());
+  EXPECT_TRUE(in_order == ReadBytes(Path("reversed.exr")));
+  EXPECT_TRUE(in_order == ReadBytes(Path("shuffled.exr")));
+}
+
+TEST_F(PdsmFileTest, SameContentGivesSameBytesTwice) {
+  // Nothing time- or address-dependent in the file.
+  const PdsmImage image = RandomImage(FullHeader(33, 17, 8), 9);
+  ASSERT_TRUE(WriteTiles(Path("a.exr"), image.header, CutTiles(image)).ok());
+  ASSERT_TRUE(WriteTiles(Path("b.exr"), image.header, CutTiles(image)).ok());
+  EXPECT_TRUE(ReadBytes(Path("a.exr")) == ReadBytes(Path("b.exr")));
+}
+
+TEST_F(PdsmFileTest, AbandonedWriterLeavesNothing) {
+  const PdsmImage image = RandomImage(FullHeader(50, 50, 16), 2);
+  const std::vector<PdsmTile> tiles = CutTiles(image);
+  {
+    absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
+        PdsmWriter::Create(Path("out.exr"), image.header);
+    ASSERT_TRUE(writer.ok()) << writer.status();
+    ASSERT_TRUE((*writer)->WriteTile(tiles[0]).ok());
+    ASSERT_TRUE((*writer)->WriteTile(tiles[5]).ok());  // buffered, out of order
+    EXPECT_EQ(Files().size(), 1u);                     // the temporary file only
+    const absl::Status finish = (*writer)->Finish();
+    EXPECT_EQ(finish.code(), absl::StatusCode::kFailedPrecondition) << finish;
+  }
+  EXPECT_THAT(Files(), ::testing::IsEmpty());
+}
+
+TEST_F(PdsmFileTest, TemporaryFileIsBesideTheTarget) {
+  const PdsmImage image = RandomImage(FullHeader(8, 8, 8), 2);
+  absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
+      PdsmWriter::Create(Path("out.exr"), image.header);
+  ASSERT_TRUE(writer.ok()) << writer.status();
+  ASSERT_EQ(Files().size(), 1u);
+  EXPECT_THAT(Files()[0], ::testing::StartsWith("out.exr.tmp-" + std::to_string(::getpid())));
+  ASSERT_TRUE((*writer)->WriteTile(CutTile(image, 0, 0)).ok());
+  ASSERT_TRUE((*writer)->Finish().ok());
+  EXPECT_THAT(Files(), ::testing::ElementsAre("out.exr"));
+  writer->reset();
+  EXPECT_THAT(Files(), ::testing::ElementsAre("out.exr"));
+}
+
+TEST_F(PdsmFileTest, CreateInMissingFolderNamesThePath) {
+  const std::string path = Path("no/such/folder/out.exr");
+  absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
+      PdsmWriter::Create(path, FullHeader(8, 8, 8));
+  ASSERT_FALSE(writer.ok());
+  EXPECT_EQ(writer.status().code(), absl::StatusCode::kNotFound);
+  EXPECT_THAT(writer.status().message(), HasSubstr(path));
+}
+
+TEST_F(PdsmFileTest, CreateRejectsBadHeader) {
+  PdsmHeader header = FullHeader(8, 8, 0);
+  EXPECT_EQ(PdsmWriter::Create(Path("a.exr"), header).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  header = FullHeader(0, 8, 8);
+  EXPECT_EQ(PdsmWriter::Create(Path("a.exr"), header).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  header = FullHeader(8, 8, 8);
+  header.format_version = kPdsmFormatVersion + 1;
+  EXPECT_EQ(PdsmWriter::Create(Path("a.exr"), header).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(Files(), ::testing::IsEmpty());
+}
+
+TEST_F(PdsmFileTest, WriteTileRejectsTilesOffTheGrid) {
+  const PdsmImage image = RandomImage(FullHeader(40, 40, 16), 4);
+  absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
+      PdsmWriter::Create(Path("out.exr"), image.header);
+  ASSERT_TRUE(writer.ok()) << writer.status();
+  PdsmWriter& w = **writer;
+
+  PdsmTile misaligned = CutTile(image, 0, 0);
+  misaligned.x0 = 3;
+  EXPECT_EQ(w.WriteTile(misaligned).code(), absl::StatusCode::kInvalidArgument);
+
+  PdsmTile wrong_size = CutTile(image, 32, 0);  // 8 wide at the edge
+  wrong_size.width = 16;
+  EXPECT_EQ(w.WriteTile(wrong_size).code(), absl::StatusCode::kInvalidArgument);
+
+  PdsmTile bad_offsets = CutTile(image, 16, 0);
+  bad_offsets.offsets.pop_back();
+  EXPECT_EQ(w.WriteTile(bad_offsets).code(), absl::StatusCode::kInvalidArgument);
+
+  PdsmTile unsorted;
+  unsorted.x0 = 16;
+  unsorted.y0 = 16;
+  unsorted.width = unsorted.height = 16;
+  unsorted.offsets.assign(257, 2);
+  unsorted.offsets[0] = 0;
+  unsorted.vertices = {{2.0f, 0.5f}, {1.0f, 0.5f}};
+  const absl::Status s = w.WriteTile(unsorted);
+  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(s.message(), HasSubstr("pixel (16, 16)"));
+
+  ASSERT_TRUE(w.WriteTile(CutTile(image, 16, 16)).ok());
+  EXPECT_EQ(w.WriteTile(CutTile(image, 16, 16)).code(), absl::StatusCode::kInvalidArgument);
+  ASSERT_TRUE(w.WriteTile(CutTile(image, 0, 0)).ok());
+  EXPECT_EQ(w.WriteTile(CutTile(image, 0, 0)).code(), absl::StatusCode::kInvalidArgument);
+}
+
+TEST_F(PdsmFileTest, MissingFileIsNotFound) {
+  EXPECT_EQ(ReadPdsm(Path("missing.exr")).status().code(), absl::StatusCode::kNotFound);
+  EXPECT_EQ(ReadPdsmHeader(Path("missing.exr")).status().code(), absl::StatusCode::kNotFound);
+}
+
+TEST_F(PdsmFileTest, NonExrFileIsDataLoss) {
+  WriteBytes(Path("text.exr"), "this is not an OpenEXR file, just some text\n");
+  const absl::Status s = ReadPdsm(Path("text.exr")).status();
+  EXPECT_EQ(s.code(), absl::StatusCode::kDataLoss) << s;
+  EXPECT_THAT(s.message(), HasSubstr(Path("text.exr")));
+  EXPECT_EQ(ReadPdsmHeader(Path("text.exr")).status().code(), absl::StatusCode::kDataLoss);
+  WriteBytes(Path("empty.exr"), "");
+  EXPECT_EQ(ReadPdsm(Path("empty.exr")).status().code(), absl::StatusCode::kDataLoss);
+}
+
+TEST_F(PdsmFileTest, TruncatedFileIsDataLoss) {
+  const std::string bytes = ReadBytes(WriteSample("full.exr"));
+  ASSERT_GT(bytes.size(), 200u);
+  for (size_t keep : {size_t{8}, size_t{100}, bytes.size() / 2, bytes.size() - 1}) {
+    SCOPED_TRACE(keep);
+    const std::string path = Path("truncated.exr");
+    WriteBytes(path, bytes.substr(0, keep));
+    const absl::Status s = ReadPdsm(path).status();
+    EXPECT_EQ(s.code(), absl::StatusCode::kDataLoss) << s;
+    EXPECT_THAT(s.message(), HasSubstr(path));
+  }
+}
+
+TEST_F(PdsmFileTest, PlainDeepExrIsNotAPdsm) {
+  const std::string path = Path("plain_deep.exr");
+  WriteRawDeepTiled(path, PlainDeepTiledHeader(20, 20), {{1.0f, 0.5f}});
+  const absl::Status s = ReadPdsm(path).status();
+  EXPECT_EQ(s.code(), absl::StatusCode::kDataLoss) << s;
+  EXPECT_THAT(s.message(), HasSubstr("not a PDSM file: " + path));
+  EXPECT_EQ(ReadPdsmHeader(path).status().code(), absl::StatusCode::kDataLoss);
+}
+
+TEST_F(PdsmFileTest, ScanlineExrIsDataLoss) {
+  const std::string path = Path("scanline.exr");
+  {
+    Imf::Header header(4, 4);
+    header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
+    std::vector<float> pixels(16, 0.25f);
+    Imf::FrameBuffer fb;
+    fb.insert("Y", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(pixels.data()), sizeof(float),
+                              4 * sizeof(float)));
+    Imf::OutputFile out(path.c_str(), header);
+    out.setFrameBuffer(fb);
+    out.writePixels(4);
+  }
+  const absl::Status s = ReadPdsm(path).status();
+  EXPECT_EQ(s.code(), absl::StatusCode::kDataLoss) << s;
+  EXPECT_THAT(s.message(), HasSubstr("not a PDSM file"));
+}
+
+TEST_F(PdsmFileTest, PdsmAttributesOnAScanlineImageAreDataLoss) {
+  const std::string path = Path("flat.exr");
+  {
+    Imf::Header header = HeaderOf(WriteSample("sample.exr"));
+    const Imath::Box2i window = header.dataWindow();
+    Imf::Header flat(window.max.x + 1, window.max.y + 1);
+    for (auto it = header.begin(); it != header.end(); ++it) {
+      if (std::string(it.name()).rfind("pdsm", 0) == 0) flat.insert(it.name(), it.attribute());
+    }
+    flat.channels().insert("Z", Imf::Channel(Imf::FLOAT));
+    flat.channels().insert("attenuation", Imf::Channel(Imf::FLOAT));
+    Imf::OutputFile out(path.c_str(), flat);  // no pixels: zeros
+    Imf::FrameBuffer fb;
+    out.setFrameBuffer(fb);
+    out.writePixels(flat.dataWindow().max.y + 1);
+  }
+  const absl::Status s = ReadPdsm(path).status();
+  EXPECT_EQ(s.code(), absl::StatusCode::kDataLoss) << s;
+  EXPECT_THAT(s.message(), HasSubstr("deep tiled"));
+}
+
+TEST_F(PdsmFileTest, NewerFormatVersionIsFailedPrecondition) {
+  Imf::Header header = HeaderOf(WriteSample("sample.exr"));
+  header.typedAttribute<Imf::IntAttribute>("pdsmFormatVersion").value() = kPdsmFormatVersion + 1;
+  const std::string path = Path("future.exr");
+  WriteRawDeepTiled(path, header, {});
+  EXPECT_EQ(ReadPdsm(path).status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_EQ(ReadPdsmHeader(path).status().code(), absl::StatusCode::kFailedPrecondition);
+}
+
+TEST_F(PdsmFileTest, MissingAttributeIsDataLossNamingIt) {
+  // A copy without the attribute (OpenEXR 3.1.5's Header::erase leaks it).
+  const Imf::Header full = HeaderOf(WriteSample("sample.exr"));
+  const Imath::Box2i window = full.dataWindow();
+  Imf::Header header(window.max.x + 1, window.max.y + 1);
+  for (auto it = full.begin(); it != full.end(); ++it) {
+    if (std::string(it.name()) != "pdsmWindowMax") header.insert(it.name(), it.attribute());
+  }
+  const std::string path = Path("no_window.exr");
+  WriteRawDeepTiled(path, header, {});
+  const absl::Status s = ReadPdsmHeader(path).status();
+  EXPECT_EQ(s.code(), absl::StatusCode::kDataLoss) << s;
+  EXPECT_THAT(s.message(), HasSubstr("pdsmWindowMax"));
+}
+
+TEST_F(PdsmFileTest, DecreasingDepthsAreDataLossNamingThePixel) {
+  const Imf::Header header = HeaderOf(WriteSample("sample.exr", 3, 2));
+  const std::string path = Path("unsorted.exr");
+  WriteRawDeepTiled(path, header, {{2.0f, 0.5f}, {1.0f, 1.0f}});
+  const absl::Status s = ReadPdsm(path).status();
+  EXPECT_EQ(s.code(), absl::StatusCode::kDataLoss) << s;
+  EXPECT_THAT(s.message(), HasSubstr("pixel (0, 0)"));
+}
+
+// The file must be readable by OpenEXR's own tools (DESIGN.md, "PDSM file").
+TEST_F(PdsmFileTest, OpenExrToolsAcceptTheFile) {
+  const std::string path = WriteSample("tools.exr", 130, 70);
+  const std::string log = Path("tool.log");
+  bool ran = false;
+  for (const char* tool : {"exrheader", "exrinfo -s", "exrinfo -v -a"}) {
+    const std::string name = std::string(tool).substr(0, std::string(tool).find(' '));
+    if (!fs::exists("/usr/bin/" + name)) continue;
+    ran = true;
+    const std::string command =
+        "/usr/bin/" + std::string(tool) + " '" + path + "' > '" + log + "' 2>&1";
+    EXPECT_EQ(std::system(command.c_str()), 0) << command << "\n" << ReadBytes(log);
+    if (name == "exrheader") {
+      const std::string out = ReadBytes(log);
+      EXPECT_THAT(out, HasSubstr("pdsmFormatVersion"));
+      EXPECT_THAT(out, HasSubstr("deeptile"));
+    }
+  }
+  if (!ran) GTEST_SKIP() << "neither exrheader nor exrinfo in /usr/bin";
+}
+
+}  // namespace
+}  // namespace pdsm
+namespace pdsm { namespace {
+TEST_F(PdsmFileTest, ZzzScratch) {
+  const std::string path = WriteSample("s.exr", 3, 2);
+  std::system(("xxd " + path + " | head -5; xxd " + path + " | tail -30").c_str());
+}
+}}

@@ -1,0 +1,39 @@
+#include "server/tile_assembly.h"
+
+#include <chrono>
+#include <vector>
+
+#include "core/events/consolidation.h"
+#include "core/pdsm/compression.h"
+
+namespace pdsm {
+
+PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts,
+                      AssemblyStats* stats) {
+  const auto start = std::chrono::steady_clock::now();
+  const TileEvents merged = MergeTileEvents(parts);
+  PdsmTile tile;
+  tile.x0 = merged.x0;
+  tile.y0 = merged.y0;
+  tile.width = merged.width;
+  tile.height = merged.height;
+  tile.offsets.assign(merged.PixelCount() + 1, 0);
+  // Compression's perpendicular metric measures depth in units of the baked depth range.
+  const PdsmGeometry& g = header.geometry;
+  const double depth_scale = std::max(g.z_far - g.z_near, 1e-30);
+  for (size_t p = 0; p < merged.PixelCount(); ++p) {
+    const std::vector<Event> events = ConsolidateEvents(merged.Pixel(p));
+    const std::vector<Vertex> function = FunctionFromEvents(events, header.samples);
+    const std::vector<Vertex> compressed =
+        CompressFunction(function, header.epsilon, header.compression_metric, depth_scale);
+    tile.vertices.insert(tile.vertices.end(), compressed.begin(), compressed.end());
+    tile.offsets[p + 1] = tile.vertices.size();
+    stats->merged_events += static_cast<int64_t>(merged.Pixel(p).size());
+    stats->consolidated_events += static_cast<int64_t>(events.size());
+  }
+  stats->vertices += static_cast<int64_t>(tile.vertices.size());
+  stats->seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return tile;
+}
+
+}  // namespace pdsm

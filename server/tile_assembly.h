@@ -1,0 +1,29 @@
+// The coordinator's last steps for one tile (thesis 3.1-3.2): merge the event lists of all its
+// sample batches, consolidate, turn counts into attenuation and compress. The merge is exact
+// integer arithmetic, so the tile is the same whatever the batches and their order.
+#ifndef PDSM_SERVER_TILE_ASSEMBLY_H_
+#define PDSM_SERVER_TILE_ASSEMBLY_H_
+
+#include <cstdint>
+#include <span>
+
+#include "core/events/event.h"
+#include "core/pdsm/pdsm_image.h"
+
+namespace pdsm {
+
+struct AssemblyStats {
+  int64_t merged_events = 0;        // after merging batches
+  int64_t consolidated_events = 0;  // after consolidation
+  int64_t vertices = 0;             // after compression
+  double seconds = 0;
+};
+
+// REQUIRES: `parts` are results for the same tile whose batches together cover every sample
+// of the bake exactly once.
+PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts,
+                      AssemblyStats* stats);
+
+}  // namespace pdsm
+
+#endif  // PDSM_SERVER_TILE_ASSEMBLY_H_

@@ -1,0 +1,177 @@
+// The `pdsm` command line as a user runs it: exit codes 0 / 2 / 1, messages naming the file
+// and field, no output left behind on failure, query and info output formats.
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "tests/test_support.h"
+
+namespace pdsm {
+namespace {
+
+using testing::CommandResult;
+using testing::ExamplePath;
+using testing::RunCommand;
+using testing::TempDir;
+using testing::WriteText;
+
+const std::string kPdsm = PDSM_CLI;
+
+constexpr char kGoodScene[] = R"({
+  "name": "tiny",
+  "meshes": [
+    {"inline": {"positions": [-5,0,-5, 5,0,-5, 5,0,5, -5,0,5], "indices": [0,1,2, 0,2,3]},
+     "role": "RECEIVER_ONLY"},
+    {"inline": {"positions": [-1,2,-1, 1,2,-1, 1,2,1, -1,2,1], "indices": [0,1,2, 0,2,3]}}
+  ],
+  "light": {"rect": {"center": [0,6,0], "normal": [0,-1,0], "up": [0,0,1], "size": [1,1]}},
+  "bake": {"resolution": [48,48], "samples": 16, "tileSize": 16}
+})";
+
+// A bad scene must exit 2, name the file and the field, and leave no output.
+void ExpectBadScene(const std::string& json, const std::string& field) {
+  TempDir dir;
+  const std::string scene = dir.File("bad.json");
+  WriteText(scene, json);
+  const std::string out = dir.File("out.exr");
+  const CommandResult r = RunCommand(kPdsm + " bake " + scene + " -o " + out, dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("bad.json"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(field), std::string::npos) << "expected field " << field << " in: " << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out));
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    EXPECT_EQ(entry.path().filename().string().find(".exr"), std::string::npos)
+        << "left behind: " << entry.path();
+  }
+}
+
+std::string Replace(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return text.replace(at, from.size(), to);
+}
+
+TEST(Cli, BakeQueryInfoRoundTrip) {
+  TempDir dir;
+  const std::string scene = dir.File("tiny.json");
+  WriteText(scene, kGoodScene);
+  const std::string out = dir.File("tiny.exr");
+  CommandResult r = RunCommand(kPdsm + " bake " + scene + " -o " + out, dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(out));
+  EXPECT_TRUE(std::filesystem::exists(dir.File("tiny.png")));
+  EXPECT_NE(r.err.find("vertices"), std::string::npos) << r.err;  // the closing summary
+
+  const std::string points = dir.File("points.csv");
+  // Under the plate's centre (umbra), far outside it (lit), behind the light (nan).
+  WriteText(points, "0,0,0\n# comment\n\n4.5,0,4.5\n0,7,0\n");
+  r = RunCommand(kPdsm + " query " + out + " --points " + points, dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, "0,0,0,1.000000\n4.5,0,4.5,0.000000\n0,7,0,nan\n");
+
+  r = RunCommand(kPdsm + " info " + out + " --json", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"resolution\": [48, 48]"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"samples\": 16"), std::string::npos) << r.out;
+}
+
+TEST(Cli, BadPointsFileNamesFileAndLine) {
+  TempDir dir;
+  const std::string scene = dir.File("tiny.json");
+  WriteText(scene, kGoodScene);
+  const std::string out = dir.File("tiny.exr");
+  ASSERT_EQ(RunCommand(kPdsm + " bake " + scene + " -o " + out, dir).exit_code, 0);
+  WriteText(dir.File("pts.csv"), "1,2,3\n1,nan,3\n");
+  const CommandResult r = RunCommand(kPdsm + " query " + out + " --points " + dir.File("pts.csv"), dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("pts.csv:2"), std::string::npos) << r.err;
+}
+
+TEST(Cli, NotAPdsmFileExits2) {
+  TempDir dir;
+  WriteText(dir.File("fake.exr"), "definitely not an EXR file");
+  WriteText(dir.File("pts.csv"), "1,2,3\n");
+  CommandResult r = RunCommand(kPdsm + " info " + dir.File("fake.exr"), dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("fake.exr"), std::string::npos) << r.err;
+  r = RunCommand(kPdsm + " info " + dir.File("missing.exr"), dir);
+  EXPECT_EQ(r.exit_code, 2);
+}
+
+TEST(Cli, MalformedJson) { ExpectBadScene("{\"name\": \"x\", ", "invalid scene JSON"); }
+TEST(Cli, UnknownField) {
+  ExpectBadScene(Replace(kGoodScene, "\"meshes\"", "\"meshs\""), "meshs");
+}
+TEST(Cli, MissingMesh) {
+  ExpectBadScene(Replace(kGoodScene, "{\"inline\": {\"positions\": [-1,2,-1",
+                         "{\"path\": \"nowhere.ply\"}, {\"inline\": {\"positions\": [-1,2,-1"),
+                 "meshes[1].path");
+}
+TEST(Cli, UnreadableMesh) {
+  TempDir dir;
+  WriteText(dir.File("garbage.ply"), "ply\nthis is not a mesh\n");
+  // The path is absolute, so the scene written in another folder still finds it.
+  ExpectBadScene(Replace(kGoodScene, "{\"inline\": {\"positions\": [-1,2,-1",
+                         "{\"path\": \"" + dir.File("garbage.ply") +
+                             "\"}, {\"inline\": {\"positions\": [-1,2,-1"),
+                 "meshes[1].path");
+}
+TEST(Cli, NanCoordinate) {
+  ExpectBadScene(Replace(kGoodScene, "[-1,2,-1,", "[\"NaN\",2,-1,"),
+                 "meshes[1].inline.positions[0]");
+}
+TEST(Cli, InfiniteLightCenter) {
+  ExpectBadScene(Replace(kGoodScene, "\"center\": [0,6,0]", "\"center\": [0,\"Infinity\",0]"),
+                 "light.rect.center[1]");
+}
+TEST(Cli, ZeroLightSize) {
+  ExpectBadScene(Replace(kGoodScene, "\"size\": [1,1]", "\"size\": [0,1]"), "light.rect.size");
+}
+TEST(Cli, NegativeLightSize) {
+  ExpectBadScene(Replace(kGoodScene, "\"size\": [1,1]", "\"size\": [1,-2]"), "light.rect.size");
+}
+TEST(Cli, ZeroSamples) {
+  ExpectBadScene(Replace(kGoodScene, "\"samples\": 16", "\"samples\": 0"), "bake.samples");
+}
+TEST(Cli, AbsurdSamples) {
+  ExpectBadScene(Replace(kGoodScene, "\"samples\": 16", "\"samples\": 1000000"), "bake.samples");
+}
+TEST(Cli, AbsurdResolution) {
+  ExpectBadScene(Replace(kGoodScene, "[48,48]", "[100000,48]"), "bake.resolution");
+}
+TEST(Cli, ZeroResolution) {
+  ExpectBadScene(Replace(kGoodScene, "[48,48]", "[0,48]"), "bake.resolution");
+}
+
+TEST(Cli, BadOverrideFlagsExit2) {
+  TempDir dir;
+  const std::string scene = dir.File("tiny.json");
+  WriteText(scene, kGoodScene);
+  for (const std::string flags : {"--samples 0", "--resolution 12by4", "--epsilon 3",
+                                  "--tile-size 0", "--samples 70000"}) {
+    const CommandResult r =
+        RunCommand(kPdsm + " bake " + scene + " -o " + dir.File("o.exr") + " " + flags, dir);
+    EXPECT_EQ(r.exit_code, 2) << flags << ": " << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.File("o.exr"))) << flags;
+  }
+}
+
+TEST(Cli, UnwritableOutputExits1OrTwoWithPath) {
+  TempDir dir;
+  const std::string scene = dir.File("tiny.json");
+  WriteText(scene, kGoodScene);
+  const CommandResult r =
+      RunCommand(kPdsm + " bake " + scene + " -o /nonexistent-dir/x/out.exr", dir);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("/nonexistent-dir/x/out.exr"), std::string::npos) << r.err;
+}
+
+TEST(Cli, UsageErrorExits2) {
+  TempDir dir;
+  EXPECT_EQ(RunCommand(kPdsm + " bake", dir).exit_code, 2);
+  EXPECT_EQ(RunCommand(kPdsm + " frobnicate", dir).exit_code, 2);
+}
+
+}  // namespace
+}  // namespace pdsm

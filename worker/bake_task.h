@@ -1,0 +1,60 @@
+// A bake task (the unit of distribution): one tile and a batch of light samples. For each
+// sample the worker renders the tile's shadow map and scan-converts every ray of the tile
+// through it; the result is the tile's per-pixel event lists for that batch.
+#ifndef PDSM_WORKER_BAKE_TASK_H_
+#define PDSM_WORKER_BAKE_TASK_H_
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/bake/bake_plan.h"
+#include "core/bake/tile_reach.h"
+#include "core/events/event.h"
+#include "worker/gl/shadow_map_renderer.h"
+
+namespace pdsm {
+
+struct BakeTask {
+  int tile_index = 0;
+  int sample_begin = 0;  // [sample_begin, sample_end) of plan.samples
+  int sample_end = 0;
+};
+
+struct TaskStats {
+  double shadow_map_seconds = 0;  // rendering and read-back
+  double scan_seconds = 0;        // scan conversion and per-pixel sorting
+  int64_t shadow_maps = 0;
+  int64_t shadow_map_texels = 0;
+  int64_t events = 0;             // before merging
+  void Add(const TaskStats& o);
+};
+
+// Largest shadow map one task renders for one sample, in texels (1 GiB of float depths).
+inline constexpr int64_t kMaxShadowMapTexels = int64_t{1} << 28;
+
+// Runs tasks of one plan. Owns a renderer (an OSMesa context): one runner per thread.
+class TaskRunner {
+ public:
+  // `plan` must outlive the runner.
+  static absl::StatusOr<std::unique_ptr<TaskRunner>> Create(const BakePlan& plan);
+
+  absl::StatusOr<TileEvents> Run(const BakeTask& task, TaskStats* stats);
+
+  // Light-space depth of the nearest receiver seen along each PDSM ray of the tile (the
+  // preview's surface), +infinity where none; row-major over the tile.
+  absl::StatusOr<std::vector<float>> ReceiverDepth(const TileRect& tile);
+
+ private:
+  TaskRunner(const BakePlan& plan, std::unique_ptr<ShadowMapRenderer> renderer)
+      : plan_(plan), renderer_(std::move(renderer)) {}
+  absl::Status UploadCasters(const TileReach& reach);
+
+  const BakePlan& plan_;
+  std::unique_ptr<ShadowMapRenderer> renderer_;
+};
+
+}  // namespace pdsm
+
+#endif  // PDSM_WORKER_BAKE_TASK_H_

@@ -1,0 +1,430 @@
+#include "worker/gl/shadow_map_renderer.h"
+
+#include <algorithm>
+#include <array>
+#include <climits>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/string_view.h"
+#include "spdlog/spdlog.h"
+#include "worker/gl/gl_functions.h"
+#include "worker/gl/gl_objects.h"
+#include "worker/gl/osmesa_context.h"
+#include "worker/gl/shadow_map_shaders.h"  // generated: the embedded GLSL sources
+
+namespace pdsm {
+namespace {
+
+using gl::GlFunctions;
+
+// Pieces beyond this are not worth their memory (an 8192^2 piece is 512 MiB of attachments).
+constexpr int kMaxPieceSizeCap = 8192;
+
+spdlog::logger& Logger() {
+  static const std::shared_ptr<spdlog::logger> logger = spdlog::default_logger()->clone("gl");
+  return *logger;
+}
+
+// Drains the GL error flags; INTERNAL naming `what` and the first error if any was set.
+absl::Status CheckGlError(const GlFunctions& gl, absl::string_view what) {
+  const GLenum first = gl.GetError();
+  if (first == GL_NO_ERROR) return absl::OkStatus();
+  for (int i = 0; i < 16 && gl.GetError() != GL_NO_ERROR; ++i) {
+  }
+  return absl::InternalError(absl::StrFormat("GL error 0x%04x after %s", first, what));
+}
+
+absl::StatusOr<gl::Shader> CompileShader(const GlFunctions& gl, GLenum type,
+                                         const char* source, absl::string_view name) {
+  gl::Shader shader = gl::MakeShader(gl, type);
+  if (!shader) return absl::InternalError(absl::StrCat("glCreateShader failed for ", name));
+  gl.ShaderSource(shader.name(), 1, &source, nullptr);
+  gl.CompileShader(shader.name());
+  GLint ok = GL_FALSE;
+  gl.GetShaderiv(shader.name(), GL_COMPILE_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    GLint length = 0;
+    gl.GetShaderiv(shader.name(), GL_INFO_LOG_LENGTH, &length);
+    std::string log(std::max(length, 1), '\0');
+    gl.GetShaderInfoLog(shader.name(), length, nullptr, log.data());
+    return absl::InternalError(absl::StrCat("compiling ", name, " failed: ", log.c_str()));
+  }
+  return shader;
+}
+
+absl::StatusOr<gl::Program> LinkShadowMapProgram(const GlFunctions& gl) {
+  absl::StatusOr<gl::Shader> vertex =
+      CompileShader(gl, GL_VERTEX_SHADER, gl::kShadowMapVertexShader, "shadow_map.vert");
+  if (!vertex.ok()) return vertex.status();
+  absl::StatusOr<gl::Shader> fragment =
+      CompileShader(gl, GL_FRAGMENT_SHADER, gl::kShadowMapFragmentShader, "shadow_map.frag");
+  if (!fragment.ok()) return fragment.status();
+  gl::Program program = gl::MakeProgram(gl);
+  if (!program) return absl::InternalError("glCreateProgram failed");
+  gl.AttachShader(program.name(), vertex->name());
+  gl.AttachShader(program.name(), fragment->name());
+  gl.LinkProgram(program.name());
+  // Detached so the shaders are freed with their wrappers rather than with the program.
+  gl.DetachShader(program.name(), vertex->name());
+  gl.DetachShader(program.name(), fragment->name());
+  GLint ok = GL_FALSE;
+  gl.GetProgramiv(program.name(), GL_LINK_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    GLint length = 0;
+    gl.GetProgramiv(program.name(), GL_INFO_LOG_LENGTH, &length);
+    std::string log(std::max(length, 1), '\0');
+    gl.GetProgramInfoLog(program.name(), length, nullptr, log.data());
+    return absl::InternalError(absl::StrCat("linking the shadow-map program failed: ", log.c_str()));
+  }
+  if (absl::Status status = CheckGlError(gl, "building the shadow-map program"); !status.ok()) {
+    return status;
+  }
+  return program;
+}
+
+absl::Status ValidateCamera(const ShadowMapCamera& camera) {
+  const ShadowMapLattice& lattice = camera.lattice;
+  if (!(std::isfinite(lattice.pitch_s) && lattice.pitch_s > 0 && std::isfinite(lattice.pitch_t) &&
+        lattice.pitch_t > 0 && std::isfinite(lattice.s_origin) &&
+        std::isfinite(lattice.t_origin))) {
+    return absl::InvalidArgumentError("camera.lattice: pitches must be finite and > 0");
+  }
+  if (camera.window.width < 0 || camera.window.height < 0) {
+    return absl::InvalidArgumentError("camera.window: negative width or height");
+  }
+  if (!std::isfinite(camera.sample.x) || !std::isfinite(camera.sample.y)) {
+    return absl::InvalidArgumentError("camera.sample is not finite");
+  }
+  if (!std::isfinite(camera.depth_bias) || !std::isfinite(camera.slope_bias) ||
+      !std::isfinite(camera.footprint_scale)) {
+    return absl::InvalidArgumentError("camera bias terms must be finite");
+  }
+  if (!(std::isfinite(camera.z_clip_near) && camera.z_clip_near > 0) &&
+      camera.projection == Projection::kPerspective) {
+    return absl::InvalidArgumentError("camera.z_clip_near must be finite and > 0 (perspective)");
+  }
+  if (camera.projection == Projection::kOrthographic &&
+      !(std::isfinite(camera.z_clip_near) && std::isfinite(camera.z_clip_far) &&
+        camera.z_clip_far > camera.z_clip_near)) {
+    return absl::InvalidArgumentError(
+        "camera.z_clip_far must be finite and > z_clip_near (orthographic)");
+  }
+  return absl::OkStatus();
+}
+
+// Column-major clip_from_light for the texels `piece` of `camera.lattice` (rows as in
+// DESIGN.md: NDC x, y span the piece's edges exactly; clip z / w is the reversed depth).
+// Computed in double, rounded once to float. `zero_to_one_clip`: glClipControl is in effect;
+// otherwise clip z is remapped to [-1, 1] (only the orthographic depth needs it: the
+// perspective near-plane test -w <= n <= w equals 0 <= n <= w for n > 0).
+std::array<float, 16> ClipFromLight(const ShadowMapCamera& camera, const ShadowMapWindow& piece,
+                                    bool zero_to_one_clip) {
+  const ShadowMapLattice& lattice = camera.lattice;
+  const double s_lo = lattice.EdgeS(piece.x0), s_hi = lattice.EdgeS(piece.x0 + piece.width);
+  const double t_lo = lattice.EdgeT(piece.y0), t_hi = lattice.EdgeT(piece.y0 + piece.height);
+  const double sc = 0.5 * (s_lo + s_hi), hs = 0.5 * (s_hi - s_lo);
+  const double tc = 0.5 * (t_lo + t_hi), ht = 0.5 * (t_hi - t_lo);
+  const double a = camera.sample.x, b = camera.sample.y;
+  double rows[4][4];
+  if (camera.projection == Projection::kPerspective) {
+    const double n = camera.z_clip_near;
+    const double r[4][4] = {{1 / hs, 0, -sc / hs, -a / hs},
+                            {0, 1 / ht, -tc / ht, -b / ht},
+                            {0, 0, 0, n},
+                            {0, 0, 1, 0}};
+    std::copy(&r[0][0], &r[0][0] + 16, &rows[0][0]);
+  } else {
+    const double range = camera.z_clip_far - camera.z_clip_near;
+    double z_row[4] = {0, 0, -1 / range, camera.z_clip_far / range};
+    if (!zero_to_one_clip) {
+      z_row[2] *= 2;
+      z_row[3] = 2 * z_row[3] - 1;
+    }
+    const double r[4][4] = {{1 / hs, 0, -a / hs, -sc / hs},
+                            {0, 1 / ht, -b / ht, -tc / ht},
+                            {z_row[0], z_row[1], z_row[2], z_row[3]},
+                            {0, 0, 0, 1}};
+    std::copy(&r[0][0], &r[0][0] + 16, &rows[0][0]);
+  }
+  std::array<float, 16> column_major;
+  for (int col = 0; col < 4; ++col) {
+    for (int row = 0; row < 4; ++row) {
+      column_major[col * 4 + row] = static_cast<float>(rows[row][col]);
+    }
+  }
+  return column_major;
+}
+
+class OsMesaShadowMapRenderer final : public ShadowMapRenderer {
+ public:
+  OsMesaShadowMapRenderer(gl::OsMesaContext context, const GlFunctions& gl)
+      : context_(std::move(context)), gl_(gl) {}
+  // Deleting GL names needs this context current (another renderer may have been made
+  // current on this thread since).
+  ~OsMesaShadowMapRenderer() override { (void)context_.MakeCurrent(); }
+
+  OsMesaShadowMapRenderer(const OsMesaShadowMapRenderer&) = delete;
+  OsMesaShadowMapRenderer& operator=(const OsMesaShadowMapRenderer&) = delete;
+
+  absl::Status Init(const Options& options);
+  absl::Status SetGeometry(std::span<const glm::vec3> positions_light,
+                           std::span<const uint32_t> indices) override;
+  absl::Status Render(const ShadowMapCamera& camera, std::vector<float>* depth) override;
+
+ private:
+  struct UniformLocations {
+    GLint clip_from_light = -1, depth_bias = -1, slope_bias = -1, footprint_scale = -1,
+          orthographic = -1, z_clip_near = -1, z_clip_far = -1;
+  };
+
+  absl::Status ChoosePieceSize(int requested);
+  absl::Status EnsureTarget(int width, int height);
+  void SetPipelineState(const ShadowMapCamera& camera);
+  absl::Status RenderPiece(const ShadowMapCamera& camera, const ShadowMapWindow& piece,
+                           int row_length, float* out);
+
+  gl::OsMesaContext context_;  // first member: destroyed after every GL object below
+  GlFunctions gl_;
+  bool has_clip_control_ = false;
+  int max_piece_size_ = 0;
+  gl::Program program_;
+  UniformLocations uniforms_;
+  gl::VertexArray vertex_array_;
+  gl::Buffer vertex_buffer_;
+  gl::Buffer index_buffer_;
+  GLsizei index_count_ = 0;
+  // Render target, grown (never shrunk) to the largest piece rendered so far.
+  gl::Framebuffer framebuffer_;
+  gl::Texture biased_depth_;   // GL_R32F: biased light-space z, the output
+  gl::Texture reversed_depth_;  // GL_DEPTH_COMPONENT32F: reversed depth for the test
+  int target_width_ = 0, target_height_ = 0;
+};
+
+absl::Status OsMesaShadowMapRenderer::Init(const Options& options) {
+  GLint major = 0, minor = 0;
+  gl_.GetIntegerv(GL_MAJOR_VERSION, &major);
+  gl_.GetIntegerv(GL_MINOR_VERSION, &minor);
+  // Mesa hands out stubs for any name, so the version decides whether glClipControl is real.
+  has_clip_control_ = major > 4 || (major == 4 && minor >= 5);
+  if (absl::Status status = ChoosePieceSize(options.max_piece_size); !status.ok()) return status;
+
+  absl::StatusOr<gl::Program> program = LinkShadowMapProgram(gl_);
+  if (!program.ok()) return program.status();
+  program_ = *std::move(program);
+  const GLuint p = program_.name();
+  uniforms_ = {gl_.GetUniformLocation(p, "clip_from_light"),
+               gl_.GetUniformLocation(p, "depth_bias"),
+               gl_.GetUniformLocation(p, "slope_bias"),
+               gl_.GetUniformLocation(p, "footprint_scale"),
+               gl_.GetUniformLocation(p, "orthographic"),
+               gl_.GetUniformLocation(p, "z_clip_near"),
+               gl_.GetUniformLocation(p, "z_clip_far")};
+
+  vertex_array_ = gl::MakeVertexArray(gl_);
+  vertex_buffer_ = gl::MakeBuffer(gl_);
+  index_buffer_ = gl::MakeBuffer(gl_);
+  framebuffer_ = gl::MakeFramebuffer(gl_);
+  gl_.BindVertexArray(vertex_array_.name());
+  gl_.BindBuffer(GL_ARRAY_BUFFER, vertex_buffer_.name());
+  gl_.EnableVertexAttribArray(0);
+  gl_.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(glm::vec3), nullptr);
+  gl_.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_buffer_.name());  // recorded in the VAO
+  if (absl::Status status = CheckGlError(gl_, "creating the vertex array"); !status.ok()) {
+    return status;
+  }
+  Logger().debug("shadow-map renderer: GL {}.{} ({}), max piece {}", major, minor,
+                 reinterpret_cast<const char*>(gl_.GetString(GL_RENDERER)), max_piece_size_);
+  return absl::OkStatus();
+}
+
+absl::Status OsMesaShadowMapRenderer::ChoosePieceSize(int requested) {
+  if (requested < 0 || requested == 1) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("options.max_piece_size must be 0 or >= 2, got ", requested));
+  }
+  GLint max_texture = 0;
+  GLint max_viewport[2] = {0, 0};
+  gl_.GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture);
+  gl_.GetIntegerv(GL_MAX_VIEWPORT_DIMS, max_viewport);
+  int size = std::min({kMaxPieceSizeCap, max_texture, max_viewport[0], max_viewport[1]});
+  if (requested > 0) size = std::min(size, requested);
+  // Even, so every piece origin is even: dFdx/dFdy pair texels in 2x2 quads anchored at the
+  // viewport origin, and the slope bias must not depend on how a window was split.
+  max_piece_size_ = size & ~1;
+  if (max_piece_size_ < 2) {
+    return absl::InternalError(absl::StrCat("GL limits allow no render target: ", size));
+  }
+  return CheckGlError(gl_, "querying GL limits");
+}
+
+absl::Status OsMesaShadowMapRenderer::SetGeometry(std::span<const glm::vec3> positions_light,
+                                                  std::span<const uint32_t> indices) {
+  if (indices.size() % 3 != 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("indices: size ", indices.size(), " is not a multiple of 3"));
+  }
+  if (indices.size() > static_cast<size_t>(INT_MAX)) {
+    return absl::InvalidArgumentError("indices: more than INT_MAX indices");
+  }
+  for (size_t i = 0; i < positions_light.size(); ++i) {
+    const glm::vec3& p = positions_light[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+      return absl::InvalidArgumentError(absl::StrCat("positions_light[", i, "] is not finite"));
+    }
+  }
+  for (size_t i = 0; i < indices.size(); ++i) {
+    if (indices[i] >= positions_light.size()) {
+      return absl::InvalidArgumentError(absl::StrCat("indices[", i, "] = ", indices[i],
+                                                     " >= ", positions_light.size(),
+                                                     " positions"));
+    }
+  }
+  if (absl::Status status = context_.MakeCurrent(); !status.ok()) return status;
+  gl_.BindVertexArray(vertex_array_.name());
+  gl_.BindBuffer(GL_ARRAY_BUFFER, vertex_buffer_.name());
+  gl_.BufferData(GL_ARRAY_BUFFER, positions_light.size_bytes(), positions_light.data(),
+                 GL_STATIC_DRAW);
+  gl_.BufferData(GL_ELEMENT_ARRAY_BUFFER, indices.size_bytes(), indices.data(), GL_STATIC_DRAW);
+  index_count_ = static_cast<GLsizei>(indices.size());
+  if (absl::Status status = CheckGlError(gl_, "uploading geometry"); !status.ok()) {
+    index_count_ = 0;  // the buffers' contents are unknown; draw nothing rather than garbage
+    return status;
+  }
+  return absl::OkStatus();
+}
+
+absl::Status OsMesaShadowMapRenderer::EnsureTarget(int width, int height) {
+  if (width <= target_width_ && height <= target_height_) return absl::OkStatus();
+  const int new_width = std::max(width, target_width_);
+  const int new_height = std::max(height, target_height_);
+  biased_depth_ = gl::MakeTexture(gl_);
+  reversed_depth_ = gl::MakeTexture(gl_);
+  const auto allocate = [&](const gl::Texture& texture, GLint internal_format, GLenum format) {
+    gl_.BindTexture(GL_TEXTURE_2D, texture.name());
+    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    gl_.TexImage2D(GL_TEXTURE_2D, 0, internal_format, new_width, new_height, 0, format, GL_FLOAT,
+                   nullptr);
+  };
+  allocate(biased_depth_, GL_R32F, GL_RED);
+  allocate(reversed_depth_, GL_DEPTH_COMPONENT32F, GL_DEPTH_COMPONENT);
+  gl_.BindTexture(GL_TEXTURE_2D, 0);
+  gl_.BindFramebuffer(GL_FRAMEBUFFER, framebuffer_.name());
+  gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
+                           biased_depth_.name(), 0);
+  gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D,
+                           reversed_depth_.name(), 0);
+  const GLenum draw_buffer = GL_COLOR_ATTACHMENT0;
+  gl_.DrawBuffers(1, &draw_buffer);
+  gl_.ReadBuffer(GL_COLOR_ATTACHMENT0);
+  const std::string what = absl::StrCat("allocating a ", new_width, "x", new_height,
+                                        " R32F + D32F render target");
+  if (absl::Status status = CheckGlError(gl_, what); !status.ok()) {
+    target_width_ = target_height_ = 0;
+    return status;
+  }
+  const GLenum completeness = gl_.CheckFramebufferStatus(GL_FRAMEBUFFER);
+  if (completeness != GL_FRAMEBUFFER_COMPLETE) {
+    target_width_ = target_height_ = 0;
+    return absl::InternalError(
+        absl::StrFormat("framebuffer incomplete (0x%04x) after %s", completeness, what));
+  }
+  target_width_ = new_width;
+  target_height_ = new_height;
+  return absl::OkStatus();
+}
+
+// All fixed-function state is set on every Render: nothing relies on what an earlier call
+// (or another user of this context) left behind.
+void OsMesaShadowMapRenderer::SetPipelineState(const ShadowMapCamera& camera) {
+  gl_.BindFramebuffer(GL_FRAMEBUFFER, framebuffer_.name());
+  gl_.UseProgram(program_.name());
+  gl_.BindVertexArray(vertex_array_.name());
+  // Reversed-Z: clip z / w in [0, 1], nearer is larger, cleared to 0 (beyond everything).
+  if (has_clip_control_) gl_.ClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+  gl_.Enable(GL_DEPTH_TEST);
+  gl_.DepthFunc(GL_GREATER);
+  gl_.DepthMask(GL_TRUE);
+  gl_.Enable(GL_SCISSOR_TEST);  // clears touch only the piece, not the whole cached target
+  gl_.Disable(GL_CULL_FACE);    // both sides of a caster cast
+  gl_.Disable(GL_BLEND);
+  gl_.PixelStorei(GL_PACK_ALIGNMENT, 4);
+  gl_.Uniform1f(uniforms_.depth_bias, static_cast<float>(camera.depth_bias));
+  gl_.Uniform1f(uniforms_.slope_bias, static_cast<float>(camera.slope_bias));
+  gl_.Uniform1f(uniforms_.footprint_scale, static_cast<float>(camera.footprint_scale));
+  gl_.Uniform1i(uniforms_.orthographic, camera.projection == Projection::kOrthographic);
+  gl_.Uniform1f(uniforms_.z_clip_near, static_cast<float>(camera.z_clip_near));
+  gl_.Uniform1f(uniforms_.z_clip_far, static_cast<float>(camera.z_clip_far));
+}
+
+absl::Status OsMesaShadowMapRenderer::RenderPiece(const ShadowMapCamera& camera,
+                                                  const ShadowMapWindow& piece, int row_length,
+                                                  float* out) {
+  if (absl::Status status = EnsureTarget(piece.width, piece.height); !status.ok()) return status;
+  gl_.Viewport(0, 0, piece.width, piece.height);
+  gl_.Scissor(0, 0, piece.width, piece.height);
+  const float no_caster[4] = {std::numeric_limits<float>::infinity(), 0, 0, 0};
+  const float beyond_everything = 0.0f;
+  gl_.ClearBufferfv(GL_COLOR, 0, no_caster);
+  gl_.ClearBufferfv(GL_DEPTH, 0, &beyond_everything);
+  if (index_count_ > 0) {
+    const std::array<float, 16> clip_from_light = ClipFromLight(camera, piece, has_clip_control_);
+    gl_.UniformMatrix4fv(uniforms_.clip_from_light, 1, GL_FALSE, clip_from_light.data());
+    gl_.DrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
+  }
+  // Straight into the output: rows are `row_length` apart there; GL's bottom row (lowest t)
+  // is the output's row 0.
+  gl_.PixelStorei(GL_PACK_ROW_LENGTH, row_length);
+  gl_.ReadPixels(0, 0, piece.width, piece.height, GL_RED, GL_FLOAT, out);
+  gl_.PixelStorei(GL_PACK_ROW_LENGTH, 0);
+  return CheckGlError(gl_, absl::StrCat("rendering piece at (", piece.x0, ", ", piece.y0, ") ",
+                                        piece.width, "x", piece.height));
+}
+
+absl::Status OsMesaShadowMapRenderer::Render(const ShadowMapCamera& camera,
+                                             std::vector<float>* depth) {
+  if (absl::Status status = ValidateCamera(camera); !status.ok()) return status;
+  const ShadowMapWindow& window = camera.window;
+  depth->assign(static_cast<size_t>(window.width) * window.height,
+                std::numeric_limits<float>::infinity());
+  if (depth->empty()) return absl::OkStatus();
+  if (absl::Status status = context_.MakeCurrent(); !status.ok()) return status;
+  SetPipelineState(camera);
+  // Pieces are sub-windows of the same lattice, each with its own matrix.
+  for (int py = 0; py < window.height; py += max_piece_size_) {
+    for (int px = 0; px < window.width; px += max_piece_size_) {
+      const ShadowMapWindow piece{window.x0 + px, window.y0 + py,
+                                  std::min(max_piece_size_, window.width - px),
+                                  std::min(max_piece_size_, window.height - py)};
+      float* out = depth->data() + static_cast<size_t>(py) * window.width + px;
+      if (absl::Status status = RenderPiece(camera, piece, window.width, out); !status.ok()) {
+        return status;
+      }
+    }
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::StatusOr<std::unique_ptr<ShadowMapRenderer>> ShadowMapRenderer::Create() {
+  return Create(Options{});
+}
+
+absl::StatusOr<std::unique_ptr<ShadowMapRenderer>> ShadowMapRenderer::Create(
+    const Options& options) {
+  absl::StatusOr<gl::OsMesaContext> context = gl::OsMesaContext::Create();
+  if (!context.ok()) return context.status();
+  absl::StatusOr<GlFunctions> gl = GlFunctions::Load(&gl::OsMesaContext::GetProcAddress);
+  if (!gl.ok()) return gl.status();
+  auto renderer = std::make_unique<OsMesaShadowMapRenderer>(*std::move(context), *gl);
+  if (absl::Status status = renderer->Init(options); !status.ok()) return status;
+  return renderer;
+}
+
+}  // namespace pdsm

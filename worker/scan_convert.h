@@ -1,0 +1,41 @@
+// Scan conversion of one PDSM ray through one light sample's shadow map (thesis 3.1).
+// The ray is a straight segment in the shadow map; walk the texels it crosses in order of
+// increasing depth. In a texel the ray spans depths [z_in, z_out] and the texel holds the
+// (biased) occluder depth z_sm:
+//   z_sm <= z_in          the whole piece is behind the occluder: enter shadow at z_in
+//                         (fig. 3.4b) unless already shadowed;
+//   z_in < z_sm < z_out   the ray passes behind the occluder at z_sm: enter at z_sm
+//                         (fig. 3.4a); if it was shadowed, it is lit from z_in to z_sm, so it
+//                         first leaves at z_in;
+//   z_sm >= z_out         lit: a shadowed ray leaves at z_in, the boundary with the previous
+//                         texel (fig. 3.4c).
+// A ray that stays in one texel (the sample at the light centre) is the thesis' special case:
+// shadowed from z_sm to infinity.
+#ifndef PDSM_WORKER_SCAN_CONVERT_H_
+#define PDSM_WORKER_SCAN_CONVERT_H_
+
+#include <vector>
+
+#include "core/bake/shadow_map_lattice.h"
+#include "core/bake/tile_reach.h"
+#include "core/events/event.h"
+#include "core/pdsm/pdsm_geometry.h"
+
+namespace pdsm {
+
+// A rendered shadow map: a window of the global lattice, row-major from the window's lowest
+// (s, t), holding biased light-space depths (+infinity where no caster).
+struct ShadowMapView {
+  const float* depth = nullptr;
+  ShadowMapLattice lattice;
+  ShadowMapWindow window;
+};
+
+// Appends the ray's events for this sample, in increasing depth, to `events`.
+// REQUIRES: the ray's segment lies inside the view's window (ShadowMapWindowFor).
+void ScanConvertRay(const ShadowMapView& shadow_map, const RayInShadowMap& ray,
+                    Projection projection, std::vector<Event>* events);
+
+}  // namespace pdsm
+
+#endif  // PDSM_WORKER_SCAN_CONVERT_H_
