@@ -567,9 +567,3 @@ TEST_F(PdsmFileTest, OpenExrToolsAcceptTheFile) {
 
 }  // namespace
 }  // namespace pdsm
-namespace pdsm { namespace {
-TEST_F(PdsmFileTest, ZzzScratch) {
-  const std::string path = WriteSample("s.exr", 3, 2);
-  std::system(("xxd " + path + " | head -5; xxd " + path + " | tail -30").c_str());
-}
-}}

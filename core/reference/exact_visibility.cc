@@ -1,24 +1,24 @@
+// The hidden area is the area of a union of convex polygons (each triangle clipped and
+// projected from the point onto the light, then clipped to the light). It is computed with
+// Green's theorem over the union's boundary: area = 1/2 ∮ (x dy - y dx), where the boundary is
+// every polygon edge minus the parts covered by another polygon.
+//
+// Why not Boost.Geometry's union_: Boost 1.74 (Debian 12) fails on exactly the input this
+// module sees most, meshes whose projected edges meet at T-junctions that are collinear only
+// up to rounding. It returns invalid multipolygons (pieces that share an edge left unmerged),
+// and later unions of those return areas off by tens of percent without throwing
+// (boostorg/geometry #838, #1068, #1229; the rescaling overlay was replaced in 1.80+).
+// The boundary integral has no topology to get wrong: a rounding error in deciding whether a
+// point of an edge is covered moves the area by at most (error x edge length), and the one
+// discontinuous decision, coincident edges, is made by a test that gives the same answer from
+// both sides.
 #include "core/reference/exact_visibility.h"
-
-#include <spdlog/sinks/stdout_color_sinks.h>
-#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <atomic>
-// Boost 1.74's envelope and rescale code trips GCC 12's -Wmaybe-uninitialized (false alarms).
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include <boost/geometry.hpp>
-#include <iostream>
-#include <boost/geometry/geometries/multi_polygon.hpp>
-#include <boost/geometry/geometries/point_xy.hpp>
-#include <boost/geometry/geometries/polygon.hpp>
-#pragma GCC diagnostic pop
 #include <cmath>
 #include <cstdint>
-#include <exception>
 #include <limits>
-#include <memory>
 #include <numbers>
 #include <optional>
 #include <thread>
@@ -28,61 +28,21 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
 
-#ifndef UNION_SLACK
-#define UNION_SLACK kUnionAreaSlack
-#endif
 namespace pdsm {
 namespace {
 
-namespace bg = boost::geometry;
-using BgPoint = bg::model::d2::point_xy<double>;
-// Counter-clockwise and closed: the orientation the clipping below produces.
-using BgPolygon = bg::model::polygon<BgPoint, /*ClockWise=*/false, /*Closed=*/true>;
-using BgMultiPolygon = bg::model::multi_polygon<BgPolygon>;
-
 // Geometry closer to the point than this (relative to p.z) is dropped: its projection runs
-// off to infinity and only matters for triangles through p itself, which hide nothing.
+// off to infinity, and only a triangle through p itself reaches there, which hides nothing.
 constexpr double kNearPointMargin = 1e-9;
 // The disk light's stand-in. Relative area error 1 - sin(2π/n)/(2π/n) = 2.51e-5 for n = 512.
 constexpr int kDiskSides = 512;
-// Projected pieces below this share of the light are degenerate (edge-on triangles, slivers
-// from clipping) and are dropped: Boost.Geometry's overlay is at its least reliable there.
+// Relative to the light's extent: vertices this close to a neighbour or to the line through
+// their neighbours are dropped, and edges this close to one line are coincident. Far above
+// rounding noise (1e-16), far below detail that matters; each use moves the hidden area by
+// at most this times an edge length.
+constexpr double kTolerance = 1e-10;
+// Pieces below this share of the light are degenerate (edge-on triangles, clipping slivers).
 constexpr double kDegenerateAreaFraction = 1e-14;
-// A union whose area is outside [max(a, b), a + b] widened by this share of the light is
-// treated as a failed operation (Boost.Geometry can return garbage without throwing).
-constexpr double kUnionAreaSlack = 1e-9;
-// Size of the nudge, relative to the light's extent, applied to an operand that made a boolean
-// operation fail. Moves the hidden area by at most perimeter * nudge: far below 1e-9.
-constexpr double kNudgeFraction = 1e-10;
-
-// Vertices this close (relative to the light's extent) to a neighbour or to the line through
-// their neighbours are dropped: far above rounding noise, far below any meaningful detail.
-constexpr double kCleanTolerance = 1e-11;
-
-std::shared_ptr<spdlog::logger> Logger() {
-  static const std::shared_ptr<spdlog::logger> logger = [] {
-    std::shared_ptr<spdlog::logger> existing = spdlog::get("reference");
-    return existing != nullptr ? existing : spdlog::stderr_color_mt("reference");
-  }();
-  return logger;
-}
-
-// How often Boost.Geometry had to be worked around: failed attempts, operations that
-// succeeded on a retry, and operands left out after every retry failed. skipped_area bounds
-// the error those cause, in units of the light's area.
-struct BooleanStats {
-  int64_t failures = 0;
-  int64_t recovered = 0;
-  int64_t skipped = 0;
-  double skipped_area = 0.0;
-
-  void Add(const BooleanStats& o) {
-    failures += o.failures;
-    recovered += o.recovered;
-    skipped += o.skipped;
-    skipped_area += o.skipped_area;
-  }
-};
 
 bool Finite(const glm::dvec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
@@ -90,8 +50,15 @@ bool Finite(const glm::dvec3& v) {
 
 double Cross(const glm::dvec2& a, const glm::dvec2& b) { return a.x * b.y - a.y * b.x; }
 
-// Twice the signed area (counter-clockwise positive), relative to the first vertex to keep
-// the products small.
+template <typename Vec>
+bool LexLess(const Vec& a, const Vec& b) {
+  for (int i = 0; i < Vec::length(); ++i) {
+    if (a[i] != b[i]) return a[i] < b[i];
+  }
+  return false;
+}
+
+// Twice the signed area (counter-clockwise positive), relative to the first vertex.
 double TwiceSignedArea(const std::vector<glm::dvec2>& poly) {
   double sum = 0.0;
   for (size_t i = 1; i + 1 < poly.size(); ++i) {
@@ -100,48 +67,13 @@ double TwiceSignedArea(const std::vector<glm::dvec2>& poly) {
   return sum;
 }
 
-// The light, prepared once for many points.
-struct PreparedLight {
-  std::vector<glm::dvec2> ccw;  // counter-clockwise, no repeated closing vertex
-  double area = 0.0;
-  glm::dvec2 box_lo{0.0}, box_hi{0.0};
-  double extent = 0.0;  // largest bounding-box side
-  double clean_tolerance = 0.0;  // for RemoveNearlyCollinear
-  // Convex lights are intersected by plain clipping; anything within inner_radius of
-  // inner_center is inside the light and needs no clipping at all.
-  bool convex = false;
-  glm::dvec2 inner_center{0.0};
-  double inner_radius = 0.0;
-  BgPolygon bg;  // for non-convex lights
-};
-
-// Removes repeated vertices (consecutive and the wrap-around) closer than `tolerance`.
-void RemoveDuplicates(double tolerance, std::vector<glm::dvec2>* poly) {
-  const double tol2 = tolerance * tolerance;
-  auto same = [tol2](const glm::dvec2& a, const glm::dvec2& b) {
-    const glm::dvec2 d = a - b;
-    return glm::dot(d, d) <= tol2;
-  };
-  size_t out = 0;
-  for (size_t i = 0; i < poly->size(); ++i) {
-    if (out > 0 && same((*poly)[out - 1], (*poly)[i])) continue;
-    (*poly)[out++] = (*poly)[i];
-  }
-  while (out > 1 && same((*poly)[out - 1], (*poly)[0])) --out;
-  poly->resize(out);
-}
-
 // Removes vertices within `tolerance` of their predecessor or of the line through their
-// neighbours (collinear points and spikes). Boost.Geometry keeps or drops such points
-// depending on rounding, and then fails to merge a T-junction whose middle vertex is 1e-17
-// off the other polygon's edge; without them, shared boundaries are bit-identical.
-// Moves the boundary by at most `tolerance`.
+// neighbours (collinear points, spikes). Moves the boundary by at most `tolerance`.
 void RemoveNearlyCollinear(double tolerance, std::vector<glm::dvec2>* ring) {
   auto close = [tolerance](const glm::dvec2& a, const glm::dvec2& b) {
     return glm::length(b - a) <= tolerance;
   };
-  // b is within tolerance of the line through a and c (or a ~ c, so a-b-c is a spike).
-  auto redundant = [&](const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) {
+  auto redundant = [tolerance](const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) {
     const double base = glm::length(c - a);
     return base <= tolerance || std::abs(Cross(c - a, b - a)) <= tolerance * base;
   };
@@ -172,108 +104,8 @@ void RemoveNearlyCollinear(double tolerance, std::vector<glm::dvec2>* ring) {
   ring->assign(out.begin() + first, out.end());
 }
 
-// RemoveNearlyCollinear on every ring; rings and polygons left degenerate are dropped.
-void CleanShape(double tolerance, BgMultiPolygon* shape) {
-  std::vector<glm::dvec2> ring;
-  auto clean_ring = [&](auto& bg_ring) {
-    ring.clear();
-    // Boost rings are closed: the last point repeats the first.
-    for (size_t i = 0; i + 1 < bg_ring.size(); ++i) ring.emplace_back(bg_ring[i].x(), bg_ring[i].y());
-    RemoveNearlyCollinear(tolerance, &ring);
-    bg_ring.clear();
-    if (ring.empty()) return false;
-    for (const glm::dvec2& q : ring) bg_ring.emplace_back(q.x, q.y);
-    bg_ring.emplace_back(ring.front().x, ring.front().y);
-    return true;
-  };
-  BgMultiPolygon cleaned;
-  for (BgPolygon& poly : *shape) {
-    if (!clean_ring(poly.outer())) continue;
-    auto& inners = poly.inners();
-    inners.erase(std::remove_if(inners.begin(), inners.end(),
-                                [&](auto& inner) { return !clean_ring(inner); }),
-                 inners.end());
-    cleaned.push_back(std::move(poly));
-  }
-  *shape = std::move(cleaned);
-}
-
-// Convex (and simple) iff every turn is a left turn and they add up to one full turn.
-bool IsConvexCcw(const std::vector<glm::dvec2>& poly) {
-  const size_t n = poly.size();
-  double turning = 0.0;
-  for (size_t i = 0; i < n; ++i) {
-    const glm::dvec2 e0 = poly[(i + 1) % n] - poly[i];
-    const glm::dvec2 e1 = poly[(i + 2) % n] - poly[(i + 1) % n];
-    const double cross = Cross(e0, e1);
-    if (cross < 0.0) return false;
-    turning += std::atan2(cross, glm::dot(e0, e1));
-  }
-  return std::abs(turning - 2.0 * std::numbers::pi) < 1e-6;
-}
-
-BgPolygon ToBg(const std::vector<glm::dvec2>& ccw) {
-  BgPolygon poly;
-  poly.outer().reserve(ccw.size() + 1);
-  for (const glm::dvec2& q : ccw) poly.outer().emplace_back(q.x, q.y);
-  poly.outer().emplace_back(ccw.front().x, ccw.front().y);
-  return poly;
-}
-
-std::optional<PreparedLight> PrepareLight(std::span<const glm::dvec2> polygon) {
-  PreparedLight light;
-  light.ccw.assign(polygon.begin(), polygon.end());
-  for (const glm::dvec2& q : light.ccw) {
-    if (!std::isfinite(q.x) || !std::isfinite(q.y)) return std::nullopt;
-  }
-  RemoveDuplicates(0.0, &light.ccw);
-  if (light.ccw.size() < 3) return std::nullopt;
-  double twice_area = TwiceSignedArea(light.ccw);
-  if (twice_area < 0.0) {
-    std::reverse(light.ccw.begin(), light.ccw.end());
-    twice_area = -twice_area;
-  }
-  if (!(twice_area > 0.0)) return std::nullopt;
-  light.area = 0.5 * twice_area;
-  light.box_lo = light.box_hi = light.ccw[0];
-  for (const glm::dvec2& q : light.ccw) {
-    light.box_lo = glm::min(light.box_lo, q);
-    light.box_hi = glm::max(light.box_hi, q);
-  }
-  light.extent = std::max(light.box_hi.x - light.box_lo.x, light.box_hi.y - light.box_lo.y);
-  light.clean_tolerance = kCleanTolerance * light.extent;
-  light.convex = IsConvexCcw(light.ccw);
-  if (light.convex) {
-    glm::dvec2 sum(0.0);
-    for (const glm::dvec2& q : light.ccw) sum += q;
-    light.inner_center = sum / static_cast<double>(light.ccw.size());
-    double radius = std::numeric_limits<double>::infinity();
-    const size_t n = light.ccw.size();
-    for (size_t i = 0; i < n; ++i) {
-      const glm::dvec2 a = light.ccw[i];
-      const glm::dvec2 e = light.ccw[(i + 1) % n] - a;
-      radius = std::min(radius, Cross(e, light.inner_center - a) / glm::length(e));
-    }
-    // Shrunk a little so that rounding in the distance test can never wrongly skip a clip.
-    light.inner_radius = std::max(0.0, radius * (1.0 - 1e-9));
-  }
-  light.bg = ToBg(light.ccw);
-  bg::correct(light.bg);
-  return light;
-}
-
-template <typename Vec>
-bool LexLess(const Vec& a, const Vec& b) {
-  for (int i = 0; i < Vec::length(); ++i) {
-    if (a[i] != b[i]) return a[i] < b[i];
-  }
-  return false;
-}
-
 // Where segment ab crosses {f = 0}. Interpolated from the lexicographically smaller end, so
-// an edge shared by two mesh triangles is cut at bit-identical points in both and their
-// projections still share the edge exactly (Boost.Geometry merges exact shared edges well,
-// nearly-shared ones badly).
+// an edge shared by two mesh triangles is cut at bit-identical points in both.
 template <typename Vec>
 Vec Crossing(Vec a, double fa, Vec b, double fb) {
   if (LexLess(b, a)) {
@@ -284,13 +116,6 @@ Vec Crossing(Vec a, double fa, Vec b, double fb) {
   if (fb == 0.0) return b;
   return a + (fa / (fa - fb)) * (b - a);
 }
-
-// Reusable buffers, one set per thread.
-struct Workspace {
-  std::vector<glm::dvec3> poly3, scratch3;
-  std::vector<glm::dvec2> poly2, scratch2;
-  std::vector<double> values;
-};
 
 // Sutherland–Hodgman step: keeps the part of convex `poly` where f >= 0 (f > 0 if `strict`).
 template <typename Vec, typename F>
@@ -324,6 +149,127 @@ void ClipConvex(const F& f, bool strict, std::vector<Vec>* poly, std::vector<Vec
   poly->swap(*scratch);
 }
 
+// A convex part of the light; the parts tile it. A convex light is one region; others are
+// ear-clipped into triangles, and the hidden area is the sum over regions.
+struct Region {
+  std::vector<glm::dvec2> ccw;
+  glm::dvec2 lo{0.0}, hi{0.0};
+  double area = 0.0;
+  // Points within inner_radius of inner_center are inside: most pieces need no clipping.
+  glm::dvec2 inner_center{0.0};
+  double inner_radius = 0.0;
+};
+
+Region MakeRegion(std::vector<glm::dvec2> ccw) {
+  Region region;
+  region.ccw = std::move(ccw);
+  region.area = 0.5 * TwiceSignedArea(region.ccw);
+  region.lo = region.hi = region.ccw[0];
+  glm::dvec2 sum(0.0);
+  for (const glm::dvec2& q : region.ccw) {
+    region.lo = glm::min(region.lo, q);
+    region.hi = glm::max(region.hi, q);
+    sum += q;
+  }
+  region.inner_center = sum / static_cast<double>(region.ccw.size());
+  double radius = std::numeric_limits<double>::infinity();
+  const size_t n = region.ccw.size();
+  for (size_t i = 0; i < n; ++i) {
+    const glm::dvec2 e = region.ccw[(i + 1) % n] - region.ccw[i];
+    radius = std::min(radius, Cross(e, region.inner_center - region.ccw[i]) / glm::length(e));
+  }
+  // Shrunk a little so that rounding in the distance test never skips a needed clip.
+  region.inner_radius = std::max(0.0, radius * (1.0 - 1e-9));
+  return region;
+}
+
+// Convex (and simple) iff every turn is a left turn and they add up to one full turn.
+bool IsConvexCcw(const std::vector<glm::dvec2>& poly) {
+  const size_t n = poly.size();
+  double turning = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    const glm::dvec2 e0 = poly[(i + 1) % n] - poly[i];
+    const glm::dvec2 e1 = poly[(i + 2) % n] - poly[(i + 1) % n];
+    const double cross = Cross(e0, e1);
+    if (cross < 0.0) return false;
+    turning += std::atan2(cross, glm::dot(e0, e1));
+  }
+  return std::abs(turning - 2.0 * std::numbers::pi) < 1e-6;
+}
+
+bool InTriangle(const glm::dvec2& q, const glm::dvec2& a, const glm::dvec2& b,
+                const glm::dvec2& c) {
+  return Cross(b - a, q - a) >= 0.0 && Cross(c - b, q - b) >= 0.0 && Cross(a - c, q - c) >= 0.0;
+}
+
+// Ear clipping of a simple counter-clockwise polygon. O(n^2): lights have few vertices.
+std::vector<Region> Triangulate(std::vector<glm::dvec2> poly) {
+  std::vector<Region> triangles;
+  while (poly.size() > 3) {
+    const size_t n = poly.size();
+    bool clipped = false;
+    for (size_t i = 0; i < n && !clipped; ++i) {
+      const glm::dvec2& a = poly[(i + n - 1) % n];
+      const glm::dvec2& b = poly[i];
+      const glm::dvec2& c = poly[(i + 1) % n];
+      const double turn = Cross(b - a, c - b);
+      if (turn == 0.0) {  // collinear: drop the vertex, no triangle
+        poly.erase(poly.begin() + i);
+        clipped = true;
+        break;
+      }
+      if (turn < 0.0) continue;
+      bool ear = true;
+      for (size_t k = 0; k < n && ear; ++k) {
+        const glm::dvec2& q = poly[k];
+        if (q == a || q == b || q == c) continue;
+        ear = !InTriangle(q, a, b, c);
+      }
+      if (!ear) continue;
+      triangles.push_back(MakeRegion({a, b, c}));
+      poly.erase(poly.begin() + i);
+      clipped = true;
+    }
+    if (!clipped) break;  // not simple; what is left is dropped
+  }
+  if (poly.size() == 3 && TwiceSignedArea(poly) > 0.0) triangles.push_back(MakeRegion(poly));
+  return triangles;
+}
+
+// The light, prepared once for many points.
+struct PreparedLight {
+  double area = 0.0;
+  glm::dvec2 lo{0.0}, hi{0.0};
+  double tolerance = 0.0;  // kTolerance times the light's extent
+  std::vector<Region> regions;
+};
+
+std::optional<PreparedLight> PrepareLight(std::span<const glm::dvec2> polygon) {
+  std::vector<glm::dvec2> ccw(polygon.begin(), polygon.end());
+  for (const glm::dvec2& q : ccw) {
+    if (!std::isfinite(q.x) || !std::isfinite(q.y)) return std::nullopt;
+  }
+  if (ccw.size() < 3) return std::nullopt;
+  if (TwiceSignedArea(ccw) < 0.0) std::reverse(ccw.begin(), ccw.end());
+  PreparedLight light;
+  light.lo = light.hi = ccw[0];
+  for (const glm::dvec2& q : ccw) {
+    light.lo = glm::min(light.lo, q);
+    light.hi = glm::max(light.hi, q);
+  }
+  light.tolerance = kTolerance * std::max(light.hi.x - light.lo.x, light.hi.y - light.lo.y);
+  RemoveNearlyCollinear(light.tolerance, &ccw);
+  if (ccw.size() < 3) return std::nullopt;
+  light.area = 0.5 * TwiceSignedArea(ccw);
+  if (!(light.area > 0.0)) return std::nullopt;
+  if (IsConvexCcw(ccw)) {
+    light.regions.push_back(MakeRegion(std::move(ccw)));
+  } else {
+    light.regions = Triangulate(std::move(ccw));
+  }
+  return light;
+}
+
 // Per-point setup: the point and the wedge from it through the light's bounding box.
 struct Projector {
   glm::dvec3 p;
@@ -346,15 +292,15 @@ struct Projector {
   }
 
   // Conservative cull: the triangle misses the light's box if all three vertices are outside
-  // the same bounding plane (all linear, so the whole triangle is).
+  // the same bounding plane (all are linear, so then the whole triangle is).
   bool Misses(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) const {
     if (a.z <= 0.0 && b.z <= 0.0 && c.z <= 0.0) return true;
     if (a.z >= z_max && b.z >= z_max && c.z >= z_max) return true;
-    auto all_out = [&](auto f) { return f(a) < 0.0 && f(b) < 0.0 && f(c) < 0.0; };
-    return all_out([&](const glm::dvec3& v) { return WedgeXLo(v); }) ||
-           all_out([&](const glm::dvec3& v) { return WedgeXHi(v); }) ||
-           all_out([&](const glm::dvec3& v) { return WedgeYLo(v); }) ||
-           all_out([&](const glm::dvec3& v) { return WedgeYHi(v); });
+    auto all_out = [&](double (Projector::*f)(const glm::dvec3&) const) {
+      return (this->*f)(a) < 0.0 && (this->*f)(b) < 0.0 && (this->*f)(c) < 0.0;
+    };
+    return all_out(&Projector::WedgeXLo) || all_out(&Projector::WedgeXHi) ||
+           all_out(&Projector::WedgeYLo) || all_out(&Projector::WedgeYHi);
   }
 
   glm::dvec2 Project(const glm::dvec3& v) const {
@@ -365,30 +311,77 @@ struct Projector {
   }
 };
 
+// Convex polygons, counter-clockwise, stored flat with their edges.
+struct ConvexSet {
+  std::vector<glm::dvec2> vertex;  // polygon i: vertex[start[i] .. start[i + 1])
+  std::vector<glm::dvec2> unit;    // direction of the edge leaving each vertex
+  std::vector<double> length;      // and its length
+  std::vector<uint32_t> start{0};
+  std::vector<glm::dvec2> lo, hi;
+  std::vector<double> area;
+
+  size_t size() const { return area.size(); }
+  void Clear() {
+    vertex.clear();
+    unit.clear();
+    length.clear();
+    start.assign(1, 0);
+    lo.clear();
+    hi.clear();
+    area.clear();
+  }
+  void Add(const std::vector<glm::dvec2>& ccw, double twice_area) {
+    const size_t n = ccw.size();
+    glm::dvec2 box_lo = ccw[0], box_hi = ccw[0];
+    for (size_t k = 0; k < n; ++k) {
+      const glm::dvec2 d = ccw[(k + 1) % n] - ccw[k];
+      const double len = glm::length(d);
+      vertex.push_back(ccw[k]);
+      unit.push_back(d / len);
+      length.push_back(len);
+      box_lo = glm::min(box_lo, ccw[k]);
+      box_hi = glm::max(box_hi, ccw[k]);
+    }
+    start.push_back(static_cast<uint32_t>(vertex.size()));
+    lo.push_back(box_lo);
+    hi.push_back(box_hi);
+    area.push_back(0.5 * twice_area);
+  }
+};
+
+// Reusable buffers, one set per thread.
+struct Workspace {
+  std::vector<glm::dvec3> poly3, scratch3;
+  std::vector<glm::dvec2> poly2, scratch2;
+  std::vector<double> values;
+  ConvexSet projected;  // the clipped, projected triangles
+  ConvexSet pieces;     // those clipped to one region
+  // Union: grid cells (CSR) and the covered parameter intervals of one edge.
+  std::vector<uint32_t> cell_start, cell_items;
+  std::vector<uint64_t> visited;
+  std::vector<std::pair<double, double>> intervals;
+};
+
 // Clips triangle abc to the part between the light and the point that projects into the
-// light's box, and projects it: a convex polygon, counter-clockwise, in ws->poly2. Returns
-// false when nothing of positive area is left.
+// light's box, and projects it: a convex counter-clockwise polygon in ws->poly2. Returns false
+// when nothing of positive area is left.
 bool ProjectTriangle(const Projector& proj, const glm::dvec3& a, const glm::dvec3& b,
-                     const glm::dvec3& c, double min_area, double clean_tolerance,
-                     Workspace* ws) {
+                     const glm::dvec3& c, double min_area, double tolerance, Workspace* ws) {
   std::vector<glm::dvec3>& poly = ws->poly3;
   poly.assign({a, b, c});
-  ClipConvex([](const glm::dvec3& v) { return v.z; }, /*strict=*/true, &poly, &ws->scratch3,
-             &ws->values);
-  ClipConvex([&](const glm::dvec3& v) { return proj.z_max - v.z; }, false, &poly, &ws->scratch3,
-             &ws->values);
-  ClipConvex([&](const glm::dvec3& v) { return proj.WedgeXLo(v); }, false, &poly, &ws->scratch3,
-             &ws->values);
-  ClipConvex([&](const glm::dvec3& v) { return proj.WedgeXHi(v); }, false, &poly, &ws->scratch3,
-             &ws->values);
-  ClipConvex([&](const glm::dvec3& v) { return proj.WedgeYLo(v); }, false, &poly, &ws->scratch3,
-             &ws->values);
-  ClipConvex([&](const glm::dvec3& v) { return proj.WedgeYHi(v); }, false, &poly, &ws->scratch3,
-             &ws->values);
+  auto clip = [&](auto f, bool strict) {
+    ClipConvex(f, strict, &poly, &ws->scratch3, &ws->values);
+  };
+  clip([](const glm::dvec3& v) { return v.z; }, /*strict=*/true);
+  clip([&](const glm::dvec3& v) { return proj.z_max - v.z; }, false);
+  clip([&](const glm::dvec3& v) { return proj.WedgeXLo(v); }, false);
+  clip([&](const glm::dvec3& v) { return proj.WedgeXHi(v); }, false);
+  clip([&](const glm::dvec3& v) { return proj.WedgeYLo(v); }, false);
+  clip([&](const glm::dvec3& v) { return proj.WedgeYHi(v); }, false);
   if (poly.size() < 3) return false;
   ws->poly2.clear();
   for (const glm::dvec3& v : poly) ws->poly2.push_back(proj.Project(v));
-  RemoveNearlyCollinear(clean_tolerance, &ws->poly2);
+  RemoveNearlyCollinear(tolerance, &ws->poly2);
   if (ws->poly2.size() < 3) return false;
   const double twice_area = TwiceSignedArea(ws->poly2);
   if (std::abs(twice_area) <= 2.0 * min_area) return false;
@@ -396,210 +389,230 @@ bool ProjectTriangle(const Projector& proj, const glm::dvec3& a, const glm::dvec
   return true;
 }
 
-// Clips the convex ccw polygon ws->poly2 to a convex light. Returns false if nothing is left.
-bool ClipToConvexLight(const PreparedLight& light, double min_area, Workspace* ws) {
+// Clips the convex counter-clockwise ws->poly2 to a region. Returns twice the area left, 0 if
+// nothing of positive area is.
+double ClipToRegion(const Region& region, double min_area, double tolerance, Workspace* ws) {
   std::vector<glm::dvec2>& poly = ws->poly2;
-  const double r2 = light.inner_radius * light.inner_radius;
+  const double r2 = region.inner_radius * region.inner_radius;
   const bool inside = std::all_of(poly.begin(), poly.end(), [&](const glm::dvec2& q) {
-    const glm::dvec2 d = q - light.inner_center;
+    const glm::dvec2 d = q - region.inner_center;
     return glm::dot(d, d) <= r2;
   });
-  if (inside) return true;
-  const size_t n = light.ccw.size();
-  for (size_t i = 0; i < n && poly.size() >= 3; ++i) {
-    const glm::dvec2 a = light.ccw[i];
-    const glm::dvec2 e = light.ccw[(i + 1) % n] - a;
-    ClipConvex([&](const glm::dvec2& q) { return Cross(e, q - a); }, false, &poly, &ws->scratch2,
-               &ws->values);
+  if (!inside) {
+    const size_t n = region.ccw.size();
+    for (size_t i = 0; i < n && poly.size() >= 3; ++i) {
+      const glm::dvec2 a = region.ccw[i];
+      const glm::dvec2 e = region.ccw[(i + 1) % n] - a;
+      ClipConvex([&](const glm::dvec2& q) { return Cross(e, q - a); }, false, &poly, &ws->scratch2,
+                 &ws->values);
+    }
+    RemoveNearlyCollinear(tolerance, &poly);
   }
-  RemoveNearlyCollinear(light.clean_tolerance, &poly);
-  return poly.size() >= 3 && TwiceSignedArea(poly) > 2.0 * min_area;
+  if (poly.size() < 3) return 0.0;
+  const double twice_area = TwiceSignedArea(poly);
+  return twice_area > 2.0 * min_area ? twice_area : 0.0;
 }
 
-void Nudge(double dx, double dy, BgMultiPolygon* shape) {
-  auto move_ring = [&](auto& ring) {
-    for (BgPoint& q : ring) q = BgPoint(q.x() + dx, q.y() + dy);
-  };
-  for (BgPolygon& poly : *shape) {
-    move_ring(poly.outer());
-    for (auto& inner : poly.inners()) move_ring(inner);
+// Whether segments a and b lie on one line, within `tolerance`. Measured against the longer
+// one's line, with both put in a canonical order first: the answer is bit-for-bit the same
+// whichever of the two edges asks, so coincident edges are treated alike from both sides.
+bool OnOneLine(glm::dvec2 a0, glm::dvec2 a1, glm::dvec2 b0, glm::dvec2 b1, double tolerance) {
+  if (LexLess(a1, a0)) std::swap(a0, a1);
+  if (LexLess(b1, b0)) std::swap(b0, b1);
+  double la = glm::length(a1 - a0), lb = glm::length(b1 - b0);
+  const bool b_is_reference =
+      lb > la || (lb == la && (LexLess(b0, a0) || (b0 == a0 && LexLess(b1, a1))));
+  if (b_is_reference) {
+    std::swap(a0, b0);
+    std::swap(a1, b1);
+    std::swap(la, lb);
   }
+  const glm::dvec2 d = a1 - a0;
+  return std::abs(Cross(d, b0 - a0)) <= tolerance * la &&
+         std::abs(Cross(d, b1 - a0)) <= tolerance * la;
 }
 
-// Runs a Boost.Geometry boolean operation `op` (which returns the result's area, or nullopt
-// when that area is implausible). Boost.Geometry can throw (overlay_invalid_input_exception
-// and friends) or return garbage on nearly-degenerate turns; both are retried with the
-// operands swapped (the turn traversal depends on the order), then with `b` nudged by a tiny
-// amount. Returns nullopt if every attempt failed.
-template <typename Op>
-std::optional<double> TryBoolean(const Op& op, double nudge, const BgMultiPolygon& a,
-                                 const BgMultiPolygon& b, BgMultiPolygon* out,
-                                 BooleanStats* stats) {
-  constexpr int kAttempts = 4;
-  for (int attempt = 0; attempt < kAttempts; ++attempt) {
-    out->clear();
-    std::optional<double> area;
-    try {
-      if (attempt == 0) {
-        area = op(a, b, out);
-      } else if (attempt == 1) {
-        area = op(b, a, out);
-      } else {
-        // An irrational-ish direction, unlikely to line the moved edges up with others.
-        BgMultiPolygon moved = b;
-        const double step = nudge * (attempt - 1);
-        Nudge(step * 0.8191520442889918, step * 0.5735764363510461, &moved);
-        area = op(a, moved, out);
+// The parameter interval of edge e (of polygon i, from a to b) covered by polygon j, if any.
+// A point of e counts as covered when it is inside j, or on an edge of j that e runs along in
+// the opposite direction (then both sides of it are in the union), or on one that e runs along
+// in the same direction when j < i (so that one of a set of coincident edges survives).
+std::optional<std::pair<double, double>> CoveredBy(const ConvexSet& set, size_t j, size_t i,
+                                                   const glm::dvec2& a, const glm::dvec2& b,
+                                                   const glm::dvec2& e_unit, double e_length,
+                                                   double tolerance) {
+  double t0 = 0.0, t1 = 1.0;
+  const uint32_t first = set.start[j], last = set.start[j + 1];
+  for (uint32_t k = first; k < last; ++k) {
+    const glm::dvec2& fa = set.vertex[k];
+    const glm::dvec2& fu = set.unit[k];
+    const double g0 = Cross(fu, a - fa);  // signed distances to f's line, inside positive
+    const double g1 = Cross(fu, b - fa);
+    // Only a candidate for "one line" when both ends are near f's line; the slack covers a
+    // short f whose direction, extended along a long e, is less certain.
+    const double reach = tolerance * (2.0 + 2.0 * e_length / set.length[k]);
+    if (std::abs(g0) <= reach && std::abs(g1) <= reach) {
+      const glm::dvec2& fb = set.vertex[k + 1 < last ? k + 1 : first];
+      if (OnOneLine(a, b, fa, fb, tolerance)) {
+        if (glm::dot(e_unit, fu) > 0.0 && !(j < i)) return std::nullopt;
+        continue;
       }
-    } catch (const std::exception&) {
-      area.reset();
     }
-    if (area.has_value()) {
-      if (attempt > 0) ++stats->recovered;
-      return area;
+    if (g0 >= 0.0 && g1 >= 0.0) continue;
+    if (g0 <= 0.0 && g1 <= 0.0) return std::nullopt;
+    const double t = g0 / (g0 - g1);
+    if (g0 < 0.0) {
+      t0 = std::max(t0, t);
+    } else {
+      t1 = std::min(t1, t);
     }
-    ++stats->failures;
+    if (t0 >= t1) return std::nullopt;
   }
-  out->clear();
-  return std::nullopt;
+  return std::make_pair(t0, t1);
 }
 
-struct Piece {
-  BgMultiPolygon shape;
-  double area = 0.0;
-  uint64_t morton = 0;  // of the centre, for locality of the union tree
+// Neumaier's compensated sum: the union's area is a sum of many terms that mostly cancel.
+class CompensatedSum {
+ public:
+  void Add(double x) {
+    const double t = sum_ + x;
+    compensation_ += std::abs(sum_) >= std::abs(x) ? (sum_ - t) + x : (x - t) + sum_;
+    sum_ = t;
+  }
+  double Value() const { return sum_ + compensation_; }
+
+ private:
+  double sum_ = 0.0, compensation_ = 0.0;
 };
 
-uint64_t SpreadBits(uint32_t x) {
-  uint64_t v = x;
-  v = (v | (v << 16)) & 0x0000FFFF0000FFFFULL;
-  v = (v | (v << 8)) & 0x00FF00FF00FF00FFULL;
-  v = (v | (v << 4)) & 0x0F0F0F0F0F0F0F0FULL;
-  v = (v | (v << 2)) & 0x3333333333333333ULL;
-  v = (v | (v << 1)) & 0x5555555555555555ULL;
-  return v;
-}
-
-uint64_t MortonCode(const PreparedLight& light, const std::vector<glm::dvec2>& poly) {
-  glm::dvec2 lo = poly[0], hi = poly[0];
-  for (const glm::dvec2& q : poly) {
-    lo = glm::min(lo, q);
-    hi = glm::max(hi, q);
+// Area of the union of the convex polygons in `set`, which lie within [lo, hi].
+double UnionArea(const ConvexSet& set, const glm::dvec2& lo, const glm::dvec2& hi, double tolerance,
+                 Workspace* ws) {
+  const size_t n = set.size();
+  if (n == 0) return 0.0;
+  if (n == 1) return set.area[0];
+  // A uniform grid over the region finds the polygons near an edge: ~sqrt(n) cells a side.
+  const int cells = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(n))), 1, 256);
+  const glm::dvec2 cell_size = glm::max((hi - lo) / static_cast<double>(cells), glm::dvec2(1e-300));
+  auto cell_of = [&](double v, double origin, double size) {
+    return std::clamp(static_cast<int>((v - origin) / size), 0, cells - 1);
+  };
+  auto for_cells = [&](const glm::dvec2& box_lo, const glm::dvec2& box_hi, auto&& f) {
+    const int x0 = cell_of(box_lo.x, lo.x, cell_size.x), x1 = cell_of(box_hi.x, lo.x, cell_size.x);
+    const int y0 = cell_of(box_lo.y, lo.y, cell_size.y), y1 = cell_of(box_hi.y, lo.y, cell_size.y);
+    for (int y = y0; y <= y1; ++y) {
+      for (int x = x0; x <= x1; ++x) {
+        if (!f(y * cells + x)) return;
+      }
+    }
+  };
+  const glm::dvec2 pad(tolerance);
+  std::vector<uint32_t>& cell_start = ws->cell_start;
+  std::vector<uint32_t>& cell_items = ws->cell_items;
+  cell_start.assign(static_cast<size_t>(cells) * cells + 1, 0);
+  for (size_t i = 0; i < n; ++i) {
+    for_cells(set.lo[i] - pad, set.hi[i] + pad, [&](int c) { return ++cell_start[c + 1], true; });
   }
-  const glm::dvec2 t = (0.5 * (lo + hi) - light.box_lo) / std::max(light.extent, 1e-300);
-  auto quantize = [](double u) { return static_cast<uint32_t>(std::clamp(u, 0.0, 1.0) * 65535.0); };
-  return SpreadBits(quantize(t.x)) | (SpreadBits(quantize(t.y)) << 1);
+  for (size_t c = 1; c < cell_start.size(); ++c) cell_start[c] += cell_start[c - 1];
+  cell_items.resize(cell_start.back());
+  {
+    std::vector<uint32_t> fill(cell_start.begin(), cell_start.end() - 1);
+    for (size_t i = 0; i < n; ++i) {
+      for_cells(set.lo[i] - pad, set.hi[i] + pad, [&](int c) {
+        cell_items[fill[c]++] = static_cast<uint32_t>(i);
+        return true;
+      });
+    }
+  }
+
+  ws->visited.assign(n, std::numeric_limits<uint64_t>::max());
+  uint64_t edge_id = 0;
+  CompensatedSum twice_area;
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t first = set.start[i], last = set.start[i + 1];
+    for (uint32_t k = first; k < last; ++k, ++edge_id) {
+      const glm::dvec2& a = set.vertex[k];
+      const glm::dvec2& b = set.vertex[k + 1 < last ? k + 1 : first];
+      const glm::dvec2 e_lo = glm::min(a, b) - pad, e_hi = glm::max(a, b) + pad;
+      ws->intervals.clear();
+      bool fully_covered = false;
+      for_cells(e_lo, e_hi, [&](int c) {
+        for (uint32_t s = cell_start[c]; s < cell_start[c + 1]; ++s) {
+          const uint32_t j = cell_items[s];
+          if (j == i || ws->visited[j] == edge_id) continue;
+          ws->visited[j] = edge_id;
+          if (glm::any(glm::lessThan(set.hi[j], e_lo)) ||
+              glm::any(glm::greaterThan(set.lo[j], e_hi))) {
+            continue;
+          }
+          const auto covered = CoveredBy(set, j, i, a, b, set.unit[k], set.length[k], tolerance);
+          if (!covered.has_value()) continue;
+          if (covered->first <= 0.0 && covered->second >= 1.0) {
+            fully_covered = true;
+            return false;
+          }
+          ws->intervals.push_back(*covered);
+        }
+        return true;
+      });
+      if (fully_covered) continue;
+      // Green's theorem over the uncovered parts of the edge.
+      std::sort(ws->intervals.begin(), ws->intervals.end());
+      auto at = [&](double t) { return t <= 0.0 ? a : t >= 1.0 ? b : a + t * (b - a); };
+      double reached = 0.0;
+      for (const auto& [t0, t1] : ws->intervals) {
+        if (t0 > reached) twice_area.Add(Cross(at(reached), at(t0)));
+        reached = std::max(reached, t1);
+      }
+      if (reached < 1.0) twice_area.Add(Cross(at(reached), b));
+    }
+  }
+  return 0.5 * twice_area.Value();
 }
 
-// The projected, light-clipped pieces of all triangles, in Morton order.
-std::vector<Piece> CollectPieces(const PreparedLight& light, std::span<const glm::dvec3> tris,
-                                 const glm::dvec3& p, BooleanStats* stats) {
-  const Projector proj{p, p.z * (1.0 - kNearPointMargin), light.box_lo, light.box_hi};
-  const double min_area = kDegenerateAreaFraction * light.area;
-  const double nudge = kNudgeFraction * light.extent;
-  Workspace ws;
-  std::vector<Piece> pieces;
+// Clips and projects every triangle into ws->projected.
+void ProjectAll(const PreparedLight& light, std::span<const glm::dvec3> tris, const Projector& proj,
+                double min_area, Workspace* ws) {
+  ws->projected.Clear();
   for (size_t t = 0; t + 2 < tris.size(); t += 3) {
     const glm::dvec3& a = tris[t];
     const glm::dvec3& b = tris[t + 1];
     const glm::dvec3& c = tris[t + 2];
     if (!Finite(a) || !Finite(b) || !Finite(c)) continue;
     if (proj.Misses(a, b, c)) continue;
-    if (!ProjectTriangle(proj, a, b, c, min_area, light.clean_tolerance, &ws)) continue;
-    Piece piece;
-    piece.morton = MortonCode(light, ws.poly2);
-    if (light.convex) {
-      if (!ClipToConvexLight(light, min_area, &ws)) continue;
-      piece.area = 0.5 * TwiceSignedArea(ws.poly2);
-      piece.shape.push_back(ToBg(ws.poly2));
-    } else {
-      BgMultiPolygon projected{ToBg(ws.poly2)};
-      const BgMultiPolygon light_shape{light.bg};
-      auto intersect = [&](const BgMultiPolygon& x, const BgMultiPolygon& y,
-                           BgMultiPolygon* out) -> std::optional<double> {
-        bg::intersection(x, y, *out);
-        const double area = bg::area(*out);
-        const double slack = kUnionAreaSlack * light.area;
-        if (!(area >= -slack && area <= std::min(bg::area(x), bg::area(y)) + slack)) {
-          return std::nullopt;
-        }
-        return area;
-      };
-      std::optional<double> area =
-          TryBoolean(intersect, nudge, light_shape, projected, &piece.shape, stats);
-      if (!area.has_value()) {
-        ++stats->skipped;
-        stats->skipped_area += bg::area(projected) / light.area;
-        continue;
-      }
-      CleanShape(light.clean_tolerance, &piece.shape);
-      piece.area = bg::area(piece.shape);
-      if (piece.area <= min_area) continue;
-    }
-    pieces.push_back(std::move(piece));
+    if (!ProjectTriangle(proj, a, b, c, min_area, light.tolerance, ws)) continue;
+    ws->projected.Add(ws->poly2, TwiceSignedArea(ws->poly2));
   }
-  // Neighbours first: unions of nearby pieces merge into compact shapes, which keeps the
-  // intermediate results of the union tree small.
-  std::stable_sort(pieces.begin(), pieces.end(),
-                   [](const Piece& x, const Piece& y) { return x.morton < y.morton; });
-  return pieces;
-}
-
-// Union of two pieces. On persistent failure keeps the larger one and records the other.
-Piece UnionOf(const PreparedLight& light, Piece a, Piece b, BooleanStats* stats) {
-  const double slack = UNION_SLACK * light.area;
-  auto unite = [&](const BgMultiPolygon& x, const BgMultiPolygon& y,
-                   BgMultiPolygon* out) -> std::optional<double> {
-    bg::union_(x, y, *out);
-    const double area = bg::area(*out);
-#ifdef PDSM_EXACT_DEBUG2
-    std::string reason;
-    fprintf(stderr, "union %.15g + %.15g -> %.15g  valid x=%d y=%d out=%d\n", bg::area(x), bg::area(y), area, (int)bg::is_valid(x), (int)bg::is_valid(y), (int)bg::is_valid(*out, reason));
-    if (!reason.empty() && reason != "Geometry is valid") fprintf(stderr, "  %s\n", reason.c_str());
-    if (!bg::is_valid(*out)) { std::cerr.precision(17); std::cerr << bg::wkt(x) << "\n" << bg::wkt(y) << "\n" << bg::wkt(*out) << "\n"; }
-#endif
-    // The union can be neither smaller than either operand nor larger than both together.
-    if (!(area >= std::max(a.area, b.area) - slack && area <= a.area + b.area + slack)) {
-      return std::nullopt;
-    }
-    return area;
-  };
-  Piece result;
-  result.morton = a.morton;
-  const std::optional<double> area =
-      TryBoolean(unite, kNudgeFraction * light.extent, a.shape, b.shape, &result.shape, stats);
-  if (area.has_value()) {
-    CleanShape(light.clean_tolerance, &result.shape);
-    result.area = bg::area(result.shape);
-    return result;
-  }
-  ++stats->skipped;
-  stats->skipped_area += std::min(a.area, b.area) / light.area;
-  return a.area >= b.area ? std::move(a) : std::move(b);
 }
 
 double HiddenFraction(const PreparedLight& light, std::span<const glm::dvec3> triangles,
-                      const glm::dvec3& p, BooleanStats* stats) {
+                      const glm::dvec3& p, Workspace* ws) {
   if (!(p.z > 0.0) || !Finite(p)) return 0.0;
-  std::vector<Piece> pieces = CollectPieces(light, triangles, p, stats);
-  const double full = light.area * (1.0 - 1e-12);
-  // Every piece lies inside the light: one that is as large as the light is the umbra.
-  for (const Piece& piece : pieces) {
-    if (piece.area >= full) return 1.0;
-  }
-  // Balanced pairwise union: O(log n) levels instead of n ever-growing unions.
-  while (pieces.size() > 1) {
-    std::vector<Piece> next;
-    next.reserve((pieces.size() + 1) / 2);
-    for (size_t i = 0; i + 1 < pieces.size(); i += 2) {
-      next.push_back(UnionOf(light, std::move(pieces[i]), std::move(pieces[i + 1]), stats));
-      if (next.back().area >= full) return 1.0;
+  const Projector proj{p, p.z * (1.0 - kNearPointMargin), light.lo, light.hi};
+  const double min_area = kDegenerateAreaFraction * light.area;
+  ProjectAll(light, triangles, proj, min_area, ws);
+  const ConvexSet& projected = ws->projected;
+  double hidden_area = 0.0;
+  for (const Region& region : light.regions) {
+    ConvexSet& pieces = ws->pieces;
+    pieces.Clear();
+    bool umbra = false;
+    for (size_t i = 0; i < projected.size() && !umbra; ++i) {
+      if (glm::any(glm::lessThan(projected.hi[i], region.lo)) ||
+          glm::any(glm::greaterThan(projected.lo[i], region.hi))) {
+        continue;
+      }
+      ws->poly2.assign(projected.vertex.begin() + projected.start[i],
+                       projected.vertex.begin() + projected.start[i + 1]);
+      const double twice_area = ClipToRegion(region, min_area, light.tolerance, ws);
+      if (twice_area <= 0.0) continue;
+      // A piece as large as its region covers all of it.
+      umbra = 0.5 * twice_area >= region.area * (1.0 - 1e-12);
+      pieces.Add(ws->poly2, twice_area);
     }
-    if (pieces.size() % 2 == 1) next.push_back(std::move(pieces.back()));
-    pieces = std::move(next);
+    hidden_area +=
+        umbra ? region.area : UnionArea(pieces, region.lo, region.hi, light.tolerance, ws);
   }
-  if (pieces.empty()) return 0.0;
-  return std::clamp(pieces[0].area / light.area, 0.0, 1.0);
+  return std::clamp(hidden_area / light.area, 0.0, 1.0);
 }
 
 absl::StatusOr<std::vector<glm::dvec2>> LightPolygon(const LightSpec& light) {
@@ -671,8 +684,8 @@ double ExactHiddenFraction(std::span<const glm::dvec2> light_polygon,
   // A degenerate light has nothing to hide.
   const std::optional<PreparedLight> light = PrepareLight(light_polygon);
   if (!light.has_value()) return 0.0;
-  BooleanStats stats;
-  return HiddenFraction(*light, triangles, p_light, &stats);
+  Workspace ws;
+  return HiddenFraction(*light, triangles, p_light, &ws);
 }
 
 absl::StatusOr<std::vector<double>> ExactAttenuation(const Scene& scene,
@@ -685,35 +698,23 @@ absl::StatusOr<std::vector<double>> ExactAttenuation(const Scene& scene,
   if (!light.has_value()) return absl::InternalError("light polygon is degenerate");
 
   std::vector<double> result(points_world.size(), std::numeric_limits<double>::quiet_NaN());
-  // Points are independent: threads take them one at a time, each writing its own slot, so
-  // the output does not depend on the scheduling.
+  // Points are independent: threads take them one at a time and each writes only its own
+  // slot, so the output does not depend on the scheduling.
   const size_t thread_count = std::clamp<size_t>(std::thread::hardware_concurrency(), 1,
                                                  std::max<size_t>(points_world.size(), 1));
-  std::vector<BooleanStats> stats(thread_count);
   std::atomic<size_t> next{0};
-  auto work = [&](size_t thread_index) {
+  auto work = [&] {
+    Workspace ws;
     for (size_t i = next++; i < points_world.size(); i = next++) {
       const glm::dvec3 p_light = scene.light.frame.LightFromWorld(points_world[i]);
       if (!(p_light.z > 0.0) || !Finite(p_light)) continue;  // stays NaN
-      result[i] = HiddenFraction(*light, *triangles, p_light, &stats[thread_index]);
+      result[i] = HiddenFraction(*light, *triangles, p_light, &ws);
     }
   };
   std::vector<std::thread> threads;
-  for (size_t t = 1; t < thread_count; ++t) threads.emplace_back(work, t);
-  work(0);
+  for (size_t t = 1; t < thread_count; ++t) threads.emplace_back(work);
+  work();
   for (std::thread& thread : threads) thread.join();
-
-  BooleanStats total;
-  for (const BooleanStats& s : stats) total.Add(s);
-  if (total.skipped > 0) {
-    Logger()->warn(
-        "exact reference: {} Boost.Geometry operations failed after every retry; operands "
-        "left out, total {:.3g} of the light area over {} points",
-        total.skipped, total.skipped_area, points_world.size());
-  } else if (total.failures > 0) {
-    Logger()->info("exact reference: {} Boost.Geometry operations needed a retry ({} recovered)",
-                   total.failures, total.recovered);
-  }
   return result;
 }
 

@@ -9,7 +9,7 @@ absl::StatusOr<GlFunctions> GlFunctions::Load(GetProcAddressFn get_proc_address)
     return absl::InvalidArgumentError("GlFunctions::Load: get_proc_address is null");
   }
   GlFunctions gl;
-#define PDSM_GL_LOAD_MEMBER(type, name)                                                \
+#define PDSM_GL_LOAD_MEMBER(type, name)                                               \
   gl.name = reinterpret_cast<type>(get_proc_address("gl" #name));                     \
   if (gl.name == nullptr) {                                                           \
     return absl::NotFoundError(absl::StrCat("GL entry point gl" #name " not found")); \

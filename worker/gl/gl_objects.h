@@ -22,8 +22,7 @@ class GlObject {
 
   GlObject(const GlObject&) = delete;
   GlObject& operator=(const GlObject&) = delete;
-  GlObject(GlObject&& other) noexcept
-      : gl_(other.gl_), name_(std::exchange(other.name_, 0)) {}
+  GlObject(GlObject&& other) noexcept : gl_(other.gl_), name_(std::exchange(other.name_, 0)) {}
   GlObject& operator=(GlObject&& other) noexcept {
     if (this != &other) {
       Reset();

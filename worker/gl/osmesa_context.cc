@@ -13,6 +13,8 @@ namespace {
 constexpr int kColourBufferSize = 1;
 
 OSMesaContext CreateCoreContext(int major, int minor) {
+  // (name, value) pairs.
+  // clang-format off
   const int attribs[] = {
       OSMESA_FORMAT, OSMESA_RGBA,
       OSMESA_DEPTH_BITS, 0,  // all rendering goes to FBOs
@@ -23,6 +25,7 @@ OSMesaContext CreateCoreContext(int major, int minor) {
       OSMESA_CONTEXT_MINOR_VERSION, minor,
       0,
   };
+  // clang-format on
   return OSMesaCreateContextAttribs(attribs, nullptr);
 }
 
@@ -82,8 +85,8 @@ absl::Status OsMesaContext::MakeCurrent() const {
   if (IsCurrent()) return absl::OkStatus();
   if (!OSMesaMakeCurrent(context_, colour_buffer_.get(), GL_UNSIGNED_BYTE, kColourBufferSize,
                          kColourBufferSize)) {
-    return absl::InternalError(absl::StrCat("OSMesaMakeCurrent failed (GL ", major_version_,
-                                            ".", minor_version_, " core context)"));
+    return absl::InternalError(absl::StrCat("OSMesaMakeCurrent failed (GL ", major_version_, ".",
+                                            minor_version_, " core context)"));
   }
   return absl::OkStatus();
 }

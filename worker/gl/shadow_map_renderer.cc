@@ -39,8 +39,8 @@ absl::Status CheckGlError(const GlFunctions& gl, absl::string_view what) {
   return absl::InternalError(absl::StrFormat("GL error 0x%04x after %s", first, what));
 }
 
-absl::StatusOr<gl::Shader> CompileShader(const GlFunctions& gl, GLenum type,
-                                         const char* source, absl::string_view name) {
+absl::StatusOr<gl::Shader> CompileShader(const GlFunctions& gl, GLenum type, const char* source,
+                                         absl::string_view name) {
   gl::Shader shader = gl::MakeShader(gl, type);
   if (!shader) return absl::InternalError(absl::StrCat("glCreateShader failed for ", name));
   gl.ShaderSource(shader.name(), 1, &source, nullptr);
@@ -79,7 +79,8 @@ absl::StatusOr<gl::Program> LinkShadowMapProgram(const GlFunctions& gl) {
     gl.GetProgramiv(program.name(), GL_INFO_LOG_LENGTH, &length);
     std::string log(std::max(length, 1), '\0');
     gl.GetProgramInfoLog(program.name(), length, nullptr, log.data());
-    return absl::InternalError(absl::StrCat("linking the shadow-map program failed: ", log.c_str()));
+    return absl::InternalError(
+        absl::StrCat("linking the shadow-map program failed: ", log.c_str()));
   }
   if (absl::Status status = CheckGlError(gl, "building the shadow-map program"); !status.ok()) {
     return status;
@@ -133,10 +134,12 @@ std::array<float, 16> ClipFromLight(const ShadowMapCamera& camera, const ShadowM
   double rows[4][4];
   if (camera.projection == Projection::kPerspective) {
     const double n = camera.z_clip_near;
+    // clang-format off
     const double r[4][4] = {{1 / hs, 0, -sc / hs, -a / hs},
                             {0, 1 / ht, -tc / ht, -b / ht},
                             {0, 0, 0, n},
                             {0, 0, 1, 0}};
+    // clang-format on
     std::copy(&r[0][0], &r[0][0] + 16, &rows[0][0]);
   } else {
     const double range = camera.z_clip_far - camera.z_clip_near;
@@ -145,10 +148,12 @@ std::array<float, 16> ClipFromLight(const ShadowMapCamera& camera, const ShadowM
       z_row[2] *= 2;
       z_row[3] = 2 * z_row[3] - 1;
     }
+    // clang-format off
     const double r[4][4] = {{1 / hs, 0, -a / hs, -sc / hs},
                             {0, 1 / ht, -b / ht, -tc / ht},
                             {z_row[0], z_row[1], z_row[2], z_row[3]},
                             {0, 0, 0, 1}};
+    // clang-format on
     std::copy(&r[0][0], &r[0][0] + 16, &rows[0][0]);
   }
   std::array<float, 16> column_major;
@@ -200,7 +205,7 @@ class OsMesaShadowMapRenderer final : public ShadowMapRenderer {
   GLsizei index_count_ = 0;
   // Render target, grown (never shrunk) to the largest piece rendered so far.
   gl::Framebuffer framebuffer_;
-  gl::Texture biased_depth_;   // GL_R32F: biased light-space z, the output
+  gl::Texture biased_depth_;    // GL_R32F: biased light-space z, the output
   gl::Texture reversed_depth_;  // GL_DEPTH_COMPONENT32F: reversed depth for the test
   int target_width_ = 0, target_height_ = 0;
 };
@@ -216,14 +221,16 @@ absl::Status OsMesaShadowMapRenderer::Init(const Options& options) {
   absl::StatusOr<gl::Program> program = LinkShadowMapProgram(gl_);
   if (!program.ok()) return program.status();
   program_ = *std::move(program);
-  const GLuint p = program_.name();
-  uniforms_ = {gl_.GetUniformLocation(p, "clip_from_light"),
-               gl_.GetUniformLocation(p, "depth_bias"),
-               gl_.GetUniformLocation(p, "slope_bias"),
-               gl_.GetUniformLocation(p, "footprint_scale"),
-               gl_.GetUniformLocation(p, "orthographic"),
-               gl_.GetUniformLocation(p, "z_clip_near"),
-               gl_.GetUniformLocation(p, "z_clip_far")};
+  const auto location = [&](const char* name) {
+    return gl_.GetUniformLocation(program_.name(), name);
+  };
+  uniforms_.clip_from_light = location("clip_from_light");
+  uniforms_.depth_bias = location("depth_bias");
+  uniforms_.slope_bias = location("slope_bias");
+  uniforms_.footprint_scale = location("footprint_scale");
+  uniforms_.orthographic = location("orthographic");
+  uniforms_.z_clip_near = location("z_clip_near");
+  uniforms_.z_clip_far = location("z_clip_far");
 
   vertex_array_ = gl::MakeVertexArray(gl_);
   vertex_buffer_ = gl::MakeBuffer(gl_);
@@ -280,8 +287,7 @@ absl::Status OsMesaShadowMapRenderer::SetGeometry(std::span<const glm::vec3> pos
   for (size_t i = 0; i < indices.size(); ++i) {
     if (indices[i] >= positions_light.size()) {
       return absl::InvalidArgumentError(absl::StrCat("indices[", i, "] = ", indices[i],
-                                                     " >= ", positions_light.size(),
-                                                     " positions"));
+                                                     " >= ", positions_light.size(), " positions"));
     }
   }
   if (absl::Status status = context_.MakeCurrent(); !status.ok()) return status;
@@ -322,8 +328,8 @@ absl::Status OsMesaShadowMapRenderer::EnsureTarget(int width, int height) {
   const GLenum draw_buffer = GL_COLOR_ATTACHMENT0;
   gl_.DrawBuffers(1, &draw_buffer);
   gl_.ReadBuffer(GL_COLOR_ATTACHMENT0);
-  const std::string what = absl::StrCat("allocating a ", new_width, "x", new_height,
-                                        " R32F + D32F render target");
+  const std::string what =
+      absl::StrCat("allocating a ", new_width, "x", new_height, " R32F + D32F render target");
   if (absl::Status status = CheckGlError(gl_, what); !status.ok()) {
     target_width_ = target_height_ = 0;
     return status;

@@ -8,11 +8,10 @@
 #define PDSM_WORKER_GL_SHADOW_MAP_RENDERER_H_
 
 #include <cstdint>
+#include <glm/glm.hpp>
 #include <memory>
 #include <span>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"

@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# The main job, from a fresh Debian 12 machine: install dependencies, build, bake the bundled
+# "plates" example locally, and say where the PDSM and its preview image are.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash deploy/install_deps.sh
+bash scripts/build.sh
+mkdir -p out
+./build/client/pdsm bake examples/plates/scene.json -o out/plates.exr
+echo
+echo "PDSM:    $(pwd)/out/plates.exr"
+echo "preview: $(pwd)/out/plates.png"
+echo "try:     ./build/client/pdsm info out/plates.exr"
