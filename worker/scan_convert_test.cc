@@ -1,0 +1,115 @@
+// Scan conversion cases of thesis 3.1 on hand-made shadow maps: depth inside the bounds
+// (fig. 3.4a), behind them (3.4b), exit into a lit texel (3.4c), and the one-texel ray.
+#include "worker/scan_convert.h"
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace pdsm {
+namespace {
+
+constexpr float kEmpty = std::numeric_limits<float>::infinity();
+
+// A 1-row shadow map of `depths` on a lattice of unit texels starting at s = 0.
+struct Row {
+  std::vector<float> depths;
+  ShadowMapView View() const {
+    ShadowMapView view;
+    view.depth = depths.data();
+    view.lattice = ShadowMapLattice{0.0, 0.0, 1.0, 1.0};
+    view.window = ShadowMapWindow{0, 0, static_cast<int>(depths.size()), 1};
+    return view;
+  }
+};
+
+// Orthographic ray crossing the row from s = 0.5 + ... : depth z maps linearly to s, so texel
+// k spans depths [z0 + k * dz, z0 + (k + 1) * dz] (the first and last clipped to the ray).
+RayInShadowMap OrthoRay(double s_near, double s_far, double z_near, double z_far) {
+  return RayInShadowMap{{s_near, 0.5}, {s_far, 0.5}, z_near, z_far};
+}
+
+std::vector<Event> Convert(const Row& row, const RayInShadowMap& ray, Projection p) {
+  std::vector<Event> events;
+  ScanConvertRay(row.View(), ray, p, &events);
+  return events;
+}
+
+TEST(ScanConvert, OccluderInsidePieceEntersAtItsDepth) {
+  // Texel 1 spans depths [2, 3] along the ray; its occluder is at 2.5.
+  const Row row{{kEmpty, 2.5f, kEmpty}};
+  const auto events = Convert(row, OrthoRay(0.0, 3.0, 1.0, 4.0), Projection::kOrthographic);
+  ASSERT_EQ(events.size(), 2u);
+  EXPECT_EQ(events[0], (Event{2.5f, +1}));
+  EXPECT_EQ(events[1], (Event{3.0f, -1}));  // texel 2 is lit: leave at its boundary
+}
+
+TEST(ScanConvert, OccluderInFrontOfPieceEntersAtTheBound) {
+  // Texel 1 spans [2, 3]; occluder at 1.2 is nearer than the piece: shadowed from z_in = 2.
+  const Row row{{kEmpty, 1.2f, 1.0f, kEmpty}};
+  const auto events = Convert(row, OrthoRay(0.0, 4.0, 1.0, 5.0), Projection::kOrthographic);
+  ASSERT_EQ(events.size(), 2u);
+  EXPECT_EQ(events[0], (Event{2.0f, +1}));
+  EXPECT_EQ(events[1], (Event{4.0f, -1}));  // stays shadowed through texel 2, leaves at 4
+}
+
+TEST(ScanConvert, ShadowedRayLitAgainThenBehindAnotherOccluder) {
+  // Texel 0 shadowed from 1.5; texel 1 occluder at 2.7 inside [2, 3]: lit from 2 to 2.7.
+  const Row row{{1.5f, 2.7f}};
+  const auto events = Convert(row, OrthoRay(0.0, 2.0, 1.0, 3.0), Projection::kOrthographic);
+  ASSERT_EQ(events.size(), 3u);
+  EXPECT_EQ(events[0], (Event{1.5f, +1}));
+  EXPECT_EQ(events[1], (Event{2.0f, -1}));
+  EXPECT_EQ(events[2], (Event{2.7f, +1}));
+}
+
+TEST(ScanConvert, OccluderBehindTheRayPieceLeavesItLit) {
+  const Row row{{9.0f, 9.0f, 9.0f}};
+  EXPECT_TRUE(Convert(row, OrthoRay(0.0, 3.0, 1.0, 4.0), Projection::kOrthographic).empty());
+}
+
+TEST(ScanConvert, OneTexelRayIsShadowedFromTheOccluderToInfinity) {
+  // The light-centre sample: the perspective ray does not move in the shadow map.
+  const Row row{{kEmpty, 3.25f, kEmpty}};
+  const RayInShadowMap ray{{1.5, 0.5}, {1.5, 0.5}, 1.0,
+                           std::numeric_limits<double>::infinity()};
+  const auto events = Convert(row, ray, Projection::kPerspective);
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0], (Event{3.25f, +1}));
+}
+
+TEST(ScanConvert, PerspectiveDepthsAreLinearInInverseDepth) {
+  // w = 1/z runs from 1 (z = 1) at s = 0 to 0 (z = inf) at s = 4: the boundary between
+  // texels k-1 and k is at w = 1 - k/4, i.e. z = 4 / (4 - k).
+  const Row row{{kEmpty, 0.5f, kEmpty, kEmpty}};
+  const RayInShadowMap ray{{0.0, 0.5}, {4.0, 0.5}, 1.0, std::numeric_limits<double>::infinity()};
+  const auto events = Convert(row, ray, Projection::kPerspective);
+  ASSERT_EQ(events.size(), 2u);
+  EXPECT_FLOAT_EQ(events[0].z, 4.0f / 3.0f);  // enters at texel 1's near bound
+  EXPECT_EQ(events[0].count, +1);
+  EXPECT_FLOAT_EQ(events[1].z, 2.0f);         // texel 2 lit: leaves at z = 4 / 2
+  EXPECT_EQ(events[1].count, -1);
+}
+
+TEST(ScanConvert, DiagonalRayVisitsEveryCrossedTexel) {
+  // A 3x3 map whose diagonal texels hold occluders nearer than the ray: the ray from
+  // (0.1, 0.1) to (2.9, 2.9) crosses (0,0) (0,1) or (1,0) (1,1) ... (2,2); shadowed all along
+  // the diagonal texels, lit in the off-diagonal ones it clips.
+  std::vector<float> depths(9, kEmpty);
+  for (int k = 0; k < 3; ++k) depths[k * 3 + k] = 0.0f;
+  ShadowMapView view{depths.data(), ShadowMapLattice{0, 0, 1, 1}, ShadowMapWindow{0, 0, 3, 3}};
+  std::vector<Event> events;
+  ScanConvertRay(view, RayInShadowMap{{0.1, 0.1}, {2.9, 2.85}, 1.0, 2.0},
+                 Projection::kOrthographic, &events);
+  ASSERT_FALSE(events.empty());
+  EXPECT_EQ(events.front(), (Event{1.0f, +1}));
+  int sum = 0;
+  for (const Event& e : events) sum += e.count;
+  EXPECT_EQ(sum, 1);  // ends in the shadowed texel (2, 2)
+  for (size_t k = 1; k < events.size(); ++k) EXPECT_LT(events[k - 1].z, events[k].z);
+}
+
+}  // namespace
+}  // namespace pdsm
