@@ -16,7 +16,7 @@ struct Vertex {
   bool operator==(const Vertex&) const = default;
 };
 
-// Evaluates A(z) by binary search. O(log n).
+// Evaluates A(z) by binary search, clamped to [0, 1]. O(log n).
 float EvaluateAttenuation(std::span<const Vertex> function, double z);
 
 }  // namespace pdsm

@@ -43,12 +43,14 @@ class LineCone {
   bool Admit(double z, double a) {
     double lo, hi;
     const double dz = z - z0_;
-    const double da = a - a0_;
     if (metric_ == CompressionMetric::kVertical) {
-      lo = (da - tolerance_) / dz;
-      hi = (da + tolerance_) / dz;
+      // The window is clipped to [0, 1] so the line never leaves the range of attenuation;
+      // clamping a segment's end afterwards would bend it and break the bound.
+      lo = (std::max(a - tolerance_, 0.0) - a0_) / dz;
+      hi = (std::min(a + tolerance_, 1.0) - a0_) / dz;
     } else {
       const double dzn = dz * inv_scale_;
+      const double da = a - a0_;
       const double dist = std::hypot(dzn, da);
       if (dist <= tolerance_) return true;
       constexpr double kSteepest = std::numbers::pi / 2 - 1e-9;
@@ -93,7 +95,7 @@ std::vector<Vertex> CompressFunction(std::span<const Vertex> function, double ep
   size_t last_admitted = 0;  // index of the last input vertex the current segment covers
   auto emit_segment_end = [&](size_t index) {
     const double z = function[index].z;
-    const double a = std::clamp(cone.ValueAt(z), 0.0, 1.0);
+    const double a = cone.ValueAt(z);
     out.push_back(Vertex{function[index].z, static_cast<float>(a)});
     cone.Reset(z, out.back().a);
   };

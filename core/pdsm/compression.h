@@ -5,10 +5,11 @@
 //
 // Guarantees (tested in compression_test.cc):
 //  - Output depths are a subset of the input depths: no event moves.
-//  - kVertical: |A'(z) - A(z)| <= epsilon for every z (A' the output, A the input).
+//  - kVertical: |A'(z) - A(z)| <= epsilon for every z (A' the output, A the input), and
+//    output values stay in [0, 1].
 //  - kPerpendicular: in the plane (z / depth_scale, A), every input vertex lies within
 //    epsilon of the line of the output segment spanning its depth (thesis: steep penumbra
-//    steps do not force vertices).
+//    steps do not force vertices). Segment ends may leave [0, 1] slightly; evaluation clamps.
 //  - epsilon = 0 is lossless: only exact duplicates are removed.
 //  - Jumps larger than the tolerance stay jumps (two vertices at one depth).
 #ifndef PDSM_CORE_PDSM_COMPRESSION_H_

@@ -31,8 +31,9 @@
 namespace pdsm {
 namespace {
 
-// Geometry closer to the point than this (relative to p.z) is dropped: its projection runs
-// off to infinity, and only a triangle through p itself reaches there, which hides nothing.
+// Geometry within this distance (relative to p.z) below the point's height is ignored: its
+// projection runs off to infinity. A consequence, wanted: the surface a point lies on (its
+// own receiver, within rounding) never shadows it.
 constexpr double kNearPointMargin = 1e-9;
 // The disk light's stand-in. Relative area error 1 - sin(2π/n)/(2π/n) = 2.51e-5 for n = 512.
 constexpr int kDiskSides = 512;
@@ -349,6 +350,68 @@ struct ConvexSet {
   }
 };
 
+// A uniform grid of ~sqrt(n) x sqrt(n) cells over a region, listing the polygons whose
+// (padded) bounding boxes touch each cell: finds the polygons near an edge.
+class CellGrid {
+ public:
+  void Build(const ConvexSet& set, const glm::dvec2& lo, const glm::dvec2& hi, double pad) {
+    const size_t n = set.size();
+    cells_ = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(n))), 1, 256);
+    lo_ = lo;
+    cell_size_ = glm::max((hi - lo) / static_cast<double>(cells_), glm::dvec2(1e-300));
+    pad_ = glm::dvec2(pad);
+    // Counting pass, then filling pass (compressed rows).
+    start_.assign(static_cast<size_t>(cells_) * cells_ + 1, 0);
+    for (size_t i = 0; i < n; ++i) {
+      ForCells(set.lo[i], set.hi[i], [&](int c) {
+        ++start_[c + 1];
+        return true;
+      });
+    }
+    for (size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
+    items_.resize(start_.back());
+    fill_.assign(start_.begin(), start_.end() - 1);
+    for (size_t i = 0; i < n; ++i) {
+      ForCells(set.lo[i], set.hi[i], [&](int c) {
+        items_[fill_[c]++] = static_cast<uint32_t>(i);
+        return true;
+      });
+    }
+  }
+
+  // Calls f(polygon index) for the polygons listed in the cells under the padded box, with
+  // repeats, until f returns false.
+  template <typename F>
+  void ForNear(const glm::dvec2& box_lo, const glm::dvec2& box_hi, const F& f) const {
+    ForCells(box_lo, box_hi, [&](int c) {
+      for (uint32_t s = start_[c]; s < start_[c + 1]; ++s) {
+        if (!f(items_[s])) return false;
+      }
+      return true;
+    });
+  }
+
+ private:
+  template <typename F>
+  void ForCells(const glm::dvec2& box_lo, const glm::dvec2& box_hi, const F& f) const {
+    auto cell = [&](double v, double origin, double size) {
+      return std::clamp(static_cast<int>((v - origin) / size), 0, cells_ - 1);
+    };
+    const glm::dvec2 a = box_lo - pad_, b = box_hi + pad_;
+    const int x0 = cell(a.x, lo_.x, cell_size_.x), x1 = cell(b.x, lo_.x, cell_size_.x);
+    const int y0 = cell(a.y, lo_.y, cell_size_.y), y1 = cell(b.y, lo_.y, cell_size_.y);
+    for (int y = y0; y <= y1; ++y) {
+      for (int x = x0; x <= x1; ++x) {
+        if (!f(y * cells_ + x)) return;
+      }
+    }
+  }
+
+  int cells_ = 1;
+  glm::dvec2 lo_{0.0}, cell_size_{1.0}, pad_{0.0};
+  std::vector<uint32_t> start_, items_, fill_;
+};
+
 // Reusable buffers, one set per thread.
 struct Workspace {
   std::vector<glm::dvec3> poly3, scratch3;
@@ -356,8 +419,9 @@ struct Workspace {
   std::vector<double> values;
   ConvexSet projected;  // the clipped, projected triangles
   ConvexSet pieces;     // those clipped to one region
-  // Union: grid cells (CSR) and the covered parameter intervals of one edge.
-  std::vector<uint32_t> cell_start, cell_items;
+  // Union: the polygons near each cell, the last edge that looked at each polygon, and the
+  // covered parameter intervals of one edge.
+  CellGrid grid;
   std::vector<uint64_t> visited;
   std::vector<std::pair<double, double>> intervals;
 };
@@ -484,86 +548,53 @@ class CompensatedSum {
   double sum_ = 0.0, compensation_ = 0.0;
 };
 
+// Twice the area that edge k of polygon i contributes to the union, by Green's theorem:
+// the cross products of the endpoints of the parts of the edge no other polygon covers.
+double EdgeTerm(const ConvexSet& set, const CellGrid& grid, size_t i, uint32_t k, uint64_t edge_id,
+                double tolerance, Workspace* ws) {
+  const uint32_t first = set.start[i], last = set.start[i + 1];
+  const glm::dvec2& a = set.vertex[k];
+  const glm::dvec2& b = set.vertex[k + 1 < last ? k + 1 : first];
+  const glm::dvec2 e_lo = glm::min(a, b) - tolerance, e_hi = glm::max(a, b) + tolerance;
+  ws->intervals.clear();
+  bool fully_covered = false;
+  grid.ForNear(e_lo, e_hi, [&](uint32_t j) {
+    if (j == i || ws->visited[j] == edge_id) return true;
+    ws->visited[j] = edge_id;
+    if (glm::any(glm::lessThan(set.hi[j], e_lo)) || glm::any(glm::greaterThan(set.lo[j], e_hi))) {
+      return true;
+    }
+    const auto covered = CoveredBy(set, j, i, a, b, set.unit[k], set.length[k], tolerance);
+    if (!covered.has_value()) return true;
+    fully_covered = covered->first <= 0.0 && covered->second >= 1.0;
+    ws->intervals.push_back(*covered);
+    return !fully_covered;
+  });
+  if (fully_covered) return 0.0;
+  std::sort(ws->intervals.begin(), ws->intervals.end());
+  auto at = [&](double t) { return t <= 0.0 ? a : t >= 1.0 ? b : a + t * (b - a); };
+  double term = 0.0, reached = 0.0;
+  for (const auto& [t0, t1] : ws->intervals) {
+    if (t0 > reached) term += Cross(at(reached), at(t0));
+    reached = std::max(reached, t1);
+  }
+  if (reached < 1.0) term += Cross(at(reached), b);
+  return term;
+}
+
 // Area of the union of the convex polygons in `set`, which lie within [lo, hi].
 double UnionArea(const ConvexSet& set, const glm::dvec2& lo, const glm::dvec2& hi, double tolerance,
                  Workspace* ws) {
   const size_t n = set.size();
   if (n == 0) return 0.0;
   if (n == 1) return set.area[0];
-  // A uniform grid over the region finds the polygons near an edge: ~sqrt(n) cells a side.
-  const int cells = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(n))), 1, 256);
-  const glm::dvec2 cell_size = glm::max((hi - lo) / static_cast<double>(cells), glm::dvec2(1e-300));
-  auto cell_of = [&](double v, double origin, double size) {
-    return std::clamp(static_cast<int>((v - origin) / size), 0, cells - 1);
-  };
-  auto for_cells = [&](const glm::dvec2& box_lo, const glm::dvec2& box_hi, auto&& f) {
-    const int x0 = cell_of(box_lo.x, lo.x, cell_size.x), x1 = cell_of(box_hi.x, lo.x, cell_size.x);
-    const int y0 = cell_of(box_lo.y, lo.y, cell_size.y), y1 = cell_of(box_hi.y, lo.y, cell_size.y);
-    for (int y = y0; y <= y1; ++y) {
-      for (int x = x0; x <= x1; ++x) {
-        if (!f(y * cells + x)) return;
-      }
-    }
-  };
-  const glm::dvec2 pad(tolerance);
-  std::vector<uint32_t>& cell_start = ws->cell_start;
-  std::vector<uint32_t>& cell_items = ws->cell_items;
-  cell_start.assign(static_cast<size_t>(cells) * cells + 1, 0);
-  for (size_t i = 0; i < n; ++i) {
-    for_cells(set.lo[i] - pad, set.hi[i] + pad, [&](int c) { return ++cell_start[c + 1], true; });
-  }
-  for (size_t c = 1; c < cell_start.size(); ++c) cell_start[c] += cell_start[c - 1];
-  cell_items.resize(cell_start.back());
-  {
-    std::vector<uint32_t> fill(cell_start.begin(), cell_start.end() - 1);
-    for (size_t i = 0; i < n; ++i) {
-      for_cells(set.lo[i] - pad, set.hi[i] + pad, [&](int c) {
-        cell_items[fill[c]++] = static_cast<uint32_t>(i);
-        return true;
-      });
-    }
-  }
-
+  ws->grid.Build(set, lo, hi, tolerance);
   ws->visited.assign(n, std::numeric_limits<uint64_t>::max());
   uint64_t edge_id = 0;
   CompensatedSum twice_area;
   for (size_t i = 0; i < n; ++i) {
-    const uint32_t first = set.start[i], last = set.start[i + 1];
-    for (uint32_t k = first; k < last; ++k, ++edge_id) {
-      const glm::dvec2& a = set.vertex[k];
-      const glm::dvec2& b = set.vertex[k + 1 < last ? k + 1 : first];
-      const glm::dvec2 e_lo = glm::min(a, b) - pad, e_hi = glm::max(a, b) + pad;
-      ws->intervals.clear();
-      bool fully_covered = false;
-      for_cells(e_lo, e_hi, [&](int c) {
-        for (uint32_t s = cell_start[c]; s < cell_start[c + 1]; ++s) {
-          const uint32_t j = cell_items[s];
-          if (j == i || ws->visited[j] == edge_id) continue;
-          ws->visited[j] = edge_id;
-          if (glm::any(glm::lessThan(set.hi[j], e_lo)) ||
-              glm::any(glm::greaterThan(set.lo[j], e_hi))) {
-            continue;
-          }
-          const auto covered = CoveredBy(set, j, i, a, b, set.unit[k], set.length[k], tolerance);
-          if (!covered.has_value()) continue;
-          if (covered->first <= 0.0 && covered->second >= 1.0) {
-            fully_covered = true;
-            return false;
-          }
-          ws->intervals.push_back(*covered);
-        }
-        return true;
-      });
-      if (fully_covered) continue;
-      // Green's theorem over the uncovered parts of the edge.
-      std::sort(ws->intervals.begin(), ws->intervals.end());
-      auto at = [&](double t) { return t <= 0.0 ? a : t >= 1.0 ? b : a + t * (b - a); };
-      double reached = 0.0;
-      for (const auto& [t0, t1] : ws->intervals) {
-        if (t0 > reached) twice_area.Add(Cross(at(reached), at(t0)));
-        reached = std::max(reached, t1);
-      }
-      if (reached < 1.0) twice_area.Add(Cross(at(reached), b));
+    for (uint32_t k = set.start[i]; k < set.start[i + 1]; ++k, ++edge_id) {
+      twice_area.Add(EdgeTerm(set, ws->grid, i, k, edge_id, tolerance, ws));
     }
   }
   return 0.5 * twice_area.Value();

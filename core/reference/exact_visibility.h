@@ -1,7 +1,9 @@
 // Exact attenuation for planar polygonal lights and triangle occluders: the fraction of the
 // light's area hidden from a point p is area(light ∩ ∪ projections of the occluders from p
-// onto the light plane) / area(light). Computed with Boost.Geometry's polygon booleans in
-// double precision. This is the ground truth the bake is measured against.
+// onto the light plane) / area(light), in double precision. The union's area comes from its
+// boundary (Green's theorem, shared edges recognised exactly): Boost.Geometry 1.74's booleans
+// return wrong areas on tessellated meshes (boostorg/geometry #838, #1068, #1229), so it only
+// cross-checks this code in the tests. This is the ground truth the bake is measured against.
 #ifndef PDSM_CORE_REFERENCE_EXACT_VISIBILITY_H_
 #define PDSM_CORE_REFERENCE_EXACT_VISIBILITY_H_
 
