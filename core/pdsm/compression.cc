@@ -52,12 +52,16 @@ class LineCone {
       const double dzn = dz * inv_scale_;
       const double da = a - a0_;
       const double dist = std::hypot(dzn, da);
-      if (dist <= tolerance_) return true;
       constexpr double kSteepest = std::numbers::pi / 2 - 1e-9;
-      const double angle = std::clamp(std::atan2(da, dzn), -kSteepest, kSteepest);
-      const double half = std::asin(tolerance_ / dist);
-      lo = std::max(angle - half, -kSteepest);
-      hi = std::min(angle + half, kSteepest);
+      // As for kVertical, the line must stay in [0, 1] at every vertex it covers.
+      lo = std::max(std::atan2(0.0 - a0_, dzn), -kSteepest);
+      hi = std::min(std::atan2(1.0 - a0_, dzn), kSteepest);
+      if (dist > tolerance_) {
+        const double angle = std::clamp(std::atan2(da, dzn), -kSteepest, kSteepest);
+        const double half = std::asin(tolerance_ / dist);
+        lo = std::max(lo, angle - half);
+        hi = std::min(hi, angle + half);
+      }
     }
     lo = std::max(lo, lo_);
     hi = std::min(hi, hi_);
@@ -93,6 +97,7 @@ std::vector<Vertex> CompressFunction(std::span<const Vertex> function, double ep
   LineCone cone(metric, StoredTolerance(epsilon), depth_scale);
   cone.Reset(function[0].z, function[0].a);
   size_t last_admitted = 0;  // index of the last input vertex the current segment covers
+  size_t first_at_depth = 0;  // first input vertex at the depth of function[i]
   auto emit_segment_end = [&](size_t index) {
     const double z = function[index].z;
     const double a = cone.ValueAt(z);
@@ -107,6 +112,19 @@ std::vector<Vertex> CompressFunction(std::span<const Vertex> function, double ep
         out.push_back(v);
         cone.Reset(v.z, v.a);
       }
+      last_admitted = i++;
+      continue;
+    }
+    // A jump may be spread over several vertices at one depth: track where the run starts.
+    if (v.z != function[i - 1].z) first_at_depth = i;
+    if (metric == CompressionMetric::kPerpendicular && last_admitted == i - 1 &&
+        first_at_depth < i &&
+        std::abs(v.a - function[first_at_depth].a) > StoredTolerance(epsilon)) {
+      // A jump inside the segment: a near-vertical line would pass within the perpendicular
+      // tolerance of both its ends and turn it into a ramp. End the segment, keep the jump.
+      emit_segment_end(last_admitted);
+      out.push_back(v);
+      cone.Reset(v.z, v.a);
       last_admitted = i++;
       continue;
     }

@@ -9,9 +9,10 @@
 //    output values stay in [0, 1].
 //  - kPerpendicular: in the plane (z / depth_scale, A), every input vertex lies within
 //    epsilon of the line of the output segment spanning its depth (thesis: steep penumbra
-//    steps do not force vertices). Segment ends may leave [0, 1] slightly; evaluation clamps.
+//    steps do not force vertices). Output values stay in [0, 1].
 //  - epsilon = 0 is lossless: only exact duplicates are removed.
-//  - Jumps larger than the tolerance stay jumps (two vertices at one depth).
+//  - Jumps larger than 2 epsilon stay jumps (two vertices at one depth); kPerpendicular
+//    keeps every jump larger than epsilon.
 #ifndef PDSM_CORE_PDSM_COMPRESSION_H_
 #define PDSM_CORE_PDSM_COMPRESSION_H_
 

@@ -39,7 +39,9 @@ std::vector<glm::dvec2> StratifiedUnitSquare(int count, uint64_t seed) {
     for (int c = 0; c < cells; ++c) {
       const double x = (c + rng.NextDouble()) / cells;
       const double y = row_bottom + rng.NextDouble() * row_height;
-      points.emplace_back(x, std::min(y, std::nextafter(1.0, 0.0)));
+      // (c + u) / cells can round up to 1.0: keep points inside [0, 1).
+      const double below_one = std::nextafter(1.0, 0.0);
+      points.emplace_back(std::min(x, below_one), std::min(y, below_one));
     }
     row_bottom += row_height;
   }
