@@ -272,11 +272,9 @@ TEST(CompressFunctionTest, PerpendicularBoundOnRandomFunctions) {
   }
 }
 
-// BUG (core/pdsm/compression.cc, LineCone::Admit, kPerpendicular branch): the vertical metric
-// clips each vertex's window to [0, 1]; the perpendicular metric does not, so on steep segments
-// (large depth_scale, or jumps absorbed into a ramp) the middle line ends far outside [0, 1] and
-// that value is stored. Vertex::a is documented as an attenuation in [0, 1], and
-// QueryAttenuation promises results in [0, 1]; a PDSM baked with kPerpendicular breaks both.
+// Regression: the perpendicular metric once let steep segments (large depth_scale, or jumps
+// absorbed into a ramp) end far outside [0, 1], breaking Vertex::a's contract and
+// QueryAttenuation's. Its admissible angles are now limited to lines inside [0, 1].
 TEST(CompressFunctionTest, PerpendicularOutputValuesAreAttenuations) {
   // Minimal cases: a full step at z = 1 with depth_scale 100 (the step is 0.01 wide in scaled
   // depth). Observed outputs: (0, 0) (2, 1.3333) and (0, 1) (2, -0.3333).
@@ -390,12 +388,10 @@ TEST(CompressFunctionTest, VerticalKeepsJumpsLargerThanTwiceEpsilon) {
   }
 }
 
-// compression.h: "Jumps larger than the tolerance stay jumps (two vertices at one depth)", for
-// both metrics. BUG (core/pdsm/compression.cc, CompressFunction / LineCone::Admit, kPerpendicular):
-// a jump that is not at the segment's origin is admitted like any vertex; in the plane
-// (z / depth_scale, A) a near-vertical line passes within epsilon of both its ends, so a full
-// 0 -> 1 step becomes a ramp ending at another depth. Observed: {(0,0) (1,0) (1,1) (2,1)},
-// epsilon 0.01, depth_scale 100 -> {(0,0) (2,1.3333)}: no vertex at z = 1 at all.
+// compression.h: jumps stay jumps. Regression: the perpendicular metric once admitted a jump
+// inside a segment like any vertex; in the plane (z / depth_scale, A) a near-vertical line passes
+// within epsilon of both its ends, so {(0,0) (1,0) (1,1) (2,1)} at epsilon 0.01, depth_scale 100
+// became {(0,0) (2,1.3333)}, with no vertex at z = 1.
 TEST(CompressFunctionTest, PerpendicularKeepsJumpsLargerThanTwiceEpsilon) {
   const std::vector<Vertex> step = {{0.0f, 0.0f}, {1.0f, 0.0f}, {1.0f, 1.0f}, {2.0f, 1.0f}};
   const std::vector<Vertex> out =
