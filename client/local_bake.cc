@@ -1,5 +1,6 @@
 #include "client/local_bake.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <filesystem>
@@ -56,6 +57,7 @@ class LocalBake {
   }
 
   const PreviewImage& preview() const { return preview_; }
+  size_t task_count() const { return tasks_.size(); }
 
  private:
   double Elapsed() const {
@@ -159,17 +161,17 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
       PdsmWriter::Create(options.output_path, plan->header);
   if (!writer.ok()) return writer.status();
 
-  int threads = options.threads > 0 ? options.threads
-                                    : static_cast<int>(std::thread::hardware_concurrency());
-  threads = std::max(1, std::min<int>(threads, static_cast<int>(plan->tiles.size()) *
-                                                   std::max(1, scene.bake.samples)));
   LocalBake bake(*plan, options, writer->get());
+  const int threads = std::clamp(options.threads > 0
+                                     ? options.threads
+                                     : static_cast<int>(std::thread::hardware_concurrency()),
+                                 1, static_cast<int>(std::max<size_t>(1, bake.task_count())));
   absl::StatusOr<BakeSummary> summary = bake.Run(threads);
   if (!summary.ok()) return summary.status();
+  if (absl::Status s = (*writer)->Finish(); !s.ok()) return s;
   if (!options.preview_path.empty()) {
     if (absl::Status s = bake.preview().Write(options.preview_path); !s.ok()) return s;
   }
-  if (absl::Status s = (*writer)->Finish(); !s.ok()) return s;
   std::error_code ec;
   summary->file_bytes = std::filesystem::file_size(options.output_path, ec);
   return summary;

@@ -80,7 +80,7 @@ absl::StatusOr<TileEvents> TaskRunner::Run(const BakeTask& task, TaskStats* stat
   camera.projection = g.projection;
   camera.lattice = plan_.lattice;
   camera.z_clip_near = plan_.z_clip_near;
-  camera.z_clip_far = g.z_far + 1e-3 * std::max(g.z_far - g.z_near, 1e-9);
+  camera.z_clip_far = plan_.z_clip_far;
   camera.depth_bias = plan_.header.depth_bias;
   camera.slope_bias = plan_.header.slope_bias;
   camera.footprint_scale = FootprintScale(plan_);
@@ -142,7 +142,7 @@ absl::StatusOr<std::vector<float>> TaskRunner::ReceiverDepth(const TileRect& til
   // Receivers may lie nearer than any caster: clip only at the light plane.
   camera.z_clip_near = g.projection == Projection::kPerspective ? 1e-6 * g.z_far
                                                                 : plan_.z_clip_near;
-  camera.z_clip_far = g.z_far + 1e-3 * std::max(g.z_far - g.z_near, 1e-9);
+  camera.z_clip_far = plan_.z_clip_far;
   std::vector<float> depth;
   if (absl::Status s = renderer_->Render(camera, &depth); !s.ok()) return s;
   return depth;

@@ -195,6 +195,7 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
   plan.z_clip_near = g.projection == Projection::kPerspective
                          ? g.z_near * (1.0 - 1e-6)
                          : g.z_near - 1e-6 * std::max(std::abs(g.z_far - g.z_near), 1e-9);
+  plan.z_clip_far = g.z_far + 1e-3 * std::max(g.z_far - g.z_near, 1e-9);
 
   const double texel_pitch = std::max(g.s_max - g.s_min, g.t_max - g.t_min) /
                              scene.bake.shadow_map_resolution;

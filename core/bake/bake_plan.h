@@ -35,6 +35,7 @@ struct BakePlan {
   std::vector<glm::dvec2> samples;  // see core/sampling/light_samples.h
   ShadowMapLattice lattice;
   double z_clip_near = 0;           // shadow maps clip geometry nearer than this
+  double z_clip_far = 0;            // sun shadow maps clip geometry farther than this
   std::vector<TileRect> tiles;      // row-major grid of header.tile_size
   int tiles_x = 0, tiles_y = 0;
   LightSpaceMesh casters;
