@@ -84,10 +84,7 @@ class LocalBake {
     }
     std::lock_guard<std::mutex> lock(mu_);
     summary_.tasks_stats.Add(stats);
-    summary_.assembly.merged_events += assembly.merged_events;
-    summary_.assembly.consolidated_events += assembly.consolidated_events;
-    summary_.assembly.vertices += assembly.vertices;
-    summary_.assembly.seconds += assembly.seconds;
+    summary_.assembly.Add(assembly);
   }
 
   absl::Status RunTask(TaskRunner& runner, const BakeTask& task, TaskStats* stats,

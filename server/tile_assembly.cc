@@ -8,6 +8,13 @@
 
 namespace pdsm {
 
+void AssemblyStats::Add(const AssemblyStats& o) {
+  merged_events += o.merged_events;
+  consolidated_events += o.consolidated_events;
+  vertices += o.vertices;
+  seconds += o.seconds;
+}
+
 PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts,
                       AssemblyStats* stats) {
   const auto start = std::chrono::steady_clock::now();

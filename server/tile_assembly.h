@@ -17,6 +17,7 @@ struct AssemblyStats {
   int64_t consolidated_events = 0;  // after consolidation
   int64_t vertices = 0;             // after compression
   double seconds = 0;
+  void Add(const AssemblyStats& o);
 };
 
 // REQUIRES: `parts` are results for the same tile whose batches together cover every sample
