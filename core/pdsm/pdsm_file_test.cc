@@ -1,4 +1,5 @@
 #include "core/pdsm/pdsm_file.h"
+#include "tests/test_support.h"
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfDeepFrameBuffer.h>
@@ -229,17 +230,6 @@ Imf::Header HeaderOf(const std::string& path) {
 
 class PdsmFileTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string("pdsm_file_test_") + std::to_string(::getpid()) + "_" +
-                       info->test_suite_name() + "_" + info->name();
-    std::replace(name.begin(), name.end(), '/', '_');  // parameterized names hold '/'
-    dir_ = (fs::temp_directory_path() / name).string();
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   std::string Path(const std::string& name) const { return (fs::path(dir_) / name).string(); }
   std::vector<std::string> Files() const {
     std::vector<std::string> names;
@@ -256,7 +246,8 @@ class PdsmFileTest : public ::testing::Test {
     return path;
   }
 
-  std::string dir_;
+  ::pdsm::testing::TempDir temp_dir_;  // a fresh folder per test, removed after it
+  const std::string dir_ = temp_dir_.path().string();
 };
 
 TEST_F(PdsmFileTest, RoundTripsHeaderAndFunctions) {

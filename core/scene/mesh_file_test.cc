@@ -13,6 +13,7 @@
 
 #include "absl/strings/escaping.h"
 #include "absl/strings/str_cat.h"
+#include "tests/test_support.h"
 
 namespace pdsm {
 namespace {
@@ -21,22 +22,14 @@ using ::testing::HasSubstr;
 
 class MeshFileTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = std::filesystem::path(::testing::TempDir()) /
-           absl::StrCat("pdsm_mesh_file_", info->name(), "_", ::getpid());
-    std::filesystem::remove_all(dir_);
-    std::filesystem::create_directories(dir_);
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-
   std::string Write(const std::string& name, const std::string& contents) {
     const std::filesystem::path path = dir_ / name;
     std::ofstream(path, std::ios::binary) << contents;
     return path.string();
   }
 
-  std::filesystem::path dir_;
+  ::pdsm::testing::TempDir temp_dir_;  // a fresh folder per test, removed after it
+  const std::filesystem::path dir_ = temp_dir_.path();
 };
 
 TEST_F(MeshFileTest, ObjQuadAndTriangleAreTriangulatedAndFlattened) {

@@ -14,6 +14,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "tests/test_support.h"
 
 namespace pdsm {
 namespace {
@@ -40,15 +41,6 @@ constexpr char kPlyQuad[] =
 
 class SceneLoaderTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = std::filesystem::path(::testing::TempDir()) /
-           absl::StrCat("pdsm_scene_loader_", info->name(), "_", ::getpid());
-    std::filesystem::remove_all(dir_);
-    std::filesystem::create_directories(dir_);
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-
   // Writes `contents` to dir_/relative_path (folders created) and returns the full path.
   std::string Write(const std::string& relative_path, const std::string& contents) {
     const std::filesystem::path path = dir_ / relative_path;
@@ -74,7 +66,8 @@ class SceneLoaderTest : public ::testing::Test {
     }
   }
 
-  std::filesystem::path dir_;
+  ::pdsm::testing::TempDir temp_dir_;  // a fresh folder per test, removed after it
+  const std::filesystem::path dir_ = temp_dir_.path();
   std::string scene_path_;
 };
 
