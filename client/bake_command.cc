@@ -1,11 +1,10 @@
 // `pdsm bake SCENE.json -o OUT.exr [overrides]`: a local single-node bake.
 #include <cstdio>
 #include <filesystem>
-#include <optional>
-#include <regex>
 #include <string>
 
 #include "absl/strings/str_format.h"
+#include "client/bake_overrides.h"
 #include "client/cli_common.h"
 #include "client/commands.h"
 #include "client/local_bake.h"
@@ -20,48 +19,9 @@ struct BakeFlags {
   std::string output_path;
   std::string preview_path;
   bool no_preview = false;
-  std::string resolution;
-  std::optional<int64_t> samples, sm_resolution, tile_size;
-  std::optional<double> epsilon;
+  OverrideFlags overrides;
   int threads = 0, samples_per_task = 0;
 };
-
-absl::StatusOr<pdsm::v1::BakeParams> Overrides(const BakeFlags& flags) {
-  pdsm::v1::BakeParams params;
-  if (!flags.resolution.empty()) {
-    std::smatch m;
-    static const std::regex kWxH(R"((\d{1,9})x(\d{1,9}))");
-    if (!std::regex_match(flags.resolution, m, kWxH)) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "--resolution: expected WIDTHxHEIGHT, e.g. 512x512 (got \"%s\")", flags.resolution));
-    }
-    params.add_resolution(std::stoul(m[1]));
-    params.add_resolution(std::stoul(m[2]));
-  }
-  // Values are range-checked with the scene's own fields (bake.samples, ...).
-  auto set_count = [](const char* flag, const std::optional<int64_t>& value,
-                      auto setter) -> absl::Status {
-    if (!value) return absl::OkStatus();
-    if (*value < 0 || *value > UINT32_MAX) {
-      return absl::InvalidArgumentError(
-          absl::StrFormat("%s: must be a positive count (got %d)", flag, *value));
-    }
-    setter(static_cast<uint32_t>(*value));
-    return absl::OkStatus();
-  };
-  absl::Status s = set_count("--samples", flags.samples,
-                             [&](uint32_t v) { params.set_samples(v); });
-  if (s.ok()) {
-    s = set_count("--sm-resolution", flags.sm_resolution,
-                  [&](uint32_t v) { params.set_shadow_map_resolution(v); });
-  }
-  if (s.ok()) {
-    s = set_count("--tile-size", flags.tile_size, [&](uint32_t v) { params.set_tile_size(v); });
-  }
-  if (!s.ok()) return s;
-  if (flags.epsilon) params.set_epsilon(*flags.epsilon);
-  return params;
-}
 
 std::string HumanBytes(uint64_t bytes) {
   if (bytes >= (1u << 20)) return absl::StrFormat("%.1f MiB", bytes / 1048576.0);
@@ -89,7 +49,7 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags, const std::string&
 }
 
 int RunBake(const BakeFlags& flags) {
-  absl::StatusOr<pdsm::v1::BakeParams> overrides = Overrides(flags);
+  absl::StatusOr<pdsm::v1::BakeParams> overrides = ToBakeParams(flags.overrides);
   if (!overrides.ok()) return ReportError(overrides.status());
   absl::StatusOr<Scene> scene = LoadSceneFile(flags.scene_path, *overrides);
   if (!scene.ok()) return ReportError(scene.status());
@@ -123,11 +83,7 @@ void RegisterBakeCommand(CLI::App& app, int* exit_code) {
   CLI::App* cmd = app.add_subcommand("bake", "Bake a PDSM locally (no server needed)");
   cmd->add_option("scene", flags->scene_path, "Scene file (JSON)")->required();
   cmd->add_option("-o,--output", flags->output_path, "Output PDSM (.exr)")->required();
-  cmd->add_option("--resolution", flags->resolution, "PDSM resolution WIDTHxHEIGHT");
-  cmd->add_option("--samples", flags->samples, "Light samples");
-  cmd->add_option("--sm-resolution", flags->sm_resolution, "Shadow-map texels across the window");
-  cmd->add_option("--epsilon", flags->epsilon, "Compression tolerance in [0, 1]");
-  cmd->add_option("--tile-size", flags->tile_size, "PDSM pixels per tile side");
+  AddOverrideFlags(cmd, &flags->overrides);
   cmd->add_option("--threads", flags->threads, "Worker threads (default: one per core)")
       ->check(CLI::Range(1, 1024));
   cmd->add_option("--samples-per-task", flags->samples_per_task,

@@ -1,4 +1,4 @@
-// `pdsm`: bake, query and inspect penumbra deep shadow maps.
+// `pdsm`: bake, query and inspect penumbra deep shadow maps, locally or on a coordinator.
 #include <CLI/CLI.hpp>
 
 #include "client/cli_common.h"
@@ -11,6 +11,10 @@ int main(int argc, char** argv) {
   pdsm::RegisterBakeCommand(app, &exit_code);
   pdsm::RegisterQueryCommand(app, &exit_code);
   pdsm::RegisterInfoCommand(app, &exit_code);
+  pdsm::RegisterSubmitCommand(app, &exit_code);
+  pdsm::RegisterJobCommands(app, &exit_code);
+  pdsm::RegisterWatchCommand(app, &exit_code);
+  pdsm::RegisterFetchCommand(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -4,19 +4,25 @@
 #define PDSM_CLIENT_PROGRESS_REPORTER_H_
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 namespace pdsm {
 
 class ProgressReporter {
  public:
-  explicit ProgressReporter(std::string label);
+  // `unit` names what done/total count ("tasks", "samples").
+  explicit ProgressReporter(std::string label, std::string unit = "tasks");
   // Not thread-safe: callers serialize.
-  void Update(int64_t done, int64_t total, double seconds);
+  // `eta_seconds`: the caller's estimate (e.g. the coordinator's); by default extrapolated
+  // from `seconds`. Negative: unknown.
+  void Update(int64_t done, int64_t total, double seconds,
+              std::optional<double> eta_seconds = std::nullopt);
   void Finish();
 
  private:
   std::string label_;
+  std::string unit_;
   bool tty_;
   int last_decile_ = -1;
   bool drawn_ = false;

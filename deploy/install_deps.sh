@@ -13,7 +13,11 @@ packages=(
   # meshes, flags, logs, tests
   libassimp-dev libcli11-dev libspdlog-dev libfmt-dev libgtest-dev libgmock-dev
   # exact polygon clipping for the reference, job state
-  libboost-dev libsqlite3-dev
+  libboost-dev libsqlite3-dev libssl-dev
+  # TLS certificates for the service tests
+  openssl
+  # tests/deploy/check_manifests.py: parses the deployment manifests
+  python3 python3-yaml
 )
 
 export DEBIAN_FRONTEND=noninteractive

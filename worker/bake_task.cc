@@ -65,7 +65,8 @@ absl::Status TaskRunner::UploadCasters(const TileReach& reach) {
   return renderer_->SetGeometry(positions, indices);
 }
 
-absl::StatusOr<TileEvents> TaskRunner::Run(const BakeTask& task, TaskStats* stats) {
+absl::StatusOr<TileEvents> TaskRunner::Run(const BakeTask& task, TaskStats* stats,
+                                           const std::function<bool()>& cancelled) {
   const TileRect& tile = plan_.tiles.at(task.tile_index);
   TileEvents result = EmptyTileEvents(tile);
   const TileReach reach = ComputeTileReach(plan_, tile);
@@ -86,6 +87,9 @@ absl::StatusOr<TileEvents> TaskRunner::Run(const BakeTask& task, TaskStats* stat
   camera.footprint_scale = FootprintScale(plan_);
 
   for (int k = task.sample_begin; k < task.sample_end; ++k) {
+    if (cancelled && cancelled()) {
+      return absl::CancelledError(absl::StrFormat("tile %d: task cancelled", tile.index));
+    }
     const glm::dvec2& sample = plan_.samples.at(k);
     camera.sample = sample;
     camera.window = ShadowMapWindowFor(plan_, tile, sample, reach.z_near);

@@ -5,6 +5,7 @@
 #define PDSM_WORKER_BAKE_TASK_H_
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -40,7 +41,10 @@ class TaskRunner {
   // `plan` must outlive the runner.
   static absl::StatusOr<std::unique_ptr<TaskRunner>> Create(const BakePlan& plan);
 
-  absl::StatusOr<TileEvents> Run(const BakeTask& task, TaskStats* stats);
+  // `cancelled` (optional) is polled before each sample's shadow map: when it returns true the
+  // task stops with CANCELLED (a cancelled job or a stopping worker frees the thread promptly).
+  absl::StatusOr<TileEvents> Run(const BakeTask& task, TaskStats* stats,
+                                 const std::function<bool()>& cancelled = nullptr);
 
   // Light-space depth of the nearest receiver seen along each PDSM ray of the tile (the
   // preview's surface), +infinity where none; row-major over the tile.

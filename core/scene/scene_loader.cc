@@ -24,6 +24,7 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/string_view.h"
+#include "core/assets/mesh_asset.h"
 #include "core/scene/mesh_file.h"
 
 namespace pdsm {
@@ -54,14 +55,30 @@ std::string Indexed(absl::string_view field, int index) {
   return absl::StrCat(field, "[", index, "]");
 }
 
+// `path` as is when absolute, else against `base_dir`.
+std::string ResolveAgainst(const std::string& base_dir, const std::string& path) {
+  std::filesystem::path file(path);
+  if (file.is_relative()) file = (std::filesystem::path(base_dir) / file).lexically_normal();
+  return file.string();
+}
+
+// The folder relative mesh paths of a scene file resolve against ("." for a bare file name,
+// since an empty base_dir means "no mesh files").
+std::string SceneFolder(const std::string& scene_path) {
+  const std::filesystem::path folder = std::filesystem::path(scene_path).parent_path();
+  return folder.empty() ? std::string(".") : folder.string();
+}
+
 // Validates one pdsm.v1.Scene into a Scene. Every error is INVALID_ARGUMENT
 // "SOURCE: FIELD: what (got VALUE)", FIELD spelled with the JSON names the user wrote.
 class SceneBuilder {
  public:
-  SceneBuilder(std::string source, std::string base_dir, std::set<std::string> overridden)
+  SceneBuilder(std::string source, std::string base_dir, std::set<std::string> overridden,
+               const MeshAssetResolver* assets = nullptr)
       : source_(std::move(source)),
         base_dir_(std::move(base_dir)),
-        overridden_(std::move(overridden)) {}
+        overridden_(std::move(overridden)),
+        assets_(assets != nullptr && *assets ? assets : nullptr) {}
 
   absl::StatusOr<Scene> Build(const pdsm::v1::Scene& message) const;
 
@@ -89,6 +106,9 @@ class SceneBuilder {
   absl::Status LoadPath(absl::string_view field, const std::string& path,
                         std::vector<glm::dvec3>* positions,
                         std::vector<uint32_t>* indices) const;
+  absl::Status LoadAsset(absl::string_view field, const std::string& sha256,
+                         std::vector<glm::dvec3>* positions,
+                         std::vector<uint32_t>* indices) const;
 
   absl::StatusOr<LightSpec> BuildLight(const pdsm::v1::Light& light) const;
   absl::StatusOr<LightSpec> BuildRect(const pdsm::v1::RectLight& rect) const;
@@ -104,6 +124,7 @@ class SceneBuilder {
   std::string source_;
   std::string base_dir_;  // empty: mesh files refused
   std::set<std::string> overridden_;
+  const MeshAssetResolver* assets_;  // null: mesh assets refused
 };
 
 absl::string_view SceneBuilder::OverrideMark(absl::string_view field) const {
@@ -226,10 +247,27 @@ absl::Status SceneBuilder::LoadPath(absl::string_view field, const std::string& 
     return Error(field, "mesh files are not accepted here; send inline geometry");
   }
   if (path.empty()) return Error(field, "must not be empty");
-  std::filesystem::path file(path);
-  if (file.is_relative()) file = (std::filesystem::path(base_dir_) / file).lexically_normal();
   absl::StatusOr<MeshFileData> data =
-      LoadMeshFile(file.string(), absl::StrCat(source_, ": ", field));
+      LoadMeshFile(ResolveAgainst(base_dir_, path), absl::StrCat(source_, ": ", field));
+  if (!data.ok()) return data.status();
+  *positions = std::move(data->positions);
+  *indices = std::move(data->indices);
+  return absl::OkStatus();
+}
+
+absl::Status SceneBuilder::LoadAsset(absl::string_view field, const std::string& sha256,
+                                     std::vector<glm::dvec3>* positions,
+                                     std::vector<uint32_t>* indices) const {
+  if (assets_ == nullptr) {
+    return Error(field, "mesh assets are only accepted by the coordinator; use path or inline");
+  }
+  if (!IsSha256Hex(sha256)) {
+    constexpr size_t kShown = 80;  // the hash comes from a client: cut it short
+    return Error(field, absl::StrCat("must be a SHA-256, 64 lowercase hex digits (got \"",
+                                     absl::CEscape(sha256.substr(0, kShown)),
+                                     sha256.size() > kShown ? "..." : "", "\")"));
+  }
+  absl::StatusOr<MeshFileData> data = (*assets_)(sha256, absl::StrCat(source_, ": ", field));
   if (!data.ok()) return data.status();
   *positions = std::move(data->positions);
   *indices = std::move(data->indices);
@@ -261,8 +299,13 @@ absl::StatusOr<TriangleMesh> SceneBuilder::BuildMesh(int index,
       out.label = absl::StrCat(field, " (inline)");
       loaded = LoadInline(field + ".inline", mesh.inline_(), &positions_model, &out.indices);
       break;
+    case pdsm::v1::Mesh::kAssetSha256:
+      out.label = absl::StrCat(field, " (asset ", mesh.asset_sha256().substr(0, 12), ")");
+      loaded = LoadAsset(field + ".assetSha256", mesh.asset_sha256(), &positions_model,
+                         &out.indices);
+      break;
     case pdsm::v1::Mesh::SOURCE_NOT_SET:
-      return Error(field, "one of path, inline is required");
+      return Error(field, "one of path, inline, assetSha256 is required");
   }
   if (!loaded.ok()) return loaded;
 
@@ -550,35 +593,55 @@ absl::StatusOr<std::string> ReadSceneFile(const std::string& path) {
   return std::move(text).str();
 }
 
-}  // namespace
-
-absl::StatusOr<Scene> LoadSceneFile(const std::string& path,
-                                    const pdsm::v1::BakeParams& overrides) {
+// Reads and parses the scene file and applies the overrides. Returns the JSON names of the
+// overridden bake fields, for messages.
+absl::StatusOr<std::set<std::string>> ParseWithOverrides(const std::string& path,
+                                                         const pdsm::v1::BakeParams& overrides,
+                                                         pdsm::v1::Scene* message) {
   absl::StatusOr<std::string> text = ReadSceneFile(path);
   if (!text.ok()) return text.status();
 
-  pdsm::v1::Scene message;
   google::protobuf::util::JsonParseOptions options;
   options.ignore_unknown_fields = false;  // a misspelt field must not be silently dropped
-  const auto parsed = google::protobuf::util::JsonStringToMessage(*text, &message, options);
+  const auto parsed = google::protobuf::util::JsonStringToMessage(*text, message, options);
   if (!parsed.ok()) {
     return absl::InvalidArgumentError(
         absl::StrCat(path, ": invalid scene JSON: ",
                      OneLineJsonError(std::string(parsed.message()))));
   }
-  std::set<std::string> overridden = ApplyOverrides(overrides, message.mutable_bake());
+  return ApplyOverrides(overrides, message->mutable_bake());
+}
 
-  // Relative mesh paths resolve against the scene file's folder ("." for a bare file name,
-  // since an empty base_dir means "no mesh files").
-  std::string base_dir = std::filesystem::path(path).parent_path().string();
-  if (base_dir.empty()) base_dir = ".";
-  return SceneBuilder(path, base_dir, std::move(overridden)).Build(message);
+}  // namespace
+
+absl::StatusOr<pdsm::v1::Scene> ParseSceneFile(const std::string& path,
+                                               const pdsm::v1::BakeParams& overrides) {
+  pdsm::v1::Scene message;
+  absl::StatusOr<std::set<std::string>> overridden =
+      ParseWithOverrides(path, overrides, &message);
+  if (!overridden.ok()) return overridden.status();
+  return message;
+}
+
+std::string ResolveMeshPath(const std::string& scene_path, const std::string& mesh_path) {
+  return ResolveAgainst(SceneFolder(scene_path), mesh_path);
+}
+
+absl::StatusOr<Scene> LoadSceneFile(const std::string& path,
+                                    const pdsm::v1::BakeParams& overrides) {
+  pdsm::v1::Scene message;
+  absl::StatusOr<std::set<std::string>> overridden =
+      ParseWithOverrides(path, overrides, &message);
+  if (!overridden.ok()) return overridden.status();
+  // No asset resolver: a scene file names meshes by path or inline, never by asset.
+  return SceneBuilder(path, SceneFolder(path), *std::move(overridden)).Build(message);
 }
 
 absl::StatusOr<Scene> SceneFromProto(const pdsm::v1::Scene& message,
                                      const std::string& source_label,
-                                     const std::string& base_dir) {
-  return SceneBuilder(source_label, base_dir, {}).Build(message);
+                                     const std::string& base_dir,
+                                     const MeshAssetResolver& assets) {
+  return SceneBuilder(source_label, base_dir, {}, &assets).Build(message);
 }
 
 }  // namespace pdsm

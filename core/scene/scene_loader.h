@@ -4,9 +4,11 @@
 #ifndef PDSM_CORE_SCENE_SCENE_LOADER_H_
 #define PDSM_CORE_SCENE_SCENE_LOADER_H_
 
+#include <functional>
 #include <string>
 
 #include "absl/status/statusor.h"
+#include "core/scene/mesh_file.h"
 #include "core/scene/scene.h"
 #include "pdsm/v1/scene.pb.h"
 
@@ -15,16 +17,38 @@ namespace pdsm {
 // Parses, applies `overrides` (set fields of the override replace the scene's bake fields;
 // used for command-line flags), loads meshes (relative paths against the scene file's folder)
 // and validates. Errors: INVALID_ARGUMENT for bad input (malformed JSON, unknown field,
-// missing or unreadable mesh, non-finite number, bad size, out-of-range parameter),
-// NOT_FOUND when the scene file itself does not exist.
+// missing or unreadable mesh, non-finite number, bad size, out-of-range parameter, a mesh
+// given by assetSha256, which only the coordinator accepts), NOT_FOUND when the scene file
+// itself does not exist.
 absl::StatusOr<Scene> LoadSceneFile(const std::string& path,
                                     const pdsm::v1::BakeParams& overrides = {});
 
+// The parse and override steps of LoadSceneFile alone, with the same error messages
+// (INVALID_ARGUMENT for malformed JSON or an unknown field, NOT_FOUND for a missing file). Loads
+// no mesh and validates nothing else: `pdsm submit` reads the message with it, then turns its
+// mesh paths (see ResolveMeshPath) into uploaded assets itself.
+absl::StatusOr<pdsm::v1::Scene> ParseSceneFile(const std::string& path,
+                                               const pdsm::v1::BakeParams& overrides = {});
+
+// The file a scene's `meshes[i].path` names: an absolute `mesh_path` as is, a relative one
+// against the folder of `scene_path` (the working directory for a bare file name), normalized
+// lexically. What LoadSceneFile opens.
+std::string ResolveMeshPath(const std::string& scene_path, const std::string& mesh_path);
+
+// Returns the decoded mesh of an asset, or an error. `context` names the field for messages
+// (e.g. "job 7: meshes[0].assetSha256"). The mesh must hold MeshFileData's invariants, as
+// DecodeMeshAsset's result does; an error is passed on to the caller as it is.
+using MeshAssetResolver = std::function<absl::StatusOr<MeshFileData>(
+    const std::string& sha256, const std::string& context)>;
+
 // The same from an already parsed message. `source_label` prefixes messages; `base_dir`
-// resolves relative mesh paths (empty: mesh paths are refused, as on the server).
+// resolves relative mesh paths (empty: mesh paths are refused, as on the server); `assets`
+// loads `meshes[i].assetSha256` meshes (null: they are refused, as in scene files). A mesh
+// from an asset gives the same Scene, bit for bit, as the mesh file it was encoded from.
 absl::StatusOr<Scene> SceneFromProto(const pdsm::v1::Scene& message,
                                      const std::string& source_label,
-                                     const std::string& base_dir);
+                                     const std::string& base_dir,
+                                     const MeshAssetResolver& assets = nullptr);
 
 }  // namespace pdsm
 

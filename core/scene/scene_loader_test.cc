@@ -2,9 +2,12 @@
 
 #include <unistd.h>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -14,6 +17,9 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "core/assets/asset_store.h"
+#include "core/assets/mesh_asset.h"
+#include "core/scene/mesh_file.h"
 #include "tests/test_support.h"
 
 namespace pdsm {
@@ -205,7 +211,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"ColumnMajorTransform", WithTransform("1,0,0,0, 0,1,0,0, 0,0,1,0, 5,6,7,1"),
                 kRect, "{}", "meshes[0].transform", "translation in elements 3, 7, 11"},
         BadCase{"MeshWithoutSource", R"({"role": "CASTER_ONLY"})", kRect, "{}", "meshes[0]",
-                "one of path, inline is required"},
+                "one of path, inline, assetSha256 is required"},
         BadCase{"SecondMeshBad", absl::StrCat(kSquare, ", ", InlineMesh(kTri, "0,1,5")), kRect,
                 "{}", "meshes[1].inline.indices[2]", "(got 5)"}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return info.param.name; });
@@ -631,6 +637,289 @@ TEST_F(SceneLoaderTest, SharedBunnyScene) {
   EXPECT_EQ(scene->meshes[0].indices.size(), 3u * 69451);
   EXPECT_EQ(scene->light.shape, LightShape::kDisk);
   EXPECT_EQ(scene->meshes[1].role, MeshRole::kReceiverOnly);
+}
+
+// ---- Scene files, parsed only -----------------------------------------------------------
+
+TEST_F(SceneLoaderTest, ParseSceneFileAppliesOverridesAndLoadsNoMesh) {
+  pdsm::v1::BakeParams overrides;
+  overrides.set_samples(7);
+  scene_path_ = Write("scene.json", SceneJson(R"({"path": "models/not-there.ply"})", kRect,
+                                              R"({"samples": 16, "tileSize": 32})"));
+  absl::StatusOr<pdsm::v1::Scene> message = ParseSceneFile(scene_path_, overrides);
+  ASSERT_TRUE(message.ok()) << message.status();
+  EXPECT_EQ(message->name(), "test");
+  ASSERT_EQ(message->meshes_size(), 1);
+  EXPECT_EQ(message->meshes(0).path(), "models/not-there.ply");
+  EXPECT_EQ(message->bake().samples(), 7u);
+  EXPECT_EQ(message->bake().tile_size(), 32u);
+}
+
+TEST_F(SceneLoaderTest, ParseSceneFileErrorsAreThoseOfLoadSceneFile) {
+  for (const std::string& json :
+       {std::string(R"({"name": "x", "meshes": [})"), std::string(""),
+        absl::StrCat(R"({"meshs": [], "light": )", kRect, "}")}) {
+    SCOPED_TRACE(json);
+    scene_path_ = Write("scene.json", json);
+    const absl::Status parsed = ParseSceneFile(scene_path_).status();
+    const absl::Status loaded = LoadSceneFile(scene_path_).status();
+    EXPECT_EQ(parsed.code(), absl::StatusCode::kInvalidArgument) << parsed;
+    EXPECT_EQ(parsed, loaded);
+  }
+  const std::string absent = (dir_ / "absent.json").string();
+  EXPECT_EQ(ParseSceneFile(absent).status().code(), absl::StatusCode::kNotFound);
+  EXPECT_EQ(ParseSceneFile(absent).status(), LoadSceneFile(absent).status());
+}
+
+TEST_F(SceneLoaderTest, ResolveMeshPath) {
+  EXPECT_EQ(ResolveMeshPath("/a/b/scene.json", "m.ply"), "/a/b/m.ply");
+  EXPECT_EQ(ResolveMeshPath("/a/b/scene.json", "../models/./m.ply"), "/a/models/m.ply");
+  EXPECT_EQ(ResolveMeshPath("/a/b/scene.json", "/elsewhere/m.ply"), "/elsewhere/m.ply");
+  EXPECT_EQ(ResolveMeshPath("scenes/scene.json", "m.ply"), "scenes/m.ply");
+  EXPECT_EQ(ResolveMeshPath("scene.json", "models/m.ply"), "models/m.ply");
+}
+
+// ---- Meshes from assets -----------------------------------------------------------------
+
+// Awkward coordinates on purpose, and a quad that the importer triangulates.
+constexpr char kObjMesh[] =
+    "v 0.1 0.2 0.3\n"
+    "v 1.0000001 -3.14159265358979 2.718281828459045\n"
+    "v 123456.789012345 -0.0 0.000012345678\n"
+    "v -7.25 1e-7 98765.4321\n"
+    "v 0.3333333333333333 0.6666666666666666 -1e-30\n"
+    "f 1 2 3\n"
+    "f 2 3 4 5\n";
+
+std::string AssetJson(const std::string& sha256) {
+  return absl::StrCat(R"({"assetSha256": ")", sha256, R"("})");
+}
+
+void ExpectSameBits(double a, double b, const std::string& what) {
+  EXPECT_EQ(std::bit_cast<uint64_t>(a), std::bit_cast<uint64_t>(b)) << what << ": " << a
+                                                                    << " vs " << b;
+}
+
+void ExpectSameBits(const glm::dvec3& a, const glm::dvec3& b, const std::string& what) {
+  for (int c = 0; c < 3; ++c) ExpectSameBits(a[c], b[c], absl::StrCat(what, "[", c, "]"));
+}
+
+// Everything a bake reads, bit for bit. Labels differ by design: they say where a mesh came from.
+void ExpectSameScene(const Scene& a, const Scene& b) {
+  EXPECT_EQ(a.name, b.name);
+  EXPECT_EQ(a.source_path, b.source_path);
+  EXPECT_EQ(a.light.shape, b.light.shape);
+  ExpectSameBits(a.light.frame.center, b.light.frame.center, "light.frame.center");
+  ExpectSameBits(a.light.frame.u, b.light.frame.u, "light.frame.u");
+  ExpectSameBits(a.light.frame.v, b.light.frame.v, "light.frame.v");
+  ExpectSameBits(a.light.frame.n, b.light.frame.n, "light.frame.n");
+  ExpectSameBits(a.light.half_width, b.light.half_width, "light.half_width");
+  ExpectSameBits(a.light.half_height, b.light.half_height, "light.half_height");
+  ExpectSameBits(a.light.radius, b.light.radius, "light.radius");
+  ExpectSameBits(a.light.tan_half_angle, b.light.tan_half_angle, "light.tan_half_angle");
+  EXPECT_EQ(a.bake.width, b.bake.width);
+  EXPECT_EQ(a.bake.height, b.bake.height);
+  EXPECT_EQ(a.bake.samples, b.bake.samples);
+  EXPECT_EQ(a.bake.shadow_map_resolution, b.bake.shadow_map_resolution);
+  ExpectSameBits(a.bake.epsilon, b.bake.epsilon, "bake.epsilon");
+  EXPECT_EQ(a.bake.depth_bias, b.bake.depth_bias);
+  ExpectSameBits(a.bake.slope_bias, b.bake.slope_bias, "bake.slope_bias");
+  EXPECT_EQ(a.bake.tile_size, b.bake.tile_size);
+  EXPECT_EQ(a.bake.seed, b.bake.seed);
+  EXPECT_EQ(a.bake.sampling, b.bake.sampling);
+  EXPECT_EQ(a.bake.compression_metric, b.bake.compression_metric);
+  ASSERT_EQ(a.bake.frustum.has_value(), b.bake.frustum.has_value());
+  if (a.bake.frustum.has_value()) {
+    ExpectSameBits(a.bake.frustum->s_min, b.bake.frustum->s_min, "frustum.s_min");
+    ExpectSameBits(a.bake.frustum->s_max, b.bake.frustum->s_max, "frustum.s_max");
+    ExpectSameBits(a.bake.frustum->t_min, b.bake.frustum->t_min, "frustum.t_min");
+    ExpectSameBits(a.bake.frustum->t_max, b.bake.frustum->t_max, "frustum.t_max");
+    ExpectSameBits(a.bake.frustum->z_near, b.bake.frustum->z_near, "frustum.z_near");
+    ExpectSameBits(a.bake.frustum->z_far, b.bake.frustum->z_far, "frustum.z_far");
+  }
+  ASSERT_EQ(a.meshes.size(), b.meshes.size());
+  for (size_t m = 0; m < a.meshes.size(); ++m) {
+    SCOPED_TRACE(absl::StrCat("meshes[", m, "]"));
+    EXPECT_EQ(a.meshes[m].role, b.meshes[m].role);
+    EXPECT_EQ(a.meshes[m].indices, b.meshes[m].indices);
+    ASSERT_EQ(a.meshes[m].positions_world.size(), b.meshes[m].positions_world.size());
+    for (size_t v = 0; v < a.meshes[m].positions_world.size(); ++v) {
+      ExpectSameBits(a.meshes[m].positions_world[v], b.meshes[m].positions_world[v],
+                     absl::StrCat("positions_world[", v, "]"));
+    }
+  }
+}
+
+class SceneAssetTest : public SceneLoaderTest {
+ protected:
+  void SetUp() override {
+    absl::StatusOr<std::unique_ptr<AssetStore>> store =
+        AssetStore::Open((dir_ / "assets").string());
+    ASSERT_TRUE(store.ok()) << store.status();
+    store_ = *std::move(store);
+    resolver_ = [this](const std::string& sha256,
+                       const std::string& context) -> absl::StatusOr<MeshFileData> {
+      contexts_.push_back(context);
+      absl::StatusOr<std::string> bytes = store_->Get(sha256);
+      if (!bytes.ok()) return bytes.status();
+      return DecodeMeshAsset(*bytes, context);
+    };
+  }
+
+  // What `pdsm submit` does: every path mesh becomes an uploaded asset.
+  void PathsToAssets(const std::string& scene_path, pdsm::v1::Scene* message) {
+    for (pdsm::v1::Mesh& mesh : *message->mutable_meshes()) {
+      if (mesh.source_case() != pdsm::v1::Mesh::kPath) continue;
+      absl::StatusOr<MeshFileData> data =
+          LoadMeshFile(ResolveMeshPath(scene_path, mesh.path()), "upload");
+      ASSERT_TRUE(data.ok()) << data.status();
+      const std::string bytes = EncodeMeshAsset(*data);
+      const std::string sha256 = Sha256Hex(bytes);
+      ASSERT_TRUE(store_->Put(sha256, bytes).ok());
+      mesh.set_asset_sha256(sha256);
+    }
+  }
+
+  std::unique_ptr<AssetStore> store_;
+  MeshAssetResolver resolver_;
+  std::vector<std::string> contexts_;  // every call of resolver_
+};
+
+TEST_F(SceneAssetTest, EncodedMeshFileDecodesBitForBit) {
+  const std::string path = Write("models/awkward.obj", kObjMesh);
+  absl::StatusOr<MeshFileData> file = LoadMeshFile(path, "test");
+  ASSERT_TRUE(file.ok()) << file.status();
+  absl::StatusOr<MeshFileData> asset = DecodeMeshAsset(EncodeMeshAsset(*file), "test");
+  ASSERT_TRUE(asset.ok()) << asset.status();
+  ASSERT_EQ(asset->positions.size(), file->positions.size());
+  for (size_t v = 0; v < file->positions.size(); ++v) {
+    ExpectSameBits(asset->positions[v], file->positions[v], absl::StrCat("vertex ", v));
+  }
+  EXPECT_EQ(asset->indices, file->indices);
+}
+
+TEST_F(SceneAssetTest, SceneFromAssetsEqualsSceneFromMeshFiles) {
+  Write("models/awkward.obj", kObjMesh);
+  Write("models/thing.ply", kPlyQuad);
+  scene_path_ = Write("scenes/scene.json", R"({
+    "name": "assets",
+    "meshes": [
+      {"path": "../models/awkward.obj",
+       "transform": [0.8, 0.6, 0, 1000.125, -0.6, 0.8, 0, 0.1, 0, 0, 2, -3.3, 0, 0, 0, 1],
+       "role": "CASTER_ONLY"},
+      {"inline": {"positions": [-10,0,-10, 10,0,-10, 10,0,10], "indices": [0,1,2]},
+       "role": "RECEIVER_ONLY"},
+      {"path": "../models/thing.ply"}
+    ],
+    "light": {"disk": {"center": [0.1,10,0.2], "normal": [0.1,-1,0.05], "radius": 0.7}},
+    "bake": {"resolution": [300, 200], "samples": 9, "epsilon": 0.02, "seed": "77",
+             "frustum": {"window": [-0.5, 0.5, -0.25, 0.75], "depthRange": [1, 20]}}
+  })");
+  pdsm::v1::BakeParams overrides;
+  overrides.set_samples(33);
+
+  absl::StatusOr<Scene> from_files = LoadSceneFile(scene_path_, overrides);
+  ASSERT_TRUE(from_files.ok()) << from_files.status();
+
+  absl::StatusOr<pdsm::v1::Scene> message = ParseSceneFile(scene_path_, overrides);
+  ASSERT_TRUE(message.ok()) << message.status();
+  PathsToAssets(scene_path_, &*message);
+  ASSERT_EQ(message->meshes(0).source_case(), pdsm::v1::Mesh::kAssetSha256);
+  ASSERT_EQ(message->meshes(2).source_case(), pdsm::v1::Mesh::kAssetSha256);
+  // No base folder: the coordinator opens no path; assets only.
+  absl::StatusOr<Scene> from_assets = SceneFromProto(*message, scene_path_, "", resolver_);
+  ASSERT_TRUE(from_assets.ok()) << from_assets.status();
+
+  ExpectSameScene(*from_files, *from_assets);
+  EXPECT_EQ(from_assets->bake.samples, 33);
+  EXPECT_EQ(from_assets->meshes[0].label,
+            absl::StrCat("meshes[0] (asset ", message->meshes(0).asset_sha256().substr(0, 12),
+                         ")"));
+  EXPECT_EQ(from_assets->meshes[1].label, "meshes[1] (inline)");
+  EXPECT_EQ(contexts_, (std::vector<std::string>{
+                           absl::StrCat(scene_path_, ": meshes[0].assetSha256"),
+                           absl::StrCat(scene_path_, ": meshes[2].assetSha256")}));
+}
+
+TEST_F(SceneAssetTest, SceneFileWithAnAssetIsRefused) {
+  const std::string sha256 = Sha256Hex("abc");
+  ExpectInvalid(Load(SceneJson(AssetJson(sha256))), "meshes[0].assetSha256",
+                "mesh assets are only accepted by the coordinator; use path or inline");
+}
+
+TEST_F(SceneAssetTest, ProtoWithoutResolverRefusesAssets) {
+  absl::StatusOr<pdsm::v1::Scene> message =
+      ParseSceneFile(Write("scene.json", SceneJson(absl::StrCat(kSquare, ", ",
+                                                               AssetJson(Sha256Hex("abc"))))));
+  ASSERT_TRUE(message.ok()) << message.status();
+  for (const MeshAssetResolver& none : {MeshAssetResolver(), MeshAssetResolver(nullptr)}) {
+    absl::StatusOr<Scene> scene = SceneFromProto(*message, "job 7", "", none);
+    ASSERT_EQ(scene.status().code(), absl::StatusCode::kInvalidArgument) << scene.status();
+    EXPECT_EQ(scene.status().message(),
+              "job 7: meshes[1].assetSha256: mesh assets are only accepted by the coordinator; "
+              "use path or inline");
+  }
+  absl::StatusOr<Scene> scene = SceneFromProto(*message, "job 7", "");  // the default
+  EXPECT_EQ(scene.status().code(), absl::StatusCode::kInvalidArgument) << scene.status();
+}
+
+TEST_F(SceneAssetTest, MalformedHashIsRefusedNamingTheField) {
+  const std::string good = Sha256Hex("abc");
+  std::string upper = good;
+  upper[5] = 'C';
+  for (const std::string& bad : {std::string(""), good.substr(0, 63), good + "a", upper,
+                                 std::string("../../etc/passwd"), std::string(500, 'z')}) {
+    SCOPED_TRACE(bad);
+    absl::StatusOr<pdsm::v1::Scene> parsed = ParseSceneFile(Write("scene.json", SceneJson()));
+    ASSERT_TRUE(parsed.ok()) << parsed.status();
+    pdsm::v1::Scene message = *std::move(parsed);
+    message.add_meshes()->set_asset_sha256(bad);
+    absl::StatusOr<Scene> scene = SceneFromProto(message, "job 7", "", resolver_);
+    ASSERT_EQ(scene.status().code(), absl::StatusCode::kInvalidArgument) << scene.status();
+    EXPECT_THAT(scene.status().message(),
+                HasSubstr("job 7: meshes[1].assetSha256: must be a SHA-256, 64 lowercase hex "
+                          "digits (got \""));
+    EXPECT_LT(scene.status().message().size(), 250u);  // a long value is cut short
+  }
+  EXPECT_TRUE(contexts_.empty()) << "the resolver must not see a malformed hash";
+}
+
+TEST_F(SceneAssetTest, ResolverErrorsArePassedOn) {
+  const std::string json = SceneJson(AssetJson(Sha256Hex("never uploaded")));
+  absl::StatusOr<pdsm::v1::Scene> message = ParseSceneFile(Write("scene.json", json));
+  ASSERT_TRUE(message.ok()) << message.status();
+  absl::StatusOr<Scene> scene = SceneFromProto(*message, "job 7", "", resolver_);
+  EXPECT_EQ(scene.status().code(), absl::StatusCode::kNotFound) << scene.status();
+  EXPECT_THAT(scene.status().message(), HasSubstr(Sha256Hex("never uploaded")));
+
+  // An uploaded blob that is not a mesh: the decoder's message, prefixed with the field.
+  const std::string junk = "not a mesh";
+  ASSERT_TRUE(store_->Put(Sha256Hex(junk), junk).ok());
+  message->mutable_meshes(0)->set_asset_sha256(Sha256Hex(junk));
+  scene = SceneFromProto(*message, "job 7", "", resolver_);
+  EXPECT_EQ(scene.status().code(), absl::StatusCode::kInvalidArgument) << scene.status();
+  EXPECT_THAT(scene.status().message(),
+              HasSubstr("job 7: meshes[0].assetSha256: not a mesh asset (bad magic)"));
+}
+
+TEST_F(SceneAssetTest, AssetMeshesStillTakeTransformAndRole) {
+  MeshFileData triangle;
+  triangle.positions = {{0, 0, 0}, {1, 0, 0}, {0, 0, 1}};
+  triangle.indices = {0, 1, 2};
+  const std::string bytes = EncodeMeshAsset(triangle);
+  const std::string sha256 = Sha256Hex(bytes);
+  ASSERT_TRUE(store_->Put(sha256, bytes).ok());
+  absl::StatusOr<pdsm::v1::Scene> message = ParseSceneFile(Write(
+      "scene.json",
+      SceneJson(absl::StrCat(R"({"assetSha256": ")", sha256,
+                             R"(", "role": "CASTER_ONLY", )"
+                             R"("transform": [1,0,0,5, 0,1,0,6, 0,0,1,7, 0,0,0,1]})"))));
+  ASSERT_TRUE(message.ok()) << message.status();
+  absl::StatusOr<Scene> scene = SceneFromProto(*message, "job 7", "", resolver_);
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  EXPECT_EQ(scene->meshes[0].role, MeshRole::kCasterOnly);
+  EXPECT_EQ(scene->meshes[0].positions_world[1], glm::dvec3(6, 6, 7));
+  EXPECT_EQ(scene->meshes[0].label, absl::StrCat("meshes[0] (asset ", sha256.substr(0, 12), ")"));
 }
 
 }  // namespace

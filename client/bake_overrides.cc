@@ -1,0 +1,54 @@
+#include "client/bake_overrides.h"
+
+#include <regex>
+
+#include "absl/strings/str_format.h"
+
+namespace pdsm {
+
+void AddOverrideFlags(CLI::App* cmd, OverrideFlags* flags) {
+  cmd->add_option("--resolution", flags->resolution, "PDSM resolution WIDTHxHEIGHT");
+  cmd->add_option("--samples", flags->samples, "Light samples");
+  cmd->add_option("--sm-resolution", flags->sm_resolution, "Shadow-map texels across the window");
+  cmd->add_option("--epsilon", flags->epsilon, "Compression tolerance in [0, 1]");
+  cmd->add_option("--tile-size", flags->tile_size, "PDSM pixels per tile side");
+}
+
+absl::StatusOr<pdsm::v1::BakeParams> ToBakeParams(const OverrideFlags& flags) {
+  pdsm::v1::BakeParams params;
+  if (!flags.resolution.empty()) {
+    std::smatch m;
+    static const std::regex kWxH(R"((\d{1,9})x(\d{1,9}))");
+    if (!std::regex_match(flags.resolution, m, kWxH)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "--resolution: expected WIDTHxHEIGHT, e.g. 512x512 (got \"%s\")", flags.resolution));
+    }
+    params.add_resolution(std::stoul(m[1]));
+    params.add_resolution(std::stoul(m[2]));
+  }
+  // Values are range-checked with the scene's own fields (bake.samples, ...).
+  auto set_count = [](const char* flag, const std::optional<int64_t>& value,
+                      auto setter) -> absl::Status {
+    if (!value) return absl::OkStatus();
+    if (*value < 0 || *value > UINT32_MAX) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("%s: must be a positive count (got %d)", flag, *value));
+    }
+    setter(static_cast<uint32_t>(*value));
+    return absl::OkStatus();
+  };
+  absl::Status s = set_count("--samples", flags.samples,
+                             [&](uint32_t v) { params.set_samples(v); });
+  if (s.ok()) {
+    s = set_count("--sm-resolution", flags.sm_resolution,
+                  [&](uint32_t v) { params.set_shadow_map_resolution(v); });
+  }
+  if (s.ok()) {
+    s = set_count("--tile-size", flags.tile_size, [&](uint32_t v) { params.set_tile_size(v); });
+  }
+  if (!s.ok()) return s;
+  if (flags.epsilon) params.set_epsilon(*flags.epsilon);
+  return params;
+}
+
+}  // namespace pdsm

@@ -1,0 +1,31 @@
+// The bake-parameter flags shared by `pdsm bake` and `pdsm submit` (--resolution, --samples,
+// --sm-resolution, --epsilon, --tile-size): they override the scene file's bake fields.
+#ifndef PDSM_CLIENT_BAKE_OVERRIDES_H_
+#define PDSM_CLIENT_BAKE_OVERRIDES_H_
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "absl/status/statusor.h"
+#include "pdsm/v1/scene.pb.h"
+
+namespace pdsm {
+
+struct OverrideFlags {
+  std::string resolution;
+  std::optional<int64_t> samples, sm_resolution, tile_size;
+  std::optional<double> epsilon;
+};
+
+void AddOverrideFlags(CLI::App* command, OverrideFlags* flags);
+
+// The set flags as BakeParams. INVALID_ARGUMENT naming the flag for a malformed value; ranges
+// are checked later with the scene's own fields (bake.samples, ...).
+absl::StatusOr<pdsm::v1::BakeParams> ToBakeParams(const OverrideFlags& flags);
+
+}  // namespace pdsm
+
+#endif  // PDSM_CLIENT_BAKE_OVERRIDES_H_

@@ -1,0 +1,60 @@
+#include "core/bake/plan_fingerprint.h"
+
+#include <cstring>
+#include <string_view>
+#include <type_traits>
+
+#include "core/assets/mesh_asset.h"
+
+namespace pdsm {
+namespace {
+
+// Feeds values by their bytes: bit-exact, so any rounding difference changes the hash.
+class Feeder {
+ public:
+  template <typename T>
+  void Add(const T& value) {
+    static_assert(std::is_arithmetic_v<T> || std::is_enum_v<T>);
+    hash_.Update(std::string_view(reinterpret_cast<const char*>(&value), sizeof(value)));
+  }
+  void Add(const glm::dvec3& v) { Add(v.x), Add(v.y), Add(v.z); }
+  void Add(const glm::vec3& v) { Add(v.x), Add(v.y), Add(v.z); }
+  void Add(const std::string& s) {
+    Add(s.size());
+    hash_.Update(s);
+  }
+  std::string FinalHex() { return hash_.FinalHex(); }
+
+ private:
+  Sha256 hash_;
+};
+
+void AddHeader(const PdsmHeader& h, Feeder* f) {
+  f->Add(h.format_version), f->Add(h.scene_name), f->Add(h.light_shape);
+  f->Add(h.light_half_width), f->Add(h.light_half_height), f->Add(h.light_radius);
+  f->Add(h.tan_half_angle);
+  const PdsmGeometry& g = h.geometry;
+  f->Add(g.projection), f->Add(g.frame.center), f->Add(g.frame.u), f->Add(g.frame.v);
+  f->Add(g.frame.n), f->Add(g.width), f->Add(g.height), f->Add(g.s_min), f->Add(g.s_max);
+  f->Add(g.t_min), f->Add(g.t_max), f->Add(g.z_near), f->Add(g.z_far);
+  f->Add(h.samples), f->Add(h.shadow_map_resolution), f->Add(h.epsilon);
+  f->Add(h.compression_metric), f->Add(h.depth_bias), f->Add(h.slope_bias), f->Add(h.sampling);
+  f->Add(h.seed), f->Add(h.tile_size);
+}
+
+}  // namespace
+
+std::string PlanFingerprint(const BakePlan& plan) {
+  Feeder f;
+  AddHeader(plan.header, &f);
+  for (const glm::dvec2& s : plan.samples) f.Add(s.x), f.Add(s.y);
+  f.Add(plan.lattice.s_origin), f.Add(plan.lattice.t_origin);
+  f.Add(plan.lattice.pitch_s), f.Add(plan.lattice.pitch_t);
+  f.Add(plan.z_clip_near), f.Add(plan.z_clip_far);
+  f.Add(plan.tiles_x), f.Add(plan.tiles_y);
+  for (const glm::vec3& p : plan.casters.positions) f.Add(p);
+  for (uint32_t i : plan.casters.indices) f.Add(i);
+  return f.FinalHex();
+}
+
+}  // namespace pdsm

@@ -1,0 +1,201 @@
+// pdsm-coordinator: the bake service. Serves the job API and the worker API on one port,
+// keeps job state under --data-dir, and resumes unfinished jobs on start.
+#include <csignal>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include <CLI/CLI.hpp>
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/grpcpp.h>
+#include <grpcpp/health_check_service_interface.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include "absl/strings/str_cat.h"
+#include "proto/grpc_support.h"
+#include "server/caller_auth.h"
+#include "server/coordinator.h"
+#include "server/jobs_service.h"
+#include "server/workers_service.h"
+
+namespace pdsm {
+namespace {
+
+struct Flags {
+  std::string listen = "0.0.0.0:50051";
+  std::string data_dir;
+  std::string client_token_file, worker_token_file;
+  std::string tls_cert, tls_key;
+  std::string ready_file;
+  std::string log_level = "info";
+  double lease_seconds = 30;
+  int max_message_bytes = kDefaultMaxMessageBytes;
+  CoordinatorOptions options;
+};
+
+absl::StatusOr<std::string> ReadWholeFile(const std::string& flag, const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return absl::InvalidArgumentError(absl::StrCat(flag, ": cannot read \"", path, "\""));
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> Credentials(const Flags& flags) {
+  if (flags.tls_cert.empty() != flags.tls_key.empty()) {
+    return absl::InvalidArgumentError("--tls-cert and --tls-key go together");
+  }
+  if (flags.tls_cert.empty()) return grpc::InsecureServerCredentials();
+  absl::StatusOr<std::string> cert = ReadWholeFile("--tls-cert", flags.tls_cert);
+  if (!cert.ok()) return cert.status();
+  absl::StatusOr<std::string> key = ReadWholeFile("--tls-key", flags.tls_key);
+  if (!key.ok()) return key.status();
+  grpc::SslServerCredentialsOptions ssl;
+  ssl.pem_key_cert_pairs.push_back({*key, *cert});
+  return grpc::SslServerCredentials(ssl);
+}
+
+absl::StatusOr<std::string> OptionalToken(const std::string& flag, const std::string& path) {
+  if (path.empty()) {
+    spdlog::warn("{} not given: that API is open to anyone who can reach the port", flag);
+    return std::string();
+  }
+  return ReadTokenFile(flag, path);
+}
+
+// Blocks until SIGTERM or SIGINT. The signals are blocked in every thread (set before any
+// thread starts), so sigwait is the only place they arrive.
+void WaitForStopSignal(const sigset_t& signals) {
+  int signal = 0;
+  sigwait(&signals, &signal);
+  spdlog::info("signal {}: shutting down", signal);
+}
+
+int Run(Flags& flags, const sigset_t& signals) {
+  // One named logger per process: every line says which component wrote it.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("coordinator"));
+  spdlog::set_level(spdlog::level::from_str(flags.log_level));
+  flags.options.lease_ms = static_cast<int64_t>(flags.lease_seconds * 1000);
+  absl::StatusOr<std::string> client_token =
+      OptionalToken("--client-token-file", flags.client_token_file);
+  absl::StatusOr<std::string> worker_token =
+      OptionalToken("--worker-token-file", flags.worker_token_file);
+  absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> credentials = Credentials(flags);
+  for (const absl::Status& s : {client_token.status(), worker_token.status(),
+                                credentials.status()}) {
+    if (!s.ok()) {
+      spdlog::error("{}", std::string(s.message()));
+      return 2;
+    }
+  }
+  if (!client_token->empty() && *client_token == *worker_token) {
+    spdlog::error("--client-token-file and --worker-token-file must hold different secrets");
+    return 2;
+  }
+  absl::StatusOr<std::unique_ptr<Coordinator>> coordinator = Coordinator::Start(flags.options);
+  if (!coordinator.ok()) {
+    spdlog::error("{}", std::string(coordinator.status().message()));
+    return 1;
+  }
+  CallerAuth auth(*client_token, *worker_token);
+  JobsService jobs(coordinator->get(), &auth);
+  WorkersService workers(coordinator->get(), &auth);
+
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  grpc::ServerBuilder builder;
+  int port = 0;
+  builder.AddListeningPort(flags.listen, *credentials, &port);
+  builder.SetMaxReceiveMessageSize(flags.max_message_bytes);
+  builder.SetMaxSendMessageSize(kDefaultMaxMessageBytes);
+  builder.RegisterService(&jobs);
+  builder.RegisterService(&workers);
+  std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
+  if (!server || port == 0) {
+    spdlog::error("--listen: cannot listen on {}", flags.listen);
+    return 1;
+  }
+  const std::string address =
+      absl::StrCat(flags.listen.substr(0, flags.listen.rfind(':')), ":", port);
+  spdlog::info("listening on {} ({}), data in {}", address,
+               flags.tls_cert.empty() ? "plaintext" : "TLS", flags.options.data_dir);
+  if (!flags.ready_file.empty()) {
+    // Written then renamed, so a reader never sees half an address.
+    const std::string temp = flags.ready_file + ".tmp";
+    std::ofstream(temp) << address << "\n";
+    std::rename(temp.c_str(), flags.ready_file.c_str());
+  }
+
+  WaitForStopSignal(signals);
+  jobs.Shutdown();
+  server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(5));
+  server->Wait();
+  coordinator->reset();
+  spdlog::info("stopped");
+  return 0;
+}
+
+}  // namespace
+}  // namespace pdsm
+
+int main(int argc, char** argv) {
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  pdsm::Flags flags;
+  pdsm::CoordinatorOptions& o = flags.options;
+  CLI::App app{"pdsm-coordinator: the PDSM bake service (job API and worker API)"};
+  app.add_option("--listen", flags.listen, "host:port to serve on (port 0: any free port)")
+      ->capture_default_str();
+  app.add_option("--data-dir", o.data_dir, "Job state, assets and finished PDSMs")->required();
+  app.add_option("--client-token-file", flags.client_token_file,
+                 "Secret the job API requires (Bearer token)");
+  app.add_option("--worker-token-file", flags.worker_token_file,
+                 "Secret the worker API requires (Bearer token)");
+  app.add_option("--tls-cert", flags.tls_cert, "PEM certificate chain: serve TLS");
+  app.add_option("--tls-key", flags.tls_key, "PEM private key of --tls-cert");
+  app.add_option("--ready-file", flags.ready_file,
+                 "Write the listening address here once serving");
+  app.add_option("--samples-per-task", o.samples_per_task, "Light samples per task")
+      ->check(CLI::Range(1, 65536))->capture_default_str();
+  app.add_option("--lease-seconds", flags.lease_seconds,
+                 "Lease length; a silent worker's task is re-issued after it")
+      ->check(CLI::Range(0.1, 3600.0))->capture_default_str();
+  app.add_option("--max-open-tiles", o.max_open_tiles,
+                 "Tiles whose partial results may be held in memory at once")
+      ->check(CLI::Range(1, 1 << 20))->capture_default_str();
+  app.add_option("--max-task-failures", o.max_task_failures,
+                 "Distinct workers a task may fail on before its job fails")
+      ->check(CLI::Range(1, 1000))->capture_default_str();
+  app.add_option("--max-worker-failures", o.max_worker_failures,
+                 "Failures after which a worker gets no more tasks of a job")
+      ->check(CLI::Range(1, 1000))->capture_default_str();
+  app.add_option("--assembly-threads", o.assembly_threads,
+                 "Threads merging and compressing finished tiles")
+      ->check(CLI::Range(1, 256))->capture_default_str();
+  app.add_option("--max-message-bytes", flags.max_message_bytes,
+                 "Largest request accepted (RESOURCE_EXHAUSTED above)")
+      ->check(CLI::Range(1 << 16, 1 << 30))->capture_default_str();
+  app.add_option("--max-job-pixels", o.max_job_pixels, "Largest PDSM (width x height)")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--max-samples", o.max_samples, "Most light samples per job")
+      ->check(CLI::Range(1, 65536))->capture_default_str();
+  app.add_option("--max-triangles", o.max_triangles, "Most triangles per job")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--max-asset-bytes", o.max_asset_bytes, "Largest mesh asset")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}))
+      ->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : 2;
+  }
+  return pdsm::Run(flags, signals);
+}

@@ -1,0 +1,292 @@
+#include "server/jobs_service.h"
+
+#include <fstream>
+
+#include <spdlog/spdlog.h>
+
+#include "absl/strings/str_cat.h"
+#include "core/assets/mesh_asset.h"
+#include "proto/grpc_support.h"
+#include "server/watch_hub.h"
+
+namespace pdsm {
+namespace {
+
+constexpr int kMaxAssetQueries = 10'000;
+constexpr int kMaxQueryPoints = 1'000'000;
+
+// Answers a unary call at once with `status`.
+grpc::ServerUnaryReactor* Answer(grpc::CallbackServerContext* context,
+                                 const grpc::Status& status) {
+  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  reactor->Finish(status);
+  return reactor;
+}
+
+grpc::ServerUnaryReactor* Answer(grpc::CallbackServerContext* context,
+                                 const absl::Status& status) {
+  return Answer(context, ToGrpcStatus(status));
+}
+
+// UploadAsset: collects the chunks, verifies size and hash, stores the blob.
+class UploadReactor final : public grpc::ServerReadReactor<pdsm::v1::AssetChunk> {
+ public:
+  UploadReactor(Coordinator* coordinator, pdsm::v1::UploadAssetResponse* response)
+      : coordinator_(coordinator), response_(response) {
+    StartRead(&chunk_);
+  }
+
+  void OnReadDone(bool ok) override {
+    if (!ok) return Complete();
+    if (first_) {
+      first_ = false;
+      sha256_ = chunk_.sha256();
+      if (!IsSha256Hex(sha256_)) {
+        return Fail(absl::InvalidArgumentError(
+            "sha256: the first chunk must name the blob's 64-hex-digit SHA-256"));
+      }
+      if (static_cast<int64_t>(chunk_.total_bytes()) > coordinator_->max_asset_bytes()) {
+        return Fail(absl::ResourceExhaustedError(
+            absl::StrCat("total_bytes: ", chunk_.total_bytes(), " is above the asset limit of ",
+                         coordinator_->max_asset_bytes())));
+      }
+      expected_bytes_ = chunk_.total_bytes();
+      blob_.reserve(expected_bytes_);
+    }
+    if (blob_.size() + chunk_.data().size() > expected_bytes_) {
+      return Fail(absl::InvalidArgumentError(absl::StrCat(
+          "data: more bytes than the announced total_bytes (", expected_bytes_, ")")));
+    }
+    blob_ += chunk_.data();
+    StartRead(&chunk_);
+  }
+
+  void OnDone() override { delete this; }
+
+ private:
+  void Complete() {
+    if (first_) return Fail(absl::InvalidArgumentError("no chunk received"));
+    if (blob_.size() != expected_bytes_) {
+      return Fail(absl::InvalidArgumentError(absl::StrCat(
+          "data: got ", blob_.size(), " bytes, total_bytes announced ", expected_bytes_)));
+    }
+    if (absl::Status s = coordinator_->PutAsset(sha256_, blob_); !s.ok()) return Fail(s);
+    response_->set_sha256(sha256_);
+    response_->set_bytes(blob_.size());
+    spdlog::info("asset {}: stored, {} bytes", sha256_, blob_.size());
+    Finish(grpc::Status::OK);
+  }
+
+  void Fail(const absl::Status& status) { Finish(ToGrpcStatus(status)); }
+
+  Coordinator* coordinator_;
+  pdsm::v1::UploadAssetResponse* response_;
+  pdsm::v1::AssetChunk chunk_;
+  bool first_ = true;
+  std::string sha256_;
+  uint64_t expected_bytes_ = 0;
+  std::string blob_;
+};
+
+// FetchPdsm: streams the file in chunks, one write in flight at a time.
+class FetchReactor final : public grpc::ServerWriteReactor<pdsm::v1::PdsmChunk> {
+ public:
+  explicit FetchReactor(const absl::StatusOr<std::string>& path) {
+    if (!path.ok()) {
+      Finish(ToGrpcStatus(path.status()));
+      return;
+    }
+    in_.open(*path, std::ios::binary);
+    if (!in_) {
+      Finish(grpc::Status(grpc::StatusCode::DATA_LOSS, "the PDSM file cannot be read"));
+      return;
+    }
+    in_.seekg(0, std::ios::end);
+    total_ = static_cast<uint64_t>(in_.tellg());
+    in_.seekg(0);
+    chunk_.set_total_bytes(total_);
+    Next();
+  }
+
+  void OnWriteDone(bool ok) override {
+    if (!ok) return Finish(grpc::Status(grpc::StatusCode::UNAVAILABLE, "write failed"));
+    chunk_.clear_total_bytes();
+    Next();
+  }
+
+  void OnDone() override { delete this; }
+
+ private:
+  void Next() {
+    if (sent_ == total_ && sent_any_) return Finish(grpc::Status::OK);
+    std::string data(std::min<uint64_t>(kChunkBytes, total_ - sent_), '\0');
+    in_.read(data.data(), static_cast<std::streamsize>(data.size()));
+    if (!in_) return Finish(grpc::Status(grpc::StatusCode::DATA_LOSS, "short read"));
+    sent_ += data.size();
+    sent_any_ = true;
+    *chunk_.mutable_data() = std::move(data);
+    StartWrite(&chunk_);
+  }
+
+  std::ifstream in_;
+  uint64_t total_ = 0, sent_ = 0;
+  bool sent_any_ = false;
+  pdsm::v1::PdsmChunk chunk_;
+};
+
+// A reactor that refuses the call at once (for streams whose caller failed the token check).
+template <typename Base>
+class RefuseReactor final : public Base {
+ public:
+  explicit RefuseReactor(const grpc::Status& status) { this->Finish(status); }
+  void OnDone() override { delete this; }
+};
+
+}  // namespace
+
+JobsService::JobsService(Coordinator* coordinator, const CallerAuth* auth)
+    : coordinator_(coordinator), auth_(auth), watch_hub_(std::make_unique<WatchHub>(coordinator)) {}
+
+JobsService::~JobsService() = default;
+
+void JobsService::Shutdown() { watch_hub_->Shutdown(); }
+
+grpc::ServerUnaryReactor* JobsService::FindMissingAssets(
+    grpc::CallbackServerContext* context, const pdsm::v1::FindMissingAssetsRequest* request,
+    pdsm::v1::FindMissingAssetsResponse* response) {
+  if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
+    return Answer(context, s);
+  }
+  if (request->sha256_size() > kMaxAssetQueries) {
+    return Answer(context, absl::ResourceExhaustedError(absl::StrCat(
+                               "sha256: at most ", kMaxAssetQueries, " per call")));
+  }
+  std::vector<std::string> hashes;
+  for (int i = 0; i < request->sha256_size(); ++i) {
+    if (!IsSha256Hex(request->sha256(i))) {
+      return Answer(context, absl::InvalidArgumentError(absl::StrCat(
+                                 "sha256[", i, "]: must be 64 lowercase hex characters")));
+    }
+    hashes.push_back(request->sha256(i));
+  }
+  for (std::string& h : coordinator_->FindMissingAssets(hashes)) {
+    response->add_missing_sha256(std::move(h));
+  }
+  return Answer(context, grpc::Status::OK);
+}
+
+grpc::ServerReadReactor<pdsm::v1::AssetChunk>* JobsService::UploadAsset(
+    grpc::CallbackServerContext* context, pdsm::v1::UploadAssetResponse* response) {
+  if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
+    return new RefuseReactor<grpc::ServerReadReactor<pdsm::v1::AssetChunk>>(s);
+  }
+  return new UploadReactor(coordinator_, response);
+}
+
+grpc::ServerUnaryReactor* JobsService::SubmitBake(grpc::CallbackServerContext* context,
+                                                  const pdsm::v1::SubmitBakeRequest* request,
+                                                  pdsm::v1::Job* response) {
+  if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
+    return Answer(context, s);
+  }
+  absl::StatusOr<pdsm::v1::Job> job = coordinator_->SubmitBake(*request);
+  if (!job.ok()) {
+    spdlog::warn("SubmitBake refused ({}): {}", context->peer(), std::string(job.status().message()));
+    return Answer(context, job.status());
+  }
+  *response = *std::move(job);
+  return Answer(context, grpc::Status::OK);
+}
+
+grpc::ServerUnaryReactor* JobsService::GetJob(grpc::CallbackServerContext* context,
+                                              const pdsm::v1::GetJobRequest* request,
+                                              pdsm::v1::Job* response) {
+  if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
+    return Answer(context, s);
+  }
+  absl::StatusOr<pdsm::v1::Job> job = coordinator_->GetJob(request->job_id());
+  if (!job.ok()) return Answer(context, job.status());
+  *response = *std::move(job);
+  return Answer(context, grpc::Status::OK);
+}
+
+grpc::ServerUnaryReactor* JobsService::ListJobs(grpc::CallbackServerContext* context,
+                                                const pdsm::v1::ListJobsRequest* request,
+                                                pdsm::v1::ListJobsResponse* response) {
+  if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
+    return Answer(context, s);
+  }
+  if (request->limit() < 0 || request->limit() > 10'000) {
+    return Answer(context, absl::InvalidArgumentError("limit: must be in [0, 10000]"));
+  }
+  absl::StatusOr<std::vector<pdsm::v1::Job>> jobs = coordinator_->ListJobs(request->limit());
+  if (!jobs.ok()) return Answer(context, jobs.status());
+  for (pdsm::v1::Job& job : *jobs) *response->add_jobs() = std::move(job);
+  return Answer(context, grpc::Status::OK);
+}
+
+grpc::ServerWriteReactor<pdsm::v1::Job>* JobsService::WatchJob(
+    grpc::CallbackServerContext* context, const pdsm::v1::GetJobRequest* request) {
+  if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
+    return new RefuseReactor<grpc::ServerWriteReactor<pdsm::v1::Job>>(s);
+  }
+  return watch_hub_->Watch(request->job_id());
+}
+
+grpc::ServerUnaryReactor* JobsService::CancelJob(grpc::CallbackServerContext* context,
+                                                 const pdsm::v1::GetJobRequest* request,
+                                                 pdsm::v1::Job* response) {
+  if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
+    return Answer(context, s);
+  }
+  absl::StatusOr<pdsm::v1::Job> job = coordinator_->CancelJob(request->job_id());
+  if (!job.ok()) return Answer(context, job.status());
+  *response = *std::move(job);
+  return Answer(context, grpc::Status::OK);
+}
+
+grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>* JobsService::FetchPdsm(
+    grpc::CallbackServerContext* context, const pdsm::v1::GetJobRequest* request) {
+  if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
+    return new RefuseReactor<grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>>(s);
+  }
+  return new FetchReactor(coordinator_->PdsmPath(request->job_id()));
+}
+
+grpc::ServerUnaryReactor* JobsService::QueryAttenuation(
+    grpc::CallbackServerContext* context, const pdsm::v1::QueryAttenuationRequest* request,
+    pdsm::v1::QueryAttenuationResponse* response) {
+  if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
+    return Answer(context, s);
+  }
+  if (request->points_size() > kMaxQueryPoints) {
+    return Answer(context, absl::ResourceExhaustedError(absl::StrCat(
+                               "points: at most ", kMaxQueryPoints, " per call")));
+  }
+  std::vector<glm::dvec3> points;
+  points.reserve(request->points_size());
+  for (int i = 0; i < request->points_size(); ++i) {
+    const pdsm::v1::QueryPoint& p = request->points(i);
+    if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !std::isfinite(p.z())) {
+      return Answer(context, absl::InvalidArgumentError(
+                                 absl::StrCat("points[", i, "]: must be finite")));
+    }
+    points.emplace_back(p.x(), p.y(), p.z());
+  }
+  absl::StatusOr<std::vector<double>> values = coordinator_->Query(request->job_id(), points);
+  if (!values.ok()) return Answer(context, values.status());
+  response->mutable_attenuation()->Assign(values->begin(), values->end());
+  return Answer(context, grpc::Status::OK);
+}
+
+grpc::ServerUnaryReactor* JobsService::GetStats(grpc::CallbackServerContext* context,
+                                                const pdsm::v1::GetStatsRequest* request,
+                                                pdsm::v1::Stats* response) {
+  if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
+    return Answer(context, s);
+  }
+  *response = coordinator_->GetStats();
+  return Answer(context, grpc::Status::OK);
+}
+
+}  // namespace pdsm

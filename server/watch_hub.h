@@ -1,0 +1,45 @@
+// WatchJob streams: one reactor per watcher, all woken by one hub thread every 100 ms. A
+// watcher writes when its job changed (state, tiles, samples) or every 2 s (a fresh ETA), and
+// finishes after writing an ended job. Fifty watchers cost one thread, not fifty.
+#ifndef PDSM_SERVER_WATCH_HUB_H_
+#define PDSM_SERVER_WATCH_HUB_H_
+
+#include <condition_variable>
+#include <mutex>
+#include <set>
+#include <string>
+#include <thread>
+
+#include <grpcpp/grpcpp.h>
+
+#include "pdsm/v1/jobs.pb.h"
+#include "server/coordinator.h"
+
+namespace pdsm {
+
+class WatchHub {
+ public:
+  explicit WatchHub(Coordinator* coordinator);
+  ~WatchHub();  // REQUIRES: Shutdown() called and the server drained
+
+  // A reactor for one WatchJob call; it registers itself and deletes itself when done.
+  grpc::ServerWriteReactor<pdsm::v1::Job>* Watch(const std::string& job_id);
+
+  // Finishes every open watch and stops the thread.
+  void Shutdown();
+
+ private:
+  class Watcher;
+  void Loop();
+
+  Coordinator* coordinator_;
+  std::mutex mu_;
+  std::condition_variable cv_;
+  std::set<Watcher*> watchers_;
+  bool stopping_ = false;
+  std::thread thread_;
+};
+
+}  // namespace pdsm
+
+#endif  // PDSM_SERVER_WATCH_HUB_H_

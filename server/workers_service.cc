@@ -1,0 +1,147 @@
+#include "server/workers_service.h"
+
+#include "absl/strings/str_cat.h"
+#include "proto/grpc_support.h"
+
+namespace pdsm {
+namespace {
+
+// Without work, a worker asks again after this long: short enough that a new job starts
+// promptly, long enough that idle workers cost the coordinator little.
+constexpr int64_t kIdleRetryMs = 250;
+
+grpc::ServerUnaryReactor* Answer(grpc::CallbackServerContext* context,
+                                 const grpc::Status& status) {
+  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  reactor->Finish(status);
+  return reactor;
+}
+
+grpc::ServerUnaryReactor* Answer(grpc::CallbackServerContext* context,
+                                 const absl::Status& status) {
+  return Answer(context, ToGrpcStatus(status));
+}
+
+absl::Status CheckWorkerId(const std::string& id) {
+  if (id.empty() || id.size() > 256) {
+    return absl::InvalidArgumentError("worker_id: must have 1 to 256 characters");
+  }
+  return absl::OkStatus();
+}
+
+// FetchAsset: the blob in chunks.
+class AssetReactor final : public grpc::ServerWriteReactor<pdsm::v1::AssetData> {
+ public:
+  explicit AssetReactor(absl::StatusOr<std::string> blob) {
+    if (!blob.ok()) {
+      Finish(ToGrpcStatus(blob.status()));
+      return;
+    }
+    blob_ = *std::move(blob);
+    chunk_.set_total_bytes(blob_.size());
+    Next();
+  }
+  void OnWriteDone(bool ok) override {
+    if (!ok) return Finish(grpc::Status(grpc::StatusCode::UNAVAILABLE, "write failed"));
+    chunk_.clear_total_bytes();
+    Next();
+  }
+  void OnDone() override { delete this; }
+
+ private:
+  void Next() {
+    if (offset_ == blob_.size() && sent_any_) return Finish(grpc::Status::OK);
+    const size_t n = std::min(kChunkBytes, blob_.size() - offset_);
+    chunk_.set_data(blob_.substr(offset_, n));
+    offset_ += n;
+    sent_any_ = true;
+    StartWrite(&chunk_);
+  }
+  std::string blob_;
+  size_t offset_ = 0;
+  bool sent_any_ = false;
+  pdsm::v1::AssetData chunk_;
+};
+
+class RefusedAsset final : public grpc::ServerWriteReactor<pdsm::v1::AssetData> {
+ public:
+  explicit RefusedAsset(const grpc::Status& status) { Finish(status); }
+  void OnDone() override { delete this; }
+};
+
+}  // namespace
+
+grpc::ServerUnaryReactor* WorkersService::LeaseTask(grpc::CallbackServerContext* context,
+                                                    const pdsm::v1::LeaseTaskRequest* request,
+                                                    pdsm::v1::LeaseTaskResponse* response) {
+  if (grpc::Status s = auth_->Check(context, Audience::kWorker); !s.ok()) {
+    return Answer(context, s);
+  }
+  if (absl::Status s = CheckWorkerId(request->worker_id()); !s.ok()) return Answer(context, s);
+  std::optional<pdsm::v1::Task> task = coordinator_->LeaseTask(request->worker_id());
+  if (task) {
+    *response->mutable_task() = *std::move(task);
+  } else {
+    response->set_retry_after_ms(kIdleRetryMs);
+  }
+  return Answer(context, grpc::Status::OK);
+}
+
+grpc::ServerUnaryReactor* WorkersService::ExtendLease(
+    grpc::CallbackServerContext* context, const pdsm::v1::ExtendLeaseRequest* request,
+    pdsm::v1::ExtendLeaseResponse* response) {
+  if (grpc::Status s = auth_->Check(context, Audience::kWorker); !s.ok()) {
+    return Answer(context, s);
+  }
+  absl::StatusOr<int64_t> lease_ms =
+      coordinator_->ExtendLease(request->worker_id(), request->lease_id());
+  if (!lease_ms.ok()) return Answer(context, lease_ms.status());
+  response->set_lease_ms(*lease_ms);
+  return Answer(context, grpc::Status::OK);
+}
+
+grpc::ServerUnaryReactor* WorkersService::ReportResult(
+    grpc::CallbackServerContext* context, const pdsm::v1::ReportResultRequest* request,
+    pdsm::v1::ReportResultResponse* response) {
+  if (grpc::Status s = auth_->Check(context, Audience::kWorker); !s.ok()) {
+    return Answer(context, s);
+  }
+  absl::StatusOr<bool> accepted =
+      coordinator_->ReportResult(request->worker_id(), request->lease_id(), request->events());
+  if (!accepted.ok()) return Answer(context, accepted.status());
+  response->set_accepted(*accepted);
+  return Answer(context, grpc::Status::OK);
+}
+
+grpc::ServerUnaryReactor* WorkersService::ReportFailure(
+    grpc::CallbackServerContext* context, const pdsm::v1::ReportFailureRequest* request,
+    pdsm::v1::ReportFailureResponse* response) {
+  if (grpc::Status s = auth_->Check(context, Audience::kWorker); !s.ok()) {
+    return Answer(context, s);
+  }
+  coordinator_->ReportFailure(request->worker_id(), request->lease_id(),
+                              request->reason().substr(0, 4096), request->handed_back());
+  return Answer(context, grpc::Status::OK);
+}
+
+grpc::ServerUnaryReactor* WorkersService::GetJobScene(
+    grpc::CallbackServerContext* context, const pdsm::v1::GetJobSceneRequest* request,
+    pdsm::v1::GetJobSceneResponse* response) {
+  if (grpc::Status s = auth_->Check(context, Audience::kWorker); !s.ok()) {
+    return Answer(context, s);
+  }
+  absl::StatusOr<pdsm::v1::GetJobSceneResponse> scene = coordinator_->JobScene(request->job_id());
+  if (!scene.ok()) return Answer(context, scene.status());
+  *response = *std::move(scene);
+  return Answer(context, grpc::Status::OK);
+}
+
+grpc::ServerWriteReactor<pdsm::v1::AssetData>* WorkersService::FetchAsset(
+    grpc::CallbackServerContext* context, const pdsm::v1::FetchAssetRequest* request) {
+  if (grpc::Status s = auth_->Check(context, Audience::kWorker); !s.ok()) {
+    return new RefusedAsset(s);
+  }
+  return new AssetReactor(coordinator_->GetAsset(request->sha256()));
+}
+
+}  // namespace pdsm

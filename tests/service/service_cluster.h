@@ -1,0 +1,261 @@
+// A real bake service on 127.0.0.1 for tests: a pdsm-coordinator and pdsm-worker processes
+// started from the build, on a free port, with helpers to kill, stop and restart them, run
+// the `pdsm` CLI against them, and call the job API directly.
+#ifndef PDSM_TESTS_SERVICE_SERVICE_CLUSTER_H_
+#define PDSM_TESTS_SERVICE_SERVICE_CLUSTER_H_
+
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <fstream>
+#include <sstream>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <google/protobuf/util/json_util.h>
+#include <gtest/gtest.h>
+
+#include "pdsm/v1/jobs.grpc.pb.h"
+#include "pdsm/v1/workers.grpc.pb.h"
+#include "proto/grpc_support.h"
+#include "tests/test_support.h"
+
+extern char** environ;
+
+namespace pdsm::testing {
+
+// A child process with its output in a log file; killed (SIGKILL) if still running at
+// destruction.
+class ChildProcess {
+ public:
+  ChildProcess(const std::vector<std::string>& argv, const std::string& log_path) {
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log_path.c_str(),
+                                     O_WRONLY | O_CREAT | O_APPEND, 0644);
+    posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+    std::vector<char*> args;
+    for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    if (posix_spawn(&pid_, args[0], &actions, nullptr, args.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&actions);
+  }
+  ~ChildProcess() {
+    if (running()) {
+      kill(pid_, SIGKILL);
+      Wait(std::chrono::seconds(10));
+    }
+  }
+  ChildProcess(const ChildProcess&) = delete;
+  ChildProcess& operator=(const ChildProcess&) = delete;
+
+  bool running() const { return pid_ > 0 && !exited_; }
+  void Signal(int signal) {
+    if (running()) kill(pid_, signal);
+  }
+  // The exit status (as from waitpid), or -1 if it did not end within `timeout`.
+  int Wait(std::chrono::milliseconds timeout) {
+    const auto end = std::chrono::steady_clock::now() + timeout;
+    while (!exited_) {
+      int status = 0;
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        exited_ = true;
+        status_ = status;
+        break;
+      }
+      if (std::chrono::steady_clock::now() > end) return -1;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return status_;
+  }
+
+ private:
+  pid_t pid_ = -1;
+  bool exited_ = false;
+  int status_ = 0;
+};
+
+struct ClusterOptions {
+  std::string client_token;  // empty: no token files
+  std::string worker_token;
+  std::vector<std::string> coordinator_args;  // extra flags
+};
+
+class ServiceCluster {
+ public:
+  explicit ServiceCluster(ClusterOptions options = {}) : options_(std::move(options)) {
+    if (!options_.client_token.empty()) {
+      WriteText(dir_.File("client_token"), options_.client_token + "\n");
+      WriteText(dir_.File("worker_token"), options_.worker_token + "\n");
+    }
+  }
+
+  const TempDir& dir() const { return dir_; }
+  const std::string& address() const { return address_; }
+
+  // Starts (or restarts, on the same port and data dir) the coordinator; waits until it
+  // serves. Returns false on timeout.
+  bool StartCoordinator() {
+    const std::string ready = dir_.File("ready");
+    std::remove(ready.c_str());
+    std::vector<std::string> argv = {PDSM_COORDINATOR, "--listen",
+                                     address_.empty() ? "127.0.0.1:0" : address_,
+                                     "--data-dir", dir_.File("data"), "--ready-file", ready};
+    if (!options_.client_token.empty()) {
+      argv.insert(argv.end(), {"--client-token-file", dir_.File("client_token"),
+                               "--worker-token-file", dir_.File("worker_token")});
+    }
+    argv.insert(argv.end(), options_.coordinator_args.begin(), options_.coordinator_args.end());
+    coordinator_ = std::make_unique<ChildProcess>(argv, dir_.File("coordinator.log"));
+    for (int i = 0; i < 600; ++i) {  // 60 s: a loaded CI machine can be slow to start
+      std::ifstream in(ready);
+      std::string line;
+      if (in && std::getline(in, line) && !line.empty()) {
+        address_ = line;
+        return true;
+      }
+      if (!coordinator_->running() || coordinator_->Wait(std::chrono::milliseconds(0)) != -1) {
+        return false;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    return false;
+  }
+
+  ChildProcess& coordinator() { return *coordinator_; }
+
+  // Starts a worker; returns its index.
+  size_t AddWorker(int threads = 1) {
+    std::vector<std::string> argv = {PDSM_WORKER, "--coordinator", address_, "--threads",
+                                     std::to_string(threads), "--cache-dir",
+                                     dir_.File("cache" + std::to_string(workers_.size()))};
+    if (!options_.worker_token.empty()) {
+      argv.insert(argv.end(), {"--token-file", dir_.File("worker_token")});
+    }
+    workers_.push_back(std::make_unique<ChildProcess>(
+        argv, dir_.File("worker" + std::to_string(workers_.size()) + ".log")));
+    return workers_.size() - 1;
+  }
+  ChildProcess& worker(size_t i) { return *workers_.at(i); }
+
+  // Runs `pdsm ARGS --server ADDR [--token-file F]`.
+  CommandResult Pdsm(const std::string& args) {
+    std::string command = std::string(PDSM_CLI) + " " + args + " --server " + address_;
+    if (!options_.client_token.empty()) command += " --token-file " + dir_.File("client_token");
+    return RunCommand(command, dir_);
+  }
+
+  // Submits and returns the job id (empty on failure, with the error in the test log).
+  std::string Submit(const std::string& scene_path, const std::string& extra = "") {
+    CommandResult r = Pdsm("submit " + scene_path + " " + extra);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    std::string last;
+    std::istringstream lines(r.out);
+    for (std::string line; std::getline(lines, line);) {
+      if (!line.empty()) last = line;
+    }
+    return last;
+  }
+
+  // The job as the job API returns it.
+  grpc::Status GetJob(const std::string& job_id, pdsm::v1::Job* job,
+                      const std::string& token = "\x01default") {
+    grpc::ClientContext context;
+    PrepareCall(&context, token == "\x01default" ? options_.client_token : token,
+                std::chrono::seconds(10));
+    pdsm::v1::GetJobRequest request;
+    request.set_job_id(job_id);
+    return JobsStub()->GetJob(&context, request, job);
+  }
+
+  // Polls until the job is in a terminal state or `timeout` passes; returns the last state.
+  pdsm::v1::Job WaitForEnd(const std::string& job_id,
+                           std::chrono::seconds timeout = std::chrono::seconds(120)) {
+    return WaitUntil(job_id, timeout, [](const pdsm::v1::Job& j) {
+      return j.state() == pdsm::v1::SUCCEEDED || j.state() == pdsm::v1::FAILED ||
+             j.state() == pdsm::v1::CANCELLED;
+    });
+  }
+
+  template <typename Predicate>
+  pdsm::v1::Job WaitUntil(const std::string& job_id, std::chrono::seconds timeout,
+                          Predicate done) {
+    const auto end = std::chrono::steady_clock::now() + timeout;
+    pdsm::v1::Job job;
+    while (std::chrono::steady_clock::now() < end) {
+      if (GetJob(job_id, &job).ok() && done(job)) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return job;
+  }
+
+  pdsm::v1::Stats Stats() {
+    grpc::ClientContext context;
+    PrepareCall(&context, options_.client_token, std::chrono::seconds(10));
+    pdsm::v1::Stats stats;
+    EXPECT_TRUE(JobsStub()->GetStats(&context, {}, &stats).ok());
+    return stats;
+  }
+
+  std::unique_ptr<pdsm::v1::PdsmJobs::Stub> JobsStub() {
+    return pdsm::v1::PdsmJobs::NewStub(*MakeChannel({address_, "", ""}));
+  }
+  std::unique_ptr<pdsm::v1::PdsmWorkers::Stub> WorkersStub() {
+    return pdsm::v1::PdsmWorkers::NewStub(*MakeChannel({address_, "", ""}));
+  }
+
+  std::string Log(const std::string& name) { return ReadBytes(dir_.File(name)); }
+
+ private:
+  ClusterOptions options_;
+  TempDir dir_;
+  std::string address_;
+  std::unique_ptr<ChildProcess> coordinator_;
+  std::vector<std::unique_ptr<ChildProcess>> workers_;
+};
+
+// A scene for the service tests: the plates example with one caster read from an OBJ file
+// (so mesh assets travel), written into `dir`. Returns the scene path.
+inline std::string WriteServiceScene(const TempDir& dir, int resolution, int samples,
+                                     int tile_size, int sm_resolution = 512) {
+  WriteText(dir.File("box.obj"),
+            "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\n"
+            "v -1 0.5 -1\nv 1 0.5 -1\nv 1 0.5 1\nv -1 0.5 1\n"
+            "f 1 2 3\nf 1 3 4\nf 5 7 6\nf 5 8 7\nf 1 5 6\nf 1 6 2\nf 4 3 7\nf 4 7 8\n");
+  const std::string path = dir.File("scene.json");
+  WriteText(path, R"({
+  "name": "service-plates",
+  "meshes": [
+    {"inline": {"positions": [-10,0,-10, 10,0,-10, 10,0,10, -10,0,10],
+                "indices": [0,1,2, 0,2,3]}, "role": "RECEIVER_ONLY"},
+    {"path": "box.obj", "transform": [1.5,0,0,-1.5, 0,1,0,4, 0,0,1.5,-1, 0,0,0,1]},
+    {"inline": {"positions": [0,0,0, 2,0,0, 1,0,1.8], "indices": [0,1,2]},
+     "transform": [1,0,0,0.5, 0,1,0,2, 0,0,1,0.5, 0,0,0,1]}
+  ],
+  "light": {"rect": {"center": [0,10,0], "normal": [0,-1,0], "up": [0,0,1], "size": [3,3]}},
+  "bake": {"resolution": [)" + std::to_string(resolution) + "," + std::to_string(resolution) +
+                      R"(], "samples": )" + std::to_string(samples) +
+                      R"(, "shadowMapResolution": )" + std::to_string(sm_resolution) +
+                      R"(, "tileSize": )" + std::to_string(tile_size) + R"(, "epsilon": 0.01}
+})");
+  return path;
+}
+
+// The local bake of a scene, as bytes: what every distributed bake must equal.
+inline std::string LocalBakeBytes(const TempDir& dir, const std::string& scene_path) {
+  const std::string out = dir.File("local.exr");
+  CommandResult r = RunCommand(
+      std::string(PDSM_CLI) + " bake " + scene_path + " -o " + out + " --no-preview", dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return ReadBytes(out);
+}
+
+}  // namespace pdsm::testing
+
+#endif  // PDSM_TESTS_SERVICE_SERVICE_CLUSTER_H_

@@ -1,0 +1,288 @@
+// The distributed service end to end: real coordinator and worker processes on 127.0.0.1.
+// Every bake is compared byte for byte with `pdsm bake` of the same scene.
+#include <atomic>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "tests/service/service_cluster.h"
+
+namespace pdsm::testing {
+namespace {
+
+using std::chrono::seconds;
+
+bool Ended(const pdsm::v1::Job& job) {
+  return job.state() == pdsm::v1::SUCCEEDED || job.state() == pdsm::v1::FAILED ||
+         job.state() == pdsm::v1::CANCELLED;
+}
+
+// Fetches a finished job and returns the file's bytes.
+std::string FetchBytes(ServiceCluster& cluster, const std::string& job_id) {
+  const std::string out = cluster.dir().File(job_id + ".exr");
+  CommandResult r = cluster.Pdsm("fetch " + job_id + " -o " + out);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return ReadBytes(out);
+}
+
+TEST(Service, ThreeWorkersMatchTheLocalBakeByteForByte) {
+  ServiceCluster cluster(ClusterOptions{.coordinator_args = {"--samples-per-task", "16"}});
+  ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
+  for (int i = 0; i < 3; ++i) cluster.AddWorker();
+  const std::string scene = WriteServiceScene(cluster.dir(), 128, 64, 32);
+  const std::string expected = LocalBakeBytes(cluster.dir(), scene);
+  ASSERT_FALSE(expected.empty());
+
+  const std::string job_id = cluster.Submit(scene);
+  ASSERT_EQ(job_id.size(), 16u);
+  const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
+  ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error() << cluster.Log("coordinator.log");
+  EXPECT_EQ(job.tiles_done(), 16);
+  EXPECT_DOUBLE_EQ(job.progress(), 1.0);
+  EXPECT_EQ(job.tile_assemblies(), job.tiles_total());
+  EXPECT_TRUE(FetchBytes(cluster, job_id) == expected) << "fetched PDSM differs from local bake";
+
+  // `status --json` is the documented contract: state and progress.
+  CommandResult status = cluster.Pdsm("status " + job_id + " --json");
+  ASSERT_EQ(status.exit_code, 0) << status.err;
+  EXPECT_NE(status.out.find("\"state\":\"SUCCEEDED\""), std::string::npos) << status.out;
+  EXPECT_NE(status.out.find("\"progress\":1"), std::string::npos) << status.out;
+
+  // Remote queries evaluate the same file with the same code as local ones.
+  WriteText(cluster.dir().File("points.csv"), "0,0,0\n1.2,0.01,-0.3\n-1.5,2,-1\n50,0,50\n");
+  CommandResult remote =
+      cluster.Pdsm("query --job " + job_id + " --points " + cluster.dir().File("points.csv"));
+  CommandResult local = RunCommand(std::string(PDSM_CLI) + " query " +
+                                       cluster.dir().File("local.exr") + " --points " +
+                                       cluster.dir().File("points.csv"),
+                                   cluster.dir());
+  ASSERT_EQ(remote.exit_code, 0) << remote.err;
+  EXPECT_EQ(remote.out, local.out);
+
+  // The same idempotency key returns the same job instead of a new one.
+  const std::string first = cluster.Submit(scene, "--idempotency-key retry-1");
+  const std::string again = cluster.Submit(scene, "--idempotency-key retry-1");
+  EXPECT_EQ(first, again);
+  EXPECT_EQ(cluster.WaitForEnd(first).state(), pdsm::v1::SUCCEEDED);
+}
+
+TEST(Service, KilledWorkersDoNotChangeTheBytes) {
+  ServiceCluster cluster(ClusterOptions{
+      .coordinator_args = {"--samples-per-task", "8", "--lease-seconds", "1"}});
+  ASSERT_TRUE(cluster.StartCoordinator());
+  const std::string scene = WriteServiceScene(cluster.dir(), 128, 128, 32, 1024);
+  const std::string expected = LocalBakeBytes(cluster.dir(), scene);
+  const std::string job_id = cluster.Submit(scene);
+  cluster.AddWorker();
+  cluster.AddWorker();
+  // Kill -9 one worker, then another, each while the job is under way.
+  for (size_t victim = 0; victim < 2; ++victim) {
+    cluster.WaitUntil(job_id, seconds(60), [](const pdsm::v1::Job& j) {
+      return j.state() == pdsm::v1::RUNNING || Ended(j);
+    });
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    cluster.worker(victim).Signal(SIGKILL);
+    cluster.AddWorker();
+  }
+  const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
+  ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error();
+  EXPECT_TRUE(FetchBytes(cluster, job_id) == expected);
+}
+
+TEST(Service, StalledWorkerLosesItsLeaseAndItsLateResultChangesNothing) {
+  ServiceCluster cluster(ClusterOptions{
+      .coordinator_args = {"--samples-per-task", "32", "--lease-seconds", "1"}});
+  ASSERT_TRUE(cluster.StartCoordinator());
+  const std::string scene = WriteServiceScene(cluster.dir(), 128, 128, 64, 1024);
+  const std::string expected = LocalBakeBytes(cluster.dir(), scene);
+  const size_t stalled = cluster.AddWorker();
+  const std::string job_id = cluster.Submit(scene);
+  cluster.WaitUntil(job_id, seconds(60), [](const pdsm::v1::Job& j) {
+    return j.state() == pdsm::v1::RUNNING || Ended(j);
+  });
+  cluster.worker(stalled).Signal(SIGSTOP);
+  cluster.AddWorker();
+  std::this_thread::sleep_for(std::chrono::milliseconds(2500));  // past the 1 s lease
+  cluster.worker(stalled).Signal(SIGCONT);
+  const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
+  ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error();
+  EXPECT_GE(cluster.Stats().leases_expired(), 1);
+  EXPECT_EQ(job.tile_assemblies(), job.tiles_total());
+  EXPECT_TRUE(FetchBytes(cluster, job_id) == expected);
+}
+
+TEST(Service, CoordinatorKilledMidJobResumesWithoutRecomputingFinishedTiles) {
+  ServiceCluster cluster(ClusterOptions{
+      .coordinator_args = {"--samples-per-task", "32", "--lease-seconds", "2"}});
+  ASSERT_TRUE(cluster.StartCoordinator());
+  const std::string scene = WriteServiceScene(cluster.dir(), 128, 256, 16, 1024);
+  const std::string expected = LocalBakeBytes(cluster.dir(), scene);
+  const std::string done_before = cluster.Submit(scene);  // a finished job must survive too
+  cluster.AddWorker();
+  ASSERT_EQ(cluster.WaitForEnd(done_before).state(), pdsm::v1::SUCCEEDED);
+
+  const std::string job_id = cluster.Submit(scene);
+  const pdsm::v1::Job partial = cluster.WaitUntil(job_id, seconds(60), [](const auto& j) {
+    return j.tiles_done() >= 8 || Ended(j);
+  });
+  ASSERT_FALSE(Ended(partial)) << "the job ended before the coordinator could be killed";
+  cluster.coordinator().Signal(SIGKILL);
+  cluster.coordinator().Wait(seconds(10));
+  ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
+
+  const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
+  ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error();
+  // Every tile assembled exactly once over both lifetimes: none finished before was redone.
+  EXPECT_EQ(job.tile_assemblies(), job.tiles_total());
+  EXPECT_TRUE(FetchBytes(cluster, job_id) == expected);
+  EXPECT_TRUE(FetchBytes(cluster, done_before) == expected);
+}
+
+TEST(Service, CancelStopsTheJobAndFreesTheWorkers) {
+  ServiceCluster cluster(ClusterOptions{
+      .coordinator_args = {"--samples-per-task", "64", "--lease-seconds", "1"}});
+  ASSERT_TRUE(cluster.StartCoordinator());
+  cluster.AddWorker();
+  const std::string big = WriteServiceScene(cluster.dir(), 512, 1024, 32, 2048);
+  const std::string job_id = cluster.Submit(big);
+  cluster.WaitUntil(job_id, seconds(60), [](const pdsm::v1::Job& j) {
+    return j.samples_done() > 0 || Ended(j);
+  });
+  CommandResult cancel = cluster.Pdsm("cancel " + job_id);
+  ASSERT_EQ(cancel.exit_code, 0) << cancel.err;
+  EXPECT_EQ(cluster.WaitForEnd(job_id, seconds(5)).state(), pdsm::v1::CANCELLED);
+  // The worker learns at its next lease extension and is free well within a few seconds.
+  const auto end = std::chrono::steady_clock::now() + seconds(10);
+  while (cluster.Stats().tasks_leased() > 0 && std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_EQ(cluster.Stats().tasks_leased(), 0);
+  CommandResult fetch = cluster.Pdsm("fetch " + job_id + " -o " + cluster.dir().File("x.exr"));
+  EXPECT_EQ(fetch.exit_code, 2);
+  EXPECT_FALSE(std::filesystem::exists(cluster.dir().File("x.exr")));
+
+  // The freed worker takes the next job.
+  TempDir small_dir;
+  const std::string small = WriteServiceScene(small_dir, 64, 16, 32);
+  const std::string next = cluster.Submit(small);
+  EXPECT_EQ(cluster.WaitForEnd(next).state(), pdsm::v1::SUCCEEDED);
+}
+
+TEST(Service, BadCallersAndBadJobsGetTheRightStatusAndDisturbNothing) {
+  ServiceCluster cluster(ClusterOptions{
+      .client_token = "client-secret", .worker_token = "worker-secret",
+      .coordinator_args = {"--max-job-pixels", "70000", "--max-message-bytes", "1048576"}});
+  ASSERT_TRUE(cluster.StartCoordinator());
+  cluster.AddWorker();
+  const std::string scene = WriteServiceScene(cluster.dir(), 128, 32, 64);
+  const std::string expected = LocalBakeBytes(cluster.dir(), scene);
+  const std::string good = cluster.Submit(scene);
+  ASSERT_FALSE(good.empty());
+
+  pdsm::v1::Job job;
+  EXPECT_EQ(cluster.GetJob(good, &job, "").error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_EQ(cluster.GetJob(good, &job, "wrong").error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_EQ(cluster.GetJob(good, &job, "worker-secret").error_code(),
+            grpc::StatusCode::PERMISSION_DENIED);
+  {
+    grpc::ClientContext context;
+    PrepareCall(&context, "client-secret", seconds(10));
+    pdsm::v1::LeaseTaskRequest request;
+    request.set_worker_id("intruder");
+    pdsm::v1::LeaseTaskResponse response;
+    EXPECT_EQ(cluster.WorkersStub()->LeaseTask(&context, request, &response).error_code(),
+              grpc::StatusCode::PERMISSION_DENIED);
+  }
+  const auto submit = [&](const pdsm::v1::Scene& s) {
+    grpc::ClientContext context;
+    PrepareCall(&context, "client-secret", seconds(30));
+    pdsm::v1::SubmitBakeRequest request;
+    request.set_idempotency_key("bad-" + std::to_string(rand()));
+    *request.mutable_scene() = s;
+    pdsm::v1::Job out;
+    return cluster.JobsStub()->SubmitBake(&context, request, &out);
+  };
+  pdsm::v1::Scene bad;
+  bad.mutable_light()->mutable_rect()->add_center(0);  // 1 number, needs 3
+  grpc::Status status = submit(bad);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("light.rect.center"), std::string::npos)
+      << status.error_message();
+
+  pdsm::v1::Scene path_scene;
+  path_scene.add_meshes()->set_path("/etc/passwd");
+  auto* rect = path_scene.mutable_light()->mutable_rect();
+  for (double x : {0.0, 10.0, 0.0}) rect->add_center(x);
+  for (double x : {0.0, -1.0, 0.0}) rect->add_normal(x);
+  for (double x : {0.0, 0.0, 1.0}) rect->add_up(x);
+  for (double x : {1.0, 1.0}) rect->add_size(x);
+  status = submit(path_scene);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("meshes[0].path"), std::string::npos);
+
+  pdsm::v1::Scene unknown_asset = path_scene;
+  unknown_asset.mutable_meshes(0)->set_asset_sha256(std::string(64, 'a'));
+  EXPECT_EQ(submit(unknown_asset).error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+
+  pdsm::v1::Scene too_big = unknown_asset;
+  auto* mesh = too_big.mutable_meshes(0)->mutable_inline_();
+  for (int i = 0; i < 9; ++i) mesh->add_positions(i % 3);
+  for (int i = 0; i < 3; ++i) mesh->add_indices(i);
+  too_big.mutable_bake()->add_resolution(512);
+  too_big.mutable_bake()->add_resolution(512);
+  EXPECT_EQ(submit(too_big).error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+
+  pdsm::v1::Scene oversized = too_big;
+  oversized.mutable_bake()->clear_resolution();
+  for (int i = 0; i < 200'000; ++i) mesh = oversized.mutable_meshes(0)->mutable_inline_(),
+                                    mesh->add_positions(0.5);
+  EXPECT_EQ(submit(oversized).error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+
+  // The CLI without a token says what is missing and exits non-zero.
+  CommandResult no_token = RunCommand(std::string(PDSM_CLI) + " status " + good + " --server " +
+                                          cluster.address(),
+                                      cluster.dir());
+  EXPECT_NE(no_token.exit_code, 0);
+  EXPECT_NE(no_token.err.find("--token-file"), std::string::npos) << no_token.err;
+
+  // None of it disturbed the good job.
+  job = cluster.WaitForEnd(good);
+  ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error();
+  EXPECT_TRUE(FetchBytes(cluster, good) == expected);
+}
+
+TEST(Service, FiftyWatchersFollowTwoJobsToTheEnd) {
+  ServiceCluster cluster(ClusterOptions{.coordinator_args = {"--samples-per-task", "16"}});
+  ASSERT_TRUE(cluster.StartCoordinator());
+  const std::string scene = WriteServiceScene(cluster.dir(), 128, 64, 32);
+  const std::string jobs[2] = {cluster.Submit(scene), cluster.Submit(scene)};
+  std::atomic<int> saw_success{0}, monotone{0};
+  std::vector<std::thread> watchers;
+  for (int w = 0; w < 50; ++w) {
+    watchers.emplace_back([&, w] {
+      auto stub = cluster.JobsStub();
+      grpc::ClientContext context;
+      PrepareCall(&context, "", seconds(120));
+      pdsm::v1::GetJobRequest request;
+      request.set_job_id(jobs[w % 2]);
+      auto reader = stub->WatchJob(&context, request);
+      pdsm::v1::Job job;
+      int64_t last_done = -1;
+      bool ordered = true;
+      while (reader->Read(&job)) {
+        ordered = ordered && job.samples_done() >= last_done;
+        last_done = job.samples_done();
+      }
+      if (reader->Finish().ok() && job.state() == pdsm::v1::SUCCEEDED) ++saw_success;
+      if (ordered) ++monotone;
+    });
+  }
+  cluster.AddWorker();
+  cluster.AddWorker();
+  for (std::thread& t : watchers) t.join();
+  EXPECT_EQ(saw_success.load(), 50);
+  EXPECT_EQ(monotone.load(), 50);
+}
+
+}  // namespace
+}  // namespace pdsm::testing

@@ -1,0 +1,42 @@
+// The worker's side of the worker API: one stub, every call with the worker token and a
+// deadline. Statuses come back as absl::Status (UNAVAILABLE when the coordinator is away).
+#ifndef PDSM_WORKER_COORDINATOR_CLIENT_H_
+#define PDSM_WORKER_COORDINATOR_CLIENT_H_
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "absl/status/statusor.h"
+#include "core/events/event.h"
+#include "pdsm/v1/workers.grpc.pb.h"
+#include "proto/grpc_support.h"
+
+namespace pdsm {
+
+class CoordinatorClient {
+ public:
+  CoordinatorClient(std::shared_ptr<grpc::Channel> channel, std::string token,
+                    std::string worker_id);
+
+  const std::string& worker_id() const { return worker_id_; }
+
+  absl::StatusOr<pdsm::v1::LeaseTaskResponse> Lease();
+  // The lease's new length in ms; FAILED_PRECONDITION when the lease is lost.
+  absl::StatusOr<int64_t> Extend(uint64_t lease_id);
+  // True when the coordinator accepted the result, false when it dropped it as stale.
+  absl::StatusOr<bool> ReportResult(uint64_t lease_id, const TileEvents& events,
+                                    double seconds);
+  absl::Status ReportFailure(uint64_t lease_id, const std::string& reason, bool handed_back);
+  absl::StatusOr<pdsm::v1::GetJobSceneResponse> JobScene(const std::string& job_id);
+  absl::StatusOr<std::string> FetchAsset(const std::string& sha256);
+
+ private:
+  std::unique_ptr<pdsm::v1::PdsmWorkers::Stub> stub_;
+  const std::string token_;
+  const std::string worker_id_;
+};
+
+}  // namespace pdsm
+
+#endif  // PDSM_WORKER_COORDINATOR_CLIENT_H_

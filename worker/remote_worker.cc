@@ -1,0 +1,221 @@
+#include "worker/remote_worker.h"
+
+#include <algorithm>
+#include <chrono>
+#include <thread>
+#include <vector>
+
+#include <spdlog/spdlog.h>
+
+#include "absl/strings/str_cat.h"
+#include "core/assets/mesh_asset.h"
+#include "core/bake/plan_fingerprint.h"
+#include "core/scene/scene_loader.h"
+#include "worker/bake_task.h"
+
+namespace pdsm {
+namespace {
+
+constexpr size_t kCachedJobs = 4;
+constexpr auto kMaxBackoff = std::chrono::milliseconds(2000);
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Sleeps up to `duration`, waking early when `stop` is set.
+void SleepUnlessStopped(std::chrono::milliseconds duration, const std::atomic<bool>& stop) {
+  const auto end = std::chrono::steady_clock::now() + duration;
+  while (!stop && std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(std::min<std::chrono::milliseconds>(
+        duration, std::chrono::milliseconds(50)));
+  }
+}
+
+}  // namespace
+
+absl::StatusOr<std::unique_ptr<RemoteWorker>> RemoteWorker::Create(
+    CoordinatorClient* client, const RemoteWorkerOptions& options) {
+  absl::StatusOr<std::unique_ptr<AssetStore>> assets = AssetStore::Open(options.cache_dir);
+  if (!assets.ok()) return assets.status();
+  return std::unique_ptr<RemoteWorker>(new RemoteWorker(client, options, *std::move(assets)));
+}
+
+RemoteWorker::~RemoteWorker() = default;
+
+absl::Status RemoteWorker::Run(const std::atomic<bool>& stop) {
+  std::thread keeper([&] { KeepLeases(stop); });
+  std::vector<std::thread> threads;
+  for (int t = 0; t < std::max(1, options_.threads); ++t) {
+    threads.emplace_back([&] { ThreadLoop(stop); });
+  }
+  for (std::thread& t : threads) t.join();
+  keeper.join();
+  return absl::OkStatus();
+}
+
+// ---- Job contexts ----------------------------------------------------------------------
+
+absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::Context(
+    const std::string& job_id) {
+  std::lock_guard<std::mutex> lock(jobs_mu_);
+  auto it = jobs_.find(job_id);
+  if (it != jobs_.end()) return it->second;
+  absl::StatusOr<std::shared_ptr<const JobContext>> context = LoadContext(job_id);
+  if (!context.ok()) return context.status();
+  if (jobs_.size() >= kCachedJobs) jobs_.erase(jobs_.begin());  // threads keep their copies
+  jobs_[job_id] = *context;
+  return context;
+}
+
+absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::LoadContext(
+    const std::string& job_id) {
+  absl::StatusOr<pdsm::v1::GetJobSceneResponse> scene = client_->JobScene(job_id);
+  if (!scene.ok()) return scene.status();
+  const MeshAssetResolver resolver = [this](const std::string& sha256,
+                                            const std::string& context)
+      -> absl::StatusOr<MeshFileData> {
+    absl::StatusOr<std::string> blob = assets_->Get(sha256);
+    if (!blob.ok()) {
+      blob = client_->FetchAsset(sha256);
+      if (!blob.ok()) return blob.status();
+      if (absl::Status s = assets_->Put(sha256, *blob); !s.ok()) return s;
+      spdlog::info("asset {}: fetched, {} bytes", sha256, blob->size());
+    }
+    return DecodeMeshAsset(*blob, context);
+  };
+  absl::StatusOr<Scene> loaded =
+      SceneFromProto(scene->scene(), absl::StrCat("job ", job_id), "", resolver);
+  if (!loaded.ok()) return loaded.status();
+  auto context = std::make_shared<JobContext>();
+  absl::StatusOr<BakePlan> plan = PlanBake(*loaded);
+  if (!plan.ok()) return plan.status();
+  context->plan = *std::move(plan);
+  context->fingerprint = PlanFingerprint(context->plan);
+  if (context->fingerprint != scene->plan_fingerprint()) {
+    return absl::FailedPreconditionError(absl::StrCat(
+        "job ", job_id, ": this worker plans the bake differently from the coordinator "
+        "(fingerprint ", context->fingerprint.substr(0, 12), " vs ",
+        scene->plan_fingerprint().substr(0, 12), "): run the same pdsm build on both"));
+  }
+  spdlog::info("job {}: planned, {} tiles, {} samples", job_id, context->plan.tiles.size(),
+               context->plan.samples.size());
+  return std::shared_ptr<const JobContext>(std::move(context));
+}
+
+// ---- Leases ----------------------------------------------------------------------------
+
+void RemoteWorker::KeepLeases(const std::atomic<bool>& stop) {
+  while (!stop) {
+    int64_t lease_ms;
+    std::vector<std::pair<uint64_t, std::shared_ptr<RunningLease>>> current;
+    {
+      std::lock_guard<std::mutex> lock(leases_mu_);
+      lease_ms = lease_ms_;
+      current.assign(leases_.begin(), leases_.end());
+    }
+    for (auto& [id, lease] : current) {
+      if (lease->lost) continue;
+      absl::StatusOr<int64_t> extended = client_->Extend(id);
+      // UNAVAILABLE: the coordinator may be restarting; keep working and try again.
+      if (!extended.ok() && !absl::IsUnavailable(extended.status()) &&
+          !absl::IsDeadlineExceeded(extended.status())) {
+        spdlog::info("lease {}: lost ({}); dropping the task", id, std::string(extended.status().message()));
+        lease->lost = true;
+      }
+    }
+    // Three extensions per lease period: one lost call still leaves a margin.
+    SleepUnlessStopped(std::chrono::milliseconds(std::max<int64_t>(50, lease_ms / 3)), stop);
+  }
+}
+
+// ---- Tasks -----------------------------------------------------------------------------
+
+void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
+  std::string runner_job;
+  std::shared_ptr<const JobContext> context;
+  std::unique_ptr<TaskRunner> runner;
+  std::chrono::milliseconds backoff(100);
+  while (!stop) {
+    absl::StatusOr<pdsm::v1::LeaseTaskResponse> response = client_->Lease();
+    if (!response.ok()) {
+      spdlog::warn("lease: {} (retrying in {} ms)", std::string(response.status().message()), backoff.count());
+      SleepUnlessStopped(backoff, stop);
+      backoff = std::min(backoff * 2, std::chrono::duration_cast<std::chrono::milliseconds>(
+                                          kMaxBackoff));
+      continue;
+    }
+    backoff = std::chrono::milliseconds(100);
+    if (!response->has_task()) {
+      SleepUnlessStopped(std::chrono::milliseconds(response->retry_after_ms()), stop);
+      continue;
+    }
+    const pdsm::v1::Task& task = response->task();
+    const auto start = std::chrono::steady_clock::now();
+    const auto fail = [&](const absl::Status& s, bool handed_back) {
+      spdlog::warn("job {} tile {}: {}", task.job_id(), task.tile_index(), std::string(s.message()));
+      (void)client_->ReportFailure(task.lease_id(), std::string(s.message()), handed_back);
+    };
+
+    auto lease = std::make_shared<RunningLease>();
+    {
+      std::lock_guard<std::mutex> lock(leases_mu_);
+      leases_[task.lease_id()] = lease;
+      lease_ms_ = task.lease_ms();
+    }
+    const auto forget_lease = [&] {
+      std::lock_guard<std::mutex> lock(leases_mu_);
+      leases_.erase(task.lease_id());
+    };
+
+    if (runner_job != task.job_id()) {
+      runner.reset();
+      absl::StatusOr<std::shared_ptr<const JobContext>> loaded = Context(task.job_id());
+      if (!loaded.ok()) {
+        forget_lease();
+        fail(loaded.status(), false);
+        runner_job.clear();
+        continue;
+      }
+      context = *loaded;
+      absl::StatusOr<std::unique_ptr<TaskRunner>> created = TaskRunner::Create(context->plan);
+      if (!created.ok()) {
+        forget_lease();
+        fail(created.status(), false);
+        continue;
+      }
+      runner = *std::move(created);
+      runner_job = task.job_id();
+    }
+    if (context->fingerprint != task.plan_fingerprint() ||
+        task.tile_index() < 0 || task.tile_index() >= static_cast<int>(context->plan.tiles.size())) {
+      forget_lease();
+      fail(absl::FailedPreconditionError("the task does not match this worker's plan"), false);
+      continue;
+    }
+
+    TaskStats stats;
+    absl::StatusOr<TileEvents> events = runner->Run(
+        BakeTask{task.tile_index(), task.sample_begin(), task.sample_end()}, &stats,
+        [&] { return stop.load() || lease->lost.load(); });
+    forget_lease();
+    if (lease->lost) continue;  // the coordinator has moved on; nothing to report
+    if (!events.ok()) {
+      fail(events.status(), /*handed_back=*/absl::IsCancelled(events.status()));
+      continue;
+    }
+    absl::StatusOr<bool> accepted =
+        client_->ReportResult(task.lease_id(), *events, SecondsSince(start));
+    if (!accepted.ok()) {
+      spdlog::warn("job {} tile {}: result not delivered: {}", task.job_id(), task.tile_index(),
+                   std::string(accepted.status().message()));
+    } else {
+      spdlog::debug("job {} tile {}: samples [{}, {}) {} in {:.3f} s, {} events", task.job_id(),
+                    task.tile_index(), task.sample_begin(), task.sample_end(),
+                    *accepted ? "accepted" : "dropped as stale", SecondsSince(start),
+                    stats.events);
+    }
+  }
+}
+
+}  // namespace pdsm
