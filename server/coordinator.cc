@@ -1,6 +1,7 @@
 #include "server/coordinator.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <random>
@@ -66,7 +67,7 @@ struct Coordinator::ActiveJob {
   int64_t samples_at_resume = 0;   // for the ETA: progress made by this process only
   int64_t resumed_ms = 0;
   bool running = false;            // RUNNING written to the store
-  bool ended = false;              // cancelled, failed or finished: drop late work
+  std::atomic<bool> ended{false};   // cancelled, failed or finished: drop late work
 };
 
 Coordinator::Coordinator(const CoordinatorOptions& options)
@@ -355,6 +356,10 @@ absl::StatusOr<pdsm::v1::Job> Coordinator::CancelJob(const std::string& job_id) 
 
 void Coordinator::AssembleAndStore(std::shared_ptr<ActiveJob> job, int tile_index,
                                    std::vector<std::pair<int, TileEvents>> parts) {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (job->ended) return;  // cancelled or failed while queued
+  }
   // Batches in sample order: the merge does not depend on it, but a fixed order costs nothing.
   std::sort(parts.begin(), parts.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -388,6 +393,10 @@ void Coordinator::AssembleAndStore(std::shared_ptr<ActiveJob> job, int tile_inde
 }
 
 void Coordinator::FinishJob(std::shared_ptr<ActiveJob> job) {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (job->ended) return;
+  }
   const std::string& id = job->record.job_id;
   const std::string dir = JobDir(id);
   const std::string out = (std::filesystem::path(dir) / "pdsm.exr").string();
@@ -405,16 +414,24 @@ void Coordinator::FinishJob(std::shared_ptr<ActiveJob> job) {
     }
     return (*writer)->Finish();
   }();
-  if (s.ok()) {
-    const uint64_t bytes = std::filesystem::file_size(out, ec);
-    s = store_->SetSucceeded(id, bytes, NowMs());
-  }
   if (!s.ok()) return EndJob(id, pdsm::v1::FAILED, absl::StrCat("writing the PDSM: ", s.message()));
   {
+    // A cancel that won the race keeps the job CANCELLED; the file goes.
     std::lock_guard<std::mutex> lock(mu_);
+    if (job->ended) {
+      std::filesystem::remove(out, ec);
+      return;
+    }
     job->ended = true;
     active_.erase(id);
     scheduler_.RemoveJob(id);
+  }
+  // A crash before this commit leaves the job RUNNING with every tile done: the next start
+  // writes the file again from the same tiles.
+  s = store_->SetSucceeded(id, std::filesystem::file_size(out, ec), NowMs());
+  if (!s.ok()) {
+    spdlog::error("job {}: cannot record SUCCEEDED: {}", id, std::string(s.message()));
+    return;
   }
   std::filesystem::remove_all(std::filesystem::path(dir) / "tiles", ec);
   spdlog::info("job {}: succeeded, {} tiles, PDSM {}", id, job->plan.tiles.size(), out);

@@ -7,6 +7,7 @@
 #include "absl/strings/str_cat.h"
 #include "core/assets/mesh_asset.h"
 #include "proto/grpc_support.h"
+#include "server/call_replies.h"
 #include "server/watch_hub.h"
 
 namespace pdsm {
@@ -14,19 +15,6 @@ namespace {
 
 constexpr int kMaxAssetQueries = 10'000;
 constexpr int kMaxQueryPoints = 1'000'000;
-
-// Answers a unary call at once with `status`.
-grpc::ServerUnaryReactor* Answer(grpc::CallbackServerContext* context,
-                                 const grpc::Status& status) {
-  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-  reactor->Finish(status);
-  return reactor;
-}
-
-grpc::ServerUnaryReactor* Answer(grpc::CallbackServerContext* context,
-                                 const absl::Status& status) {
-  return Answer(context, ToGrpcStatus(status));
-}
 
 // UploadAsset: collects the chunks, verifies size and hash, stores the blob.
 class UploadReactor final : public grpc::ServerReadReactor<pdsm::v1::AssetChunk> {
@@ -134,14 +122,6 @@ class FetchReactor final : public grpc::ServerWriteReactor<pdsm::v1::PdsmChunk> 
   pdsm::v1::PdsmChunk chunk_;
 };
 
-// A reactor that refuses the call at once (for streams whose caller failed the token check).
-template <typename Base>
-class RefuseReactor final : public Base {
- public:
-  explicit RefuseReactor(const grpc::Status& status) { this->Finish(status); }
-  void OnDone() override { delete this; }
-};
-
 }  // namespace
 
 JobsService::JobsService(Coordinator* coordinator, const CallerAuth* auth)
@@ -178,7 +158,7 @@ grpc::ServerUnaryReactor* JobsService::FindMissingAssets(
 grpc::ServerReadReactor<pdsm::v1::AssetChunk>* JobsService::UploadAsset(
     grpc::CallbackServerContext* context, pdsm::v1::UploadAssetResponse* response) {
   if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
-    return new RefuseReactor<grpc::ServerReadReactor<pdsm::v1::AssetChunk>>(s);
+    return new RefusedStream<grpc::ServerReadReactor<pdsm::v1::AssetChunk>>(s);
   }
   return new UploadReactor(coordinator_, response);
 }
@@ -228,7 +208,7 @@ grpc::ServerUnaryReactor* JobsService::ListJobs(grpc::CallbackServerContext* con
 grpc::ServerWriteReactor<pdsm::v1::Job>* JobsService::WatchJob(
     grpc::CallbackServerContext* context, const pdsm::v1::GetJobRequest* request) {
   if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
-    return new RefuseReactor<grpc::ServerWriteReactor<pdsm::v1::Job>>(s);
+    return new RefusedStream<grpc::ServerWriteReactor<pdsm::v1::Job>>(s);
   }
   return watch_hub_->Watch(request->job_id());
 }
@@ -248,7 +228,7 @@ grpc::ServerUnaryReactor* JobsService::CancelJob(grpc::CallbackServerContext* co
 grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>* JobsService::FetchPdsm(
     grpc::CallbackServerContext* context, const pdsm::v1::GetJobRequest* request) {
   if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
-    return new RefuseReactor<grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>>(s);
+    return new RefusedStream<grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>>(s);
   }
   return new FetchReactor(coordinator_->PdsmPath(request->job_id()));
 }

@@ -25,6 +25,12 @@ absl::StatusOr<TileEvents> TileEventsFromProto(const pdsm::v1::TileEventsData& d
                                   static_cast<uint64_t>(data.z_size())) {
     return bad("offsets: must start at 0 and end at the event count");
   }
+  // Offsets first: non-decreasing up to the event count keeps every read below in range.
+  for (size_t p = 0; p < pixels; ++p) {
+    if (data.offsets(static_cast<int>(p + 1)) < data.offsets(static_cast<int>(p))) {
+      return bad(absl::StrCat("offsets[", p + 1, "]: decreases"));
+    }
+  }
   TileEvents events;
   events.tile_index = tile.index;
   events.x0 = tile.x0;
@@ -35,7 +41,6 @@ absl::StatusOr<TileEvents> TileEventsFromProto(const pdsm::v1::TileEventsData& d
   events.events.reserve(data.z_size());
   for (size_t p = 0; p < pixels; ++p) {
     const uint64_t begin = events.offsets[p], end = events.offsets[p + 1];
-    if (end < begin) return bad(absl::StrCat("offsets[", p + 1, "]: decreases"));
     for (uint64_t e = begin; e < end; ++e) {
       const float z = data.z(static_cast<int>(e));
       const int32_t count = data.count(static_cast<int>(e));

@@ -16,6 +16,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/string_view.h"
+#include "core/util/little_endian.h"
 
 namespace pdsm {
 namespace {
@@ -37,47 +38,6 @@ uint64_t Checksum(std::string_view bytes) {
   return hash;
 }
 
-// Little-endian encoding into a buffer sized in advance.
-class ByteWriter {
- public:
-  explicit ByteWriter(char* out) : out_(out) {}
-  void Bytes(const char* data, size_t n) {
-    std::memcpy(out_, data, n);
-    out_ += n;
-  }
-  void U32(uint32_t v) {
-    for (int i = 0; i < 4; ++i) *out_++ = static_cast<char>(v >> (8 * i));
-  }
-  void U64(uint64_t v) {
-    for (int i = 0; i < 8; ++i) *out_++ = static_cast<char>(v >> (8 * i));
-  }
-  void I32(int32_t v) { U32(static_cast<uint32_t>(v)); }
-  void F32(float v) { U32(std::bit_cast<uint32_t>(v)); }
-
- private:
-  char* out_;
-};
-
-// Little-endian decoding. REQUIRES: the caller checked that the bytes read are there.
-class ByteReader {
- public:
-  explicit ByteReader(const char* in) : in_(reinterpret_cast<const unsigned char*>(in)) {}
-  uint32_t U32() {
-    uint32_t v = 0;
-    for (int i = 0; i < 4; ++i) v |= static_cast<uint32_t>(*in_++) << (8 * i);
-    return v;
-  }
-  uint64_t U64() {
-    uint64_t v = 0;
-    for (int i = 0; i < 8; ++i) v |= static_cast<uint64_t>(*in_++) << (8 * i);
-    return v;
-  }
-  int32_t I32() { return static_cast<int32_t>(U32()); }
-  float F32() { return std::bit_cast<float>(U32()); }
-
- private:
-  const unsigned char* in_;
-};
 
 absl::Status ErrnoStatus(int error_number, absl::string_view message) {
   return error_number != 0 ? absl::ErrnoToStatus(error_number, message)

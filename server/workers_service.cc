@@ -2,6 +2,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "proto/grpc_support.h"
+#include "server/call_replies.h"
 
 namespace pdsm {
 namespace {
@@ -9,18 +10,6 @@ namespace {
 // Without work, a worker asks again after this long: short enough that a new job starts
 // promptly, long enough that idle workers cost the coordinator little.
 constexpr int64_t kIdleRetryMs = 250;
-
-grpc::ServerUnaryReactor* Answer(grpc::CallbackServerContext* context,
-                                 const grpc::Status& status) {
-  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-  reactor->Finish(status);
-  return reactor;
-}
-
-grpc::ServerUnaryReactor* Answer(grpc::CallbackServerContext* context,
-                                 const absl::Status& status) {
-  return Answer(context, ToGrpcStatus(status));
-}
 
 absl::Status CheckWorkerId(const std::string& id) {
   if (id.empty() || id.size() > 256) {
@@ -61,12 +50,6 @@ class AssetReactor final : public grpc::ServerWriteReactor<pdsm::v1::AssetData> 
   size_t offset_ = 0;
   bool sent_any_ = false;
   pdsm::v1::AssetData chunk_;
-};
-
-class RefusedAsset final : public grpc::ServerWriteReactor<pdsm::v1::AssetData> {
- public:
-  explicit RefusedAsset(const grpc::Status& status) { Finish(status); }
-  void OnDone() override { delete this; }
 };
 
 }  // namespace
@@ -139,7 +122,7 @@ grpc::ServerUnaryReactor* WorkersService::GetJobScene(
 grpc::ServerWriteReactor<pdsm::v1::AssetData>* WorkersService::FetchAsset(
     grpc::CallbackServerContext* context, const pdsm::v1::FetchAssetRequest* request) {
   if (grpc::Status s = auth_->Check(context, Audience::kWorker); !s.ok()) {
-    return new RefusedAsset(s);
+    return new RefusedStream<grpc::ServerWriteReactor<pdsm::v1::AssetData>>(s);
   }
   return new AssetReactor(coordinator_->GetAsset(request->sha256()));
 }

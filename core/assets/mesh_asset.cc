@@ -13,6 +13,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
+#include "core/util/little_endian.h"
 
 namespace pdsm {
 namespace {
@@ -23,45 +24,6 @@ constexpr size_t kHeaderBytes = sizeof(kMagic) + 4 + 8 + 8;
 constexpr size_t kVertexBytes = 3 * 8;  // float64 x, y, z
 constexpr size_t kIndexBytes = 4;       // uint32
 
-// Little-endian encoding into a buffer sized in advance.
-class ByteWriter {
- public:
-  explicit ByteWriter(char* out) : out_(out) {}
-  void Bytes(const char* data, size_t n) {
-    std::memcpy(out_, data, n);
-    out_ += n;
-  }
-  void U32(uint32_t v) {
-    for (int i = 0; i < 4; ++i) *out_++ = static_cast<char>(v >> (8 * i));
-  }
-  void U64(uint64_t v) {
-    for (int i = 0; i < 8; ++i) *out_++ = static_cast<char>(v >> (8 * i));
-  }
-  void F64(double v) { U64(std::bit_cast<uint64_t>(v)); }
-
- private:
-  char* out_;
-};
-
-// Little-endian decoding. REQUIRES: the caller checked that the bytes read are there.
-class ByteReader {
- public:
-  explicit ByteReader(const char* in) : in_(reinterpret_cast<const unsigned char*>(in)) {}
-  uint32_t U32() {
-    uint32_t v = 0;
-    for (int i = 0; i < 4; ++i) v |= static_cast<uint32_t>(*in_++) << (8 * i);
-    return v;
-  }
-  uint64_t U64() {
-    uint64_t v = 0;
-    for (int i = 0; i < 8; ++i) v |= static_cast<uint64_t>(*in_++) << (8 * i);
-    return v;
-  }
-  double F64() { return std::bit_cast<double>(U64()); }
-
- private:
-  const unsigned char* in_;
-};
 
 // The JSON spellings of the non-finite values, as in scene messages.
 std::string FormatDouble(double x) {

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <sstream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -86,6 +87,13 @@ struct ClusterOptions {
   std::string worker_token;
   std::vector<std::string> coordinator_args;  // extra flags
 };
+
+// A cluster without tokens whose coordinator gets `args`.
+inline ClusterOptions CoordinatorArgs(std::vector<std::string> args) {
+  ClusterOptions options;
+  options.coordinator_args = std::move(args);
+  return options;
+}
 
 class ServiceCluster {
  public:
@@ -164,11 +172,11 @@ class ServiceCluster {
   }
 
   // The job as the job API returns it.
+  // `token`: the one to send instead of the cluster's client token ("" for none).
   grpc::Status GetJob(const std::string& job_id, pdsm::v1::Job* job,
-                      const std::string& token = "\x01default") {
+                      std::optional<std::string> token = std::nullopt) {
     grpc::ClientContext context;
-    PrepareCall(&context, token == "\x01default" ? options_.client_token : token,
-                std::chrono::seconds(10));
+    PrepareCall(&context, token.value_or(options_.client_token), std::chrono::seconds(10));
     pdsm::v1::GetJobRequest request;
     request.set_job_id(job_id);
     return JobsStub()->GetJob(&context, request, job);

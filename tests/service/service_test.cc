@@ -26,7 +26,7 @@ std::string FetchBytes(ServiceCluster& cluster, const std::string& job_id) {
 }
 
 TEST(Service, ThreeWorkersMatchTheLocalBakeByteForByte) {
-  ServiceCluster cluster(ClusterOptions{.coordinator_args = {"--samples-per-task", "16"}});
+  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "16"}));
   ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
   for (int i = 0; i < 3; ++i) cluster.AddWorker();
   const std::string scene = WriteServiceScene(cluster.dir(), 128, 64, 32);
@@ -67,8 +67,7 @@ TEST(Service, ThreeWorkersMatchTheLocalBakeByteForByte) {
 }
 
 TEST(Service, KilledWorkersDoNotChangeTheBytes) {
-  ServiceCluster cluster(ClusterOptions{
-      .coordinator_args = {"--samples-per-task", "8", "--lease-seconds", "1"}});
+  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "8", "--lease-seconds", "1"}));
   ASSERT_TRUE(cluster.StartCoordinator());
   const std::string scene = WriteServiceScene(cluster.dir(), 128, 128, 32, 1024);
   const std::string expected = LocalBakeBytes(cluster.dir(), scene);
@@ -81,6 +80,9 @@ TEST(Service, KilledWorkersDoNotChangeTheBytes) {
       return j.state() == pdsm::v1::RUNNING || Ended(j);
     });
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    pdsm::v1::Job now;
+    ASSERT_TRUE(cluster.GetJob(job_id, &now).ok());
+    ASSERT_FALSE(Ended(now)) << "the job ended before worker " << victim << " was killed";
     cluster.worker(victim).Signal(SIGKILL);
     cluster.AddWorker();
   }
@@ -90,8 +92,7 @@ TEST(Service, KilledWorkersDoNotChangeTheBytes) {
 }
 
 TEST(Service, StalledWorkerLosesItsLeaseAndItsLateResultChangesNothing) {
-  ServiceCluster cluster(ClusterOptions{
-      .coordinator_args = {"--samples-per-task", "32", "--lease-seconds", "1"}});
+  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "32", "--lease-seconds", "1"}));
   ASSERT_TRUE(cluster.StartCoordinator());
   const std::string scene = WriteServiceScene(cluster.dir(), 128, 128, 64, 1024);
   const std::string expected = LocalBakeBytes(cluster.dir(), scene);
@@ -111,9 +112,33 @@ TEST(Service, StalledWorkerLosesItsLeaseAndItsLateResultChangesNothing) {
   EXPECT_TRUE(FetchBytes(cluster, job_id) == expected);
 }
 
+TEST(Service, TerminatedWorkerHandsBackItsTaskAndExitsZero) {
+  // Leases of 30 s: a task that was not handed back would sit out its lease, and the expiry
+  // would show in the stats.
+  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "64"}));
+  ASSERT_TRUE(cluster.StartCoordinator());
+  const std::string scene = WriteServiceScene(cluster.dir(), 128, 256, 32, 1024);
+  const std::string expected = LocalBakeBytes(cluster.dir(), scene);
+  const size_t leaving = cluster.AddWorker();
+  const std::string job_id = cluster.Submit(scene);
+  const pdsm::v1::Job running = cluster.WaitUntil(job_id, seconds(60), [](const auto& j) {
+    return j.samples_done() > 0 || Ended(j);
+  });
+  ASSERT_FALSE(Ended(running));
+  cluster.worker(leaving).Signal(SIGTERM);
+  const int status = cluster.worker(leaving).Wait(std::chrono::seconds(20));
+  ASSERT_TRUE(WIFEXITED(status)) << status;
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  cluster.AddWorker();
+  const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
+  ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error();
+  EXPECT_EQ(cluster.Stats().leases_expired(), 0);
+  EXPECT_NE(cluster.Log("coordinator.log").find("handed the task back"), std::string::npos);
+  EXPECT_TRUE(FetchBytes(cluster, job_id) == expected);
+}
+
 TEST(Service, CoordinatorKilledMidJobResumesWithoutRecomputingFinishedTiles) {
-  ServiceCluster cluster(ClusterOptions{
-      .coordinator_args = {"--samples-per-task", "32", "--lease-seconds", "2"}});
+  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "32", "--lease-seconds", "2"}));
   ASSERT_TRUE(cluster.StartCoordinator());
   const std::string scene = WriteServiceScene(cluster.dir(), 128, 256, 16, 1024);
   const std::string expected = LocalBakeBytes(cluster.dir(), scene);
@@ -139,8 +164,7 @@ TEST(Service, CoordinatorKilledMidJobResumesWithoutRecomputingFinishedTiles) {
 }
 
 TEST(Service, CancelStopsTheJobAndFreesTheWorkers) {
-  ServiceCluster cluster(ClusterOptions{
-      .coordinator_args = {"--samples-per-task", "64", "--lease-seconds", "1"}});
+  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "64", "--lease-seconds", "1"}));
   ASSERT_TRUE(cluster.StartCoordinator());
   cluster.AddWorker();
   const std::string big = WriteServiceScene(cluster.dir(), 512, 1024, 32, 2048);
@@ -169,9 +193,11 @@ TEST(Service, CancelStopsTheJobAndFreesTheWorkers) {
 }
 
 TEST(Service, BadCallersAndBadJobsGetTheRightStatusAndDisturbNothing) {
-  ServiceCluster cluster(ClusterOptions{
-      .client_token = "client-secret", .worker_token = "worker-secret",
-      .coordinator_args = {"--max-job-pixels", "70000", "--max-message-bytes", "1048576"}});
+  ClusterOptions options =
+      CoordinatorArgs({"--max-job-pixels", "70000", "--max-message-bytes", "1048576"});
+  options.client_token = "client-secret";
+  options.worker_token = "worker-secret";
+  ServiceCluster cluster(options);
   ASSERT_TRUE(cluster.StartCoordinator());
   cluster.AddWorker();
   const std::string scene = WriteServiceScene(cluster.dir(), 128, 32, 64);
@@ -252,7 +278,7 @@ TEST(Service, BadCallersAndBadJobsGetTheRightStatusAndDisturbNothing) {
 }
 
 TEST(Service, FiftyWatchersFollowTwoJobsToTheEnd) {
-  ServiceCluster cluster(ClusterOptions{.coordinator_args = {"--samples-per-task", "16"}});
+  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "16"}));
   ASSERT_TRUE(cluster.StartCoordinator());
   const std::string scene = WriteServiceScene(cluster.dir(), 128, 64, 32);
   const std::string jobs[2] = {cluster.Submit(scene), cluster.Submit(scene)};
