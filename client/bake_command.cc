@@ -34,7 +34,7 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags, const std::string&
   std::fprintf(stderr,
                "baked \"%s\": %dx%d PDSM, %d samples, %d tiles (%d all lit), %lld tasks\n"
                "  time %.2fs; shadow maps %.2f thread-s (%lld maps, %.1f Mtexels), "
-               "scan conversion %.2f thread-s, merge+compress %.2f thread-s\n"
+               "scan conversion %.2f thread-s, merge+compress %.3f thread-s\n"
                "  events %lld -> %lld merged -> %lld consolidated -> %lld vertices\n",
                scene.name.c_str(), scene.bake.width, scene.bake.height, scene.bake.samples, s.tiles,
                s.tiles_all_lit, static_cast<long long>(s.tasks), s.seconds,

@@ -31,10 +31,10 @@ class WatchHub::Watcher final : public grpc::ServerWriteReactor<pdsm::v1::Job> {
   // Called by the hub with its mutex held.
   void Poll(std::chrono::steady_clock::time_point now) {
     if (writing_ || finished_) return;
+    if (sent_any_ && Ended(sent_)) return Finish(grpc::Status::OK);  // the last word was said
     absl::StatusOr<pdsm::v1::Job> job = hub_->coordinator_->GetJob(job_id_);
     if (!job.ok()) return Finish(ToGrpcStatus(job.status()));
-    if (sent_any_ && (SameProgress(*job, sent_) && now - sent_at_ < kHeartbeat)) return;
-    if (sent_any_ && Ended(sent_)) return Finish(grpc::Status::OK);
+    if (sent_any_ && SameProgress(*job, sent_) && now - sent_at_ < kHeartbeat) return;
     sent_ = *std::move(job);
     sent_any_ = true;
     sent_at_ = now;
