@@ -86,6 +86,7 @@ struct ClusterOptions {
   std::string client_token;  // empty: no token files
   std::string worker_token;
   std::vector<std::string> coordinator_args;  // extra flags
+  bool tls = false;  // serve TLS with a fresh self-signed certificate for 127.0.0.1
 };
 
 // A cluster without tokens whose coordinator gets `args`.
@@ -102,7 +103,18 @@ class ServiceCluster {
       WriteText(dir_.File("client_token"), options_.client_token + "\n");
       WriteText(dir_.File("worker_token"), options_.worker_token + "\n");
     }
+    if (options_.tls) {
+      CommandResult r = RunCommand(
+          "openssl req -x509 -newkey rsa:2048 -nodes -days 1 -subj /CN=localhost"
+          " -addext subjectAltName=IP:127.0.0.1,DNS:localhost -keyout " + dir_.File("key.pem") +
+              " -out " + dir_.File("cert.pem"),
+          dir_);
+      EXPECT_EQ(r.exit_code, 0) << r.err;
+    }
   }
+
+  // The CA file clients pass with --tls-ca ("" without TLS).
+  std::string tls_ca() const { return options_.tls ? dir_.File("cert.pem") : ""; }
 
   const TempDir& dir() const { return dir_; }
   const std::string& address() const { return address_; }
@@ -118,6 +130,10 @@ class ServiceCluster {
     if (!options_.client_token.empty()) {
       argv.insert(argv.end(), {"--client-token-file", dir_.File("client_token"),
                                "--worker-token-file", dir_.File("worker_token")});
+    }
+    if (options_.tls) {
+      argv.insert(argv.end(), {"--tls-cert", dir_.File("cert.pem"), "--tls-key",
+                               dir_.File("key.pem")});
     }
     argv.insert(argv.end(), options_.coordinator_args.begin(), options_.coordinator_args.end());
     coordinator_ = std::make_unique<ChildProcess>(argv, dir_.File("coordinator.log"));
@@ -146,6 +162,7 @@ class ServiceCluster {
     if (!options_.worker_token.empty()) {
       argv.insert(argv.end(), {"--token-file", dir_.File("worker_token")});
     }
+    if (options_.tls) argv.insert(argv.end(), {"--tls-ca", tls_ca()});
     workers_.push_back(std::make_unique<ChildProcess>(
         argv, dir_.File("worker" + std::to_string(workers_.size()) + ".log")));
     return workers_.size() - 1;
@@ -156,6 +173,7 @@ class ServiceCluster {
   CommandResult Pdsm(const std::string& args) {
     std::string command = std::string(PDSM_CLI) + " " + args + " --server " + address_;
     if (!options_.client_token.empty()) command += " --token-file " + dir_.File("client_token");
+    if (options_.tls) command += " --tls-ca " + tls_ca();
     return RunCommand(command, dir_);
   }
 
@@ -212,10 +230,10 @@ class ServiceCluster {
   }
 
   std::unique_ptr<pdsm::v1::PdsmJobs::Stub> JobsStub() {
-    return pdsm::v1::PdsmJobs::NewStub(*MakeChannel({address_, "", ""}));
+    return pdsm::v1::PdsmJobs::NewStub(*MakeChannel({address_, "", tls_ca()}));
   }
   std::unique_ptr<pdsm::v1::PdsmWorkers::Stub> WorkersStub() {
-    return pdsm::v1::PdsmWorkers::NewStub(*MakeChannel({address_, "", ""}));
+    return pdsm::v1::PdsmWorkers::NewStub(*MakeChannel({address_, "", tls_ca()}));
   }
 
   std::string Log(const std::string& name) { return ReadBytes(dir_.File(name)); }

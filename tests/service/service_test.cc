@@ -277,6 +277,32 @@ TEST(Service, BadCallersAndBadJobsGetTheRightStatusAndDisturbNothing) {
   EXPECT_TRUE(FetchBytes(cluster, good) == expected);
 }
 
+TEST(Service, TlsCarriesTheWholeBakeAndPlaintextClientsAreRefused) {
+  ClusterOptions options = CoordinatorArgs({});
+  options.tls = true;
+  options.client_token = "client-secret";
+  options.worker_token = "worker-secret";
+  ServiceCluster cluster(options);
+  ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
+  cluster.AddWorker();
+  const std::string scene = WriteServiceScene(cluster.dir(), 64, 16, 32);
+  const std::string expected = LocalBakeBytes(cluster.dir(), scene);
+  const std::string job_id = cluster.Submit(scene);
+  ASSERT_EQ(cluster.WaitForEnd(job_id).state(), pdsm::v1::SUCCEEDED)
+      << cluster.Log("worker0.log");
+  EXPECT_TRUE(FetchBytes(cluster, job_id) == expected);
+
+  // A client that does not speak TLS gets no answer, let alone a job.
+  auto plaintext = pdsm::v1::PdsmJobs::NewStub(*MakeChannel({cluster.address(), "", ""}));
+  grpc::ClientContext context;
+  PrepareCall(&context, "client-secret", seconds(5));
+  pdsm::v1::GetJobRequest request;
+  request.set_job_id(job_id);
+  pdsm::v1::Job job;
+  EXPECT_EQ(plaintext->GetJob(&context, request, &job).error_code(),
+            grpc::StatusCode::UNAVAILABLE);
+}
+
 TEST(Service, FiftyWatchersFollowTwoJobsToTheEnd) {
   ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "16"}));
   ASSERT_TRUE(cluster.StartCoordinator());
