@@ -1,8 +1,11 @@
 // The distributed service end to end: real coordinator and worker processes on 127.0.0.1.
 // Every bake is compared byte for byte with `pdsm bake` of the same scene.
 #include <atomic>
+#include <condition_variable>
+#include <mutex>
 #include <thread>
 
+#include <grpcpp/generic/generic_stub.h>
 #include <gtest/gtest.h>
 
 #include "tests/service/service_cluster.h"
@@ -301,6 +304,42 @@ TEST(Service, TlsCarriesTheWholeBakeAndPlaintextClientsAreRefused) {
   pdsm::v1::Job job;
   EXPECT_EQ(plaintext->GetJob(&context, request, &job).error_code(),
             grpc::StatusCode::UNAVAILABLE);
+}
+
+// grpc.health.v1.Health/Check over a generic stub (the health proto is not in our schema):
+// an empty HealthCheckRequest asks about the whole server; SERVING is field 1 = 1.
+TEST(Service, AnswersTheStandardHealthCheckWithoutAToken) {
+  ClusterOptions options = CoordinatorArgs({});
+  options.client_token = "client-secret";
+  options.worker_token = "worker-secret";
+  ServiceCluster cluster(options);
+  ASSERT_TRUE(cluster.StartCoordinator());
+  grpc::GenericStub stub(*MakeChannel({cluster.address(), "", ""}));
+  grpc::ClientContext context;
+  PrepareCall(&context, "", seconds(10));
+  grpc::Slice empty(std::string{});
+  grpc::ByteBuffer request(&empty, 1), response;  // an initialized, empty message
+  std::mutex mu;
+  std::condition_variable cv;
+  bool done = false;
+  grpc::Status status;
+  stub.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request,
+                 &response, [&](grpc::Status s) {
+                   std::lock_guard<std::mutex> lock(mu);
+                   status = s;
+                   done = true;
+                   cv.notify_one();
+                 });
+  std::unique_lock<std::mutex> lock(mu);
+  cv.wait(lock, [&] { return done; });
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  std::vector<grpc::Slice> slices;
+  ASSERT_TRUE(response.Dump(&slices).ok());
+  std::string bytes;
+  for (const grpc::Slice& slice : slices) {
+    bytes.append(reinterpret_cast<const char*>(slice.begin()), slice.size());
+  }
+  EXPECT_EQ(bytes, std::string("\x08\x01", 2));  // status: SERVING
 }
 
 TEST(Service, FiftyWatchersFollowTwoJobsToTheEnd) {
