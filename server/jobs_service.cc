@@ -1,5 +1,6 @@
 #include "server/jobs_service.h"
 
+#include <algorithm>
 #include <fstream>
 
 #include <spdlog/spdlog.h>
@@ -39,7 +40,8 @@ class UploadReactor final : public grpc::ServerReadReactor<pdsm::v1::AssetChunk>
                          coordinator_->max_asset_bytes())));
       }
       expected_bytes_ = chunk_.total_bytes();
-      blob_.reserve(expected_bytes_);
+      // Grow with the data, not with the claim: a client may announce more than it sends.
+      blob_.reserve(std::min<uint64_t>(expected_bytes_, kChunkBytes));
     }
     if (blob_.size() + chunk_.data().size() > expected_bytes_) {
       return Fail(absl::InvalidArgumentError(absl::StrCat(
