@@ -89,14 +89,28 @@ absl::Status Upload(const ServiceConnection& c, const std::string& server,
 int RunSubmit(const SubmitFlags& flags) {
   absl::StatusOr<pdsm::v1::BakeParams> overrides = ToBakeParams(flags.overrides);
   if (!overrides.ok()) return ReportError(overrides.status());
-  // Validate fully here, so errors name the scene file and field before anything is sent.
-  absl::StatusOr<Scene> local = LoadSceneFile(flags.scene_path, *overrides);
-  if (!local.ok()) return ReportError(local.status());
   absl::StatusOr<pdsm::v1::Scene> scene = ParseSceneFile(flags.scene_path, *overrides);
   if (!scene.ok()) return ReportError(scene.status());
+  // A scene file may not name assets itself: they are what this command makes of paths.
+  for (int i = 0; i < scene->meshes_size(); ++i) {
+    if (scene->meshes(i).source_case() == pdsm::v1::Mesh::kAssetSha256) {
+      return ReportError(absl::InvalidArgumentError(absl::StrCat(
+          flags.scene_path, ": meshes[", i, "].assetSha256: mesh assets are only accepted by "
+          "the coordinator; use path or inline")));
+    }
+  }
   absl::StatusOr<std::map<std::string, std::string>> blobs =
       MeshesToAssets(flags.scene_path, &*scene);
   if (!blobs.ok()) return ReportError(blobs.status());
+  // Validate fully here, from the blobs just made (each mesh file is read once), so errors
+  // name the scene file and field before anything is sent.
+  const MeshAssetResolver from_blobs = [&](const std::string& sha256,
+                                           const std::string& context) {
+    return DecodeMeshAsset(blobs->at(sha256), context);
+  };
+  absl::StatusOr<Scene> local =
+      SceneFromProto(*scene, flags.scene_path, /*base_dir=*/"", from_blobs);
+  if (!local.ok()) return ReportError(local.status());
 
   absl::StatusOr<ServiceConnection> connection = Connect(flags.service);
   if (!connection.ok()) return ReportError(connection.status());

@@ -247,29 +247,33 @@ absl::StatusOr<pdsm::v1::Job> Coordinator::SubmitBake(
     spdlog::info("job {}: submitted \"{}\", {}x{}, {} samples, {} tiles, priority {}",
                  stored->job_id, stored->scene_name, stored->width, stored->height,
                  stored->samples, stored->tiles_total, stored->priority);
-    if (absl::Status s = Activate(*stored, {}); !s.ok()) return s;
+    if (absl::Status s = Activate(*stored, {}, *std::move(plan)); !s.ok()) return s;
   }
   return GetJob(stored->job_id);
 }
 
 absl::StatusOr<std::shared_ptr<Coordinator::ActiveJob>> Coordinator::LoadActive(
-    const JobRecord& record) {
+    const JobRecord& record, std::optional<BakePlan> plan) {
   auto job = std::make_shared<ActiveJob>();
   job->record = record;
   if (!job->scene.ParseFromString(record.scene)) {
     return absl::DataLossError(absl::StrCat("job ", record.job_id, ": stored scene is corrupt"));
   }
-  absl::StatusOr<BakePlan> plan =
-      PlanFromScene(job->scene, absl::StrCat("job ", record.job_id), false);
-  if (!plan.ok()) return plan.status();
+  if (!plan) {
+    absl::StatusOr<BakePlan> planned =
+        PlanFromScene(job->scene, absl::StrCat("job ", record.job_id), false);
+    if (!planned.ok()) return planned.status();
+    plan = *std::move(planned);
+  }
   job->plan = *std::move(plan);
   job->fingerprint = PlanFingerprint(job->plan);
   job->running = record.state == pdsm::v1::RUNNING;
   return job;
 }
 
-absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<int>& done_tiles) {
-  absl::StatusOr<std::shared_ptr<ActiveJob>> job = LoadActive(record);
+absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<int>& done_tiles,
+                                   std::optional<BakePlan> plan) {
+  absl::StatusOr<std::shared_ptr<ActiveJob>> job = LoadActive(record, std::move(plan));
   if (!job.ok()) return job.status();
   std::vector<bool> done((*job)->plan.tiles.size(), false);
   for (int t : done_tiles) {
@@ -305,7 +309,7 @@ absl::Status Coordinator::Resume() {
   for (const JobRecord& record : *jobs) {
     absl::StatusOr<std::vector<int>> done = store_->DoneTiles(record.job_id);
     if (!done.ok()) return done.status();
-    if (absl::Status s = Activate(record, *done); !s.ok()) {
+    if (absl::Status s = Activate(record, *done, std::nullopt); !s.ok()) {
       // One unreadable job must not keep the others from resuming.
       spdlog::error("job {}: cannot resume: {}", record.job_id, std::string(s.message()));
       if (absl::Status f = store_->SetState(record.job_id, pdsm::v1::FAILED,

@@ -87,8 +87,11 @@ class Coordinator {
   struct ActiveJob;
   explicit Coordinator(const CoordinatorOptions& options);
   absl::Status Resume();
-  absl::Status Activate(const JobRecord& record, const std::vector<int>& done_tiles);
-  absl::StatusOr<std::shared_ptr<ActiveJob>> LoadActive(const JobRecord& record);
+  // `plan`: the job's plan when the caller has it (a new job); else planned from the record.
+  absl::Status Activate(const JobRecord& record, const std::vector<int>& done_tiles,
+                        std::optional<BakePlan> plan);
+  absl::StatusOr<std::shared_ptr<ActiveJob>> LoadActive(const JobRecord& record,
+                                                        std::optional<BakePlan> plan);
   absl::StatusOr<BakePlan> PlanFromScene(const pdsm::v1::Scene& scene, const std::string& label,
                                          bool enforce_limits) const;
   pdsm::v1::Job ToProto(const JobRecord& record) const;

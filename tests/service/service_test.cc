@@ -28,6 +28,32 @@ std::string FetchBytes(ServiceCluster& cluster, const std::string& job_id) {
   return ReadBytes(out);
 }
 
+// `pdsm submit` validates the scene before it connects: errors name the file and field.
+TEST(Service, SubmitRefusesBadScenesBeforeSendingAnything) {
+  TempDir dir;
+  const std::string text = ReadBytes(WriteServiceScene(dir, 64, 16, 32));
+  const std::string bad = dir.File("bad.json");
+  const auto submit_with = [&](const std::string& from, const std::string& to) {
+    std::string edited = text;
+    edited.replace(edited.find(from), from.size(), to);
+    WriteText(bad, edited);
+    // Nothing listens on port 1: a refusal can only come from the local validation.
+    return RunCommand(std::string(PDSM_CLI) + " submit " + bad + " --server 127.0.0.1:1", dir);
+  };
+  CommandResult r = submit_with("\"size\": [3,3]", "\"size\": [3,-3]");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find(bad + ": light.rect.size[1]"), std::string::npos) << r.err;
+
+  r = submit_with("\"path\": \"box.obj\"", "\"path\": \"missing.obj\"");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find(bad + ": meshes[1].path"), std::string::npos) << r.err;
+
+  r = submit_with("\"path\": \"box.obj\"",
+                  "\"assetSha256\": \"" + std::string(64, 'a') + "\"");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("meshes[1].assetSha256"), std::string::npos) << r.err;
+}
+
 TEST(Service, ThreeWorkersMatchTheLocalBakeByteForByte) {
   ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "16"}));
   ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
