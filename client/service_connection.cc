@@ -29,7 +29,7 @@ absl::StatusOr<ServiceConnection> Connect(const ServiceFlags& flags) {
     connection.token = *token;
   }
   absl::StatusOr<std::shared_ptr<grpc::Channel>> channel =
-      MakeChannel({flags.server, connection.token, flags.tls_ca});
+      MakeChannel({flags.server, flags.tls_ca});
   if (!channel.ok()) return channel.status();
   connection.stub = pdsm::v1::PdsmJobs::NewStub(*channel);
   return connection;

@@ -30,11 +30,11 @@ absl::StatusOr<std::string> ReadTokenFile(const std::string& flag, const std::st
 // Where and how to reach the coordinator.
 struct ConnectionOptions {
   std::string address;       // host:port
-  std::string token;         // sent as "authorization: Bearer <token>"; empty: none
   std::string tls_ca_path;   // PEM roots to trust; empty: plaintext
+  // The token is not part of the channel: PrepareCall puts it on each call.
 };
 
-// The connection flags of a command, read: the token file's secret and the channel.
+// A channel to `address`, TLS when a CA file is given. INVALID_ARGUMENT naming the flag.
 absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(const ConnectionOptions& options);
 
 // Sets the bearer token and a deadline `timeout` from now on a call.

@@ -125,6 +125,14 @@ std::string Coordinator::JobDir(const std::string& job_id) const {
   return (std::filesystem::path(options_.data_dir) / "jobs" / job_id).string();
 }
 
+std::string Coordinator::TilesDir(const std::string& job_id) const {
+  return (std::filesystem::path(JobDir(job_id)) / "tiles").string();
+}
+
+std::string Coordinator::TilePath(const std::string& job_id, int tile_index) const {
+  return (std::filesystem::path(TilesDir(job_id)) / absl::StrCat(tile_index, ".tile")).string();
+}
+
 // ---- Pool and ticker -------------------------------------------------------------------
 
 void Coordinator::Post(std::function<void()> work) {
@@ -171,7 +179,9 @@ void Coordinator::TickLoop() {
 absl::StatusOr<BakePlan> Coordinator::PlanFromScene(const pdsm::v1::Scene& scene,
                                                     const std::string& label,
                                                     bool enforce_limits) const {
-  int64_t triangles = 0;
+  // Asset triangles are counted as they decode, to stop early on a huge scene; the final
+  // check counts every mesh (inline ones too) once.
+  int64_t asset_triangles = 0;
   const MeshAssetResolver resolver =
       [&](const std::string& sha256, const std::string& context)
       -> absl::StatusOr<MeshFileData> {
@@ -183,8 +193,8 @@ absl::StatusOr<BakePlan> Coordinator::PlanFromScene(const pdsm::v1::Scene& scene
     if (!blob.ok()) return blob.status();
     absl::StatusOr<MeshFileData> mesh = DecodeMeshAsset(*blob, context);
     if (!mesh.ok()) return mesh.status();
-    triangles += static_cast<int64_t>(mesh->indices.size() / 3);
-    if (enforce_limits && triangles > options_.max_triangles) {
+    asset_triangles += static_cast<int64_t>(mesh->indices.size() / 3);
+    if (enforce_limits && asset_triangles > options_.max_triangles) {
       return absl::ResourceExhaustedError(absl::StrCat(
           context, ": the scene exceeds this coordinator's limit of ", options_.max_triangles,
           " triangles"));
@@ -194,6 +204,7 @@ absl::StatusOr<BakePlan> Coordinator::PlanFromScene(const pdsm::v1::Scene& scene
   absl::StatusOr<Scene> loaded = SceneFromProto(scene, label, /*base_dir=*/"", resolver);
   if (!loaded.ok()) return loaded.status();
   if (enforce_limits) {
+    int64_t triangles = 0;
     for (const TriangleMesh& m : loaded->meshes) triangles += m.indices.size() / 3;
     const int64_t pixels = int64_t{loaded->bake.width} * loaded->bake.height;
     if (pixels > options_.max_job_pixels) {
@@ -346,7 +357,7 @@ void Coordinator::EndJob(const std::string& job_id, pdsm::v1::JobState state,
                   std::string(s.message()));
   }
   std::error_code ec;
-  std::filesystem::remove_all(std::filesystem::path(JobDir(job_id)) / "tiles", ec);
+  std::filesystem::remove_all(TilesDir(job_id), ec);
 }
 
 absl::StatusOr<pdsm::v1::Job> Coordinator::CancelJob(const std::string& job_id) {
@@ -375,10 +386,9 @@ void Coordinator::AssembleAndStore(std::shared_ptr<ActiveJob> job, int tile_inde
   events.clear();
 
   const std::string& id = job->record.job_id;
-  const std::string path =
-      (std::filesystem::path(JobDir(id)) / "tiles" / absl::StrCat(tile_index, ".tile")).string();
+  const std::string path = TilePath(id, tile_index);
   std::error_code ec;
-  std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ec);
+  std::filesystem::create_directories(TilesDir(id), ec);
   absl::Status s = WriteTileFile(path, tile);
   if (s.ok() && !job->ended) s = store_->MarkTileDone(id, tile_index, NowMs());
   if (!s.ok()) return EndJob(id, pdsm::v1::FAILED, absl::StrCat("storing tile ", tile_index,
@@ -410,9 +420,7 @@ void Coordinator::FinishJob(std::shared_ptr<ActiveJob> job) {
     absl::StatusOr<std::unique_ptr<PdsmWriter>> writer = PdsmWriter::Create(out, job->plan.header);
     if (!writer.ok()) return writer.status();
     for (const TileRect& rect : job->plan.tiles) {
-      const std::string path =
-          (std::filesystem::path(dir) / "tiles" / absl::StrCat(rect.index, ".tile")).string();
-      absl::StatusOr<PdsmTile> tile = ReadTileFile(path);
+      absl::StatusOr<PdsmTile> tile = ReadTileFile(TilePath(id, rect.index));
       if (!tile.ok()) return tile.status();
       if (absl::Status w = (*writer)->WriteTile(*tile); !w.ok()) return w;
     }
@@ -437,7 +445,7 @@ void Coordinator::FinishJob(std::shared_ptr<ActiveJob> job) {
     spdlog::error("job {}: cannot record SUCCEEDED: {}", id, std::string(s.message()));
     return;
   }
-  std::filesystem::remove_all(std::filesystem::path(dir) / "tiles", ec);
+  std::filesystem::remove_all(TilesDir(id), ec);
   spdlog::info("job {}: succeeded, {} tiles, PDSM {}", id, job->plan.tiles.size(), out);
 }
 

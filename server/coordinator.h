@@ -103,6 +103,8 @@ class Coordinator {
   void PoolLoop();
   void TickLoop();
   std::string JobDir(const std::string& job_id) const;
+  std::string TilesDir(const std::string& job_id) const;
+  std::string TilePath(const std::string& job_id, int tile_index) const;
   int64_t NowMs() const;
 
   const CoordinatorOptions options_;

@@ -62,7 +62,7 @@ int Run(const Flags& flags, const sigset_t& signals) {
     token = *read;
   }
   absl::StatusOr<std::shared_ptr<grpc::Channel>> channel =
-      MakeChannel({flags.coordinator, token, flags.tls_ca});
+      MakeChannel({flags.coordinator, flags.tls_ca});
   if (!channel.ok()) {
     spdlog::error("{}", std::string(channel.status().message()));
     return 2;

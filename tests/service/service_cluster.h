@@ -230,10 +230,10 @@ class ServiceCluster {
   }
 
   std::unique_ptr<pdsm::v1::PdsmJobs::Stub> JobsStub() {
-    return pdsm::v1::PdsmJobs::NewStub(*MakeChannel({address_, "", tls_ca()}));
+    return pdsm::v1::PdsmJobs::NewStub(*MakeChannel({address_, tls_ca()}));
   }
   std::unique_ptr<pdsm::v1::PdsmWorkers::Stub> WorkersStub() {
-    return pdsm::v1::PdsmWorkers::NewStub(*MakeChannel({address_, "", tls_ca()}));
+    return pdsm::v1::PdsmWorkers::NewStub(*MakeChannel({address_, tls_ca()}));
   }
 
   std::string Log(const std::string& name) { return ReadBytes(dir_.File(name)); }

@@ -55,7 +55,8 @@ TEST(Service, SubmitRefusesBadScenesBeforeSendingAnything) {
 }
 
 TEST(Service, ThreeWorkersMatchTheLocalBakeByteForByte) {
-  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "16"}));
+  // The scene has exactly 11 triangles (8 from box.obj, 3 inline): each counted once fits.
+  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "16", "--max-triangles", "11"}));
   ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
   for (int i = 0; i < 3; ++i) cluster.AddWorker();
   const std::string scene = WriteServiceScene(cluster.dir(), 128, 64, 32);
@@ -322,7 +323,7 @@ TEST(Service, TlsCarriesTheWholeBakeAndPlaintextClientsAreRefused) {
   EXPECT_TRUE(FetchBytes(cluster, job_id) == expected);
 
   // A client that does not speak TLS gets no answer, let alone a job.
-  auto plaintext = pdsm::v1::PdsmJobs::NewStub(*MakeChannel({cluster.address(), "", ""}));
+  auto plaintext = pdsm::v1::PdsmJobs::NewStub(*MakeChannel({cluster.address(), ""}));
   grpc::ClientContext context;
   PrepareCall(&context, "client-secret", seconds(5));
   pdsm::v1::GetJobRequest request;
@@ -340,7 +341,7 @@ TEST(Service, AnswersTheStandardHealthCheckWithoutAToken) {
   options.worker_token = "worker-secret";
   ServiceCluster cluster(options);
   ASSERT_TRUE(cluster.StartCoordinator());
-  grpc::GenericStub stub(*MakeChannel({cluster.address(), "", ""}));
+  grpc::GenericStub stub(*MakeChannel({cluster.address(), ""}));
   grpc::ClientContext context;
   PrepareCall(&context, "", seconds(10));
   grpc::Slice empty(std::string{});
