@@ -16,6 +16,10 @@ packages=(
   libboost-dev libsqlite3-dev libssl-dev
   # TLS certificates for the service tests
   openssl
+  # pdsm-view's window; Embree occlusion rays for `pdsm reference`
+  libglfw3-dev libembree-dev
+  # the windowed pdsm-view test runs under a virtual X server; sweep.png is drawn by gnuplot
+  xvfb xauth gnuplot-nox
   # tests/deploy/check_manifests.py: parses the deployment manifests
   python3 python3-yaml
 )
