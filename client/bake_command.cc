@@ -44,6 +44,12 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags, const std::string&
                static_cast<long long>(s.assembly.merged_events),
                static_cast<long long>(s.assembly.consolidated_events),
                static_cast<long long>(s.assembly.vertices));
+  if (scene.bake.adaptive() && s.tiles > 0) {
+    std::fprintf(stderr, "  adaptive sampling: tolerance %g, %.1f samples per tile on average "
+                 "(first batch %d, max %d)\n", scene.bake.adaptive_tolerance,
+                 static_cast<double>(s.tile_samples_total) / s.tiles,
+                 scene.bake.adaptive_min_samples, scene.bake.samples);
+  }
   std::printf("pdsm: %s (%s)\n", flags.output_path.c_str(), HumanBytes(s.file_bytes).c_str());
   if (!preview.empty()) std::printf("preview: %s\n", preview.c_str());
 }

@@ -1,7 +1,9 @@
 #include "client/bake_overrides.h"
 
+#include <algorithm>
 #include <regex>
 
+#include "absl/strings/ascii.h"
 #include "absl/strings/str_format.h"
 
 namespace pdsm {
@@ -12,7 +14,31 @@ void AddOverrideFlags(CLI::App* cmd, OverrideFlags* flags) {
   cmd->add_option("--sm-resolution", flags->sm_resolution, "Shadow-map texels across the window");
   cmd->add_option("--epsilon", flags->epsilon, "Compression tolerance in [0, 1]");
   cmd->add_option("--tile-size", flags->tile_size, "PDSM pixels per tile side");
+  cmd->add_option("--sampling", flags->sampling,
+                  "Light sample pattern: stratified, uniform, sobol, halton, blue-noise");
+  cmd->add_option("--adaptive-tolerance", flags->adaptive_tolerance,
+                  "Adaptive sampling: stop adding samples to a tile once its estimated error is "
+                  "at most this; --samples becomes the per-tile maximum (0: off)");
+  cmd->add_option("--adaptive-min-samples", flags->adaptive_min_samples,
+                  "Adaptive sampling: samples of a tile's first batch");
 }
+
+namespace {
+
+absl::Status SetSampling(const std::string& flag_value, pdsm::v1::BakeParams* params) {
+  std::string name = absl::AsciiStrToUpper(flag_value);
+  std::replace(name.begin(), name.end(), '-', '_');
+  pdsm::v1::Sampling value;
+  if (name == "SAMPLING_DEFAULT" || !pdsm::v1::Sampling_Parse(name, &value)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--sampling: expected stratified, uniform, sobol, halton or blue-noise (got \"%s\")",
+        flag_value));
+  }
+  params->set_sampling(value);
+  return absl::OkStatus();
+}
+
+}  // namespace
 
 absl::StatusOr<pdsm::v1::BakeParams> ToBakeParams(const OverrideFlags& flags) {
   pdsm::v1::BakeParams params;
@@ -46,8 +72,14 @@ absl::StatusOr<pdsm::v1::BakeParams> ToBakeParams(const OverrideFlags& flags) {
   if (s.ok()) {
     s = set_count("--tile-size", flags.tile_size, [&](uint32_t v) { params.set_tile_size(v); });
   }
+  if (s.ok()) {
+    s = set_count("--adaptive-min-samples", flags.adaptive_min_samples,
+                  [&](uint32_t v) { params.set_adaptive_min_samples(v); });
+  }
+  if (s.ok() && !flags.sampling.empty()) s = SetSampling(flags.sampling, &params);
   if (!s.ok()) return s;
   if (flags.epsilon) params.set_epsilon(*flags.epsilon);
+  if (flags.adaptive_tolerance) params.set_adaptive_tolerance(*flags.adaptive_tolerance);
   return params;
 }
 

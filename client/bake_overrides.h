@@ -1,5 +1,6 @@
 // The bake-parameter flags shared by `pdsm bake` and `pdsm submit` (--resolution, --samples,
-// --sm-resolution, --epsilon, --tile-size): they override the scene file's bake fields.
+// --sm-resolution, --epsilon, --tile-size, --sampling, --adaptive-tolerance,
+// --adaptive-min-samples): they override the scene file's bake fields.
 #ifndef PDSM_CLIENT_BAKE_OVERRIDES_H_
 #define PDSM_CLIENT_BAKE_OVERRIDES_H_
 
@@ -18,6 +19,9 @@ struct OverrideFlags {
   std::string resolution;
   std::optional<int64_t> samples, sm_resolution, tile_size;
   std::optional<double> epsilon;
+  std::string sampling;  // a bake.sampling name, any case, '-' for '_' ("blue-noise")
+  std::optional<double> adaptive_tolerance;
+  std::optional<int64_t> adaptive_min_samples;
 };
 
 void AddOverrideFlags(CLI::App* command, OverrideFlags* flags);

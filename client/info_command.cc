@@ -57,6 +57,20 @@ int RunInfo(const InfoFlags& flags) {
   };
   const std::string projection =
       g.projection == Projection::kPerspective ? "perspective" : "orthographic";
+  // Adaptive bakes: how many samples the tiles took (min, mean, max).
+  int tile_min = h.samples, tile_max = 0;
+  double tile_mean = 0;
+  for (int n : h.tile_samples) {
+    tile_min = std::min(tile_min, n);
+    tile_max = std::max(tile_max, n);
+    tile_mean += static_cast<double>(n) / h.tile_samples.size();
+  }
+  const std::string adaptive_json =
+      h.adaptive() ? absl::StrFormat(", \"adaptiveTolerance\": %.17g, \"adaptiveMinSamples\": %d, "
+                                     "\"tileSamples\": {\"min\": %d, \"mean\": %.17g, \"max\": %d}",
+                                     h.adaptive_tolerance, h.adaptive_min_samples, tile_min,
+                                     tile_mean, tile_max)
+                   : "";
   if (flags.json) {
     std::printf(
         "{\"formatVersion\": %d, \"scene\": %s, \"light\": %s, \"projection\": \"%s\", "
@@ -64,12 +78,12 @@ int RunInfo(const InfoFlags& flags) {
         "\"depthRange\": [%.17g, %.17g], \"lightCenter\": %s, \"lightNormal\": %s, "
         "\"samples\": %d, \"shadowMapResolution\": %d, \"epsilon\": %.17g, "
         "\"depthBias\": %.17g, \"slopeBias\": %.17g, \"tileSize\": %d, "
-        "\"vertices\": %zu, \"maxVerticesPerPixel\": %zu, \"emptyPixels\": %zu}\n",
+        "\"vertices\": %zu, \"maxVerticesPerPixel\": %zu, \"emptyPixels\": %zu%s}\n",
         h.format_version, JsonString(h.scene_name).c_str(), JsonString(ShapeName(h.light_shape)).c_str(),
         projection.c_str(), g.width, g.height, g.s_min, g.s_max, g.t_min, g.t_max, g.z_near,
         g.z_far, v3(g.frame.center).c_str(), v3(g.frame.n).c_str(), h.samples,
         h.shadow_map_resolution, h.epsilon, h.depth_bias, h.slope_bias, h.tile_size,
-        pdsm->vertices.size(), max_vertices, empty_pixels);
+        pdsm->vertices.size(), max_vertices, empty_pixels, adaptive_json.c_str());
     return kExitOk;
   }
   std::printf("%s: PDSM format %d, scene \"%s\"\n", flags.pdsm_path.c_str(), h.format_version,
@@ -83,6 +97,11 @@ int RunInfo(const InfoFlags& flags) {
               "tiles %d\n",
               h.samples, h.shadow_map_resolution, h.epsilon, h.depth_bias, h.slope_bias,
               h.tile_size);
+  if (h.adaptive()) {
+    std::printf("  adaptive    tolerance %g, first batch %d; samples per tile min %d, mean %.1f, "
+                "max %d\n",
+                h.adaptive_tolerance, h.adaptive_min_samples, tile_min, tile_mean, tile_max);
+  }
   std::printf("  functions   %zu vertices, at most %zu per pixel, %zu empty pixels (all lit)\n",
               pdsm->vertices.size(), max_vertices, empty_pixels);
   return kExitOk;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "client/adaptive_bake.h"
 #include "client/preview_image.h"
 #include "core/bake/bake_plan.h"
 #include "core/pdsm/pdsm_file.h"
@@ -158,17 +159,25 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
       PdsmWriter::Create(options.output_path, plan->header);
   if (!writer.ok()) return writer.status();
 
-  LocalBake bake(*plan, options, writer->get());
-  const int threads = std::clamp(options.threads > 0
-                                     ? options.threads
-                                     : static_cast<int>(std::thread::hardware_concurrency()),
-                                 1, static_cast<int>(std::max<size_t>(1, bake.task_count())));
-  absl::StatusOr<BakeSummary> summary = bake.Run(threads);
-  if (!summary.ok()) return summary.status();
-  if (absl::Status s = (*writer)->Finish(); !s.ok()) return s;
-  if (!options.preview_path.empty()) {
-    if (absl::Status s = bake.preview().Write(options.preview_path); !s.ok()) return s;
+  const int cores = options.threads > 0
+                        ? options.threads
+                        : static_cast<int>(std::thread::hardware_concurrency());
+  absl::StatusOr<BakeSummary> summary;
+  if (plan->header.adaptive()) {
+    summary = RunAdaptiveTiles(*plan, options, std::max(1, cores), writer->get());
+    if (!summary.ok()) return summary.status();
+  } else {
+    LocalBake bake(*plan, options, writer->get());
+    const int threads =
+        std::clamp(cores, 1, static_cast<int>(std::max<size_t>(1, bake.task_count())));
+    summary = bake.Run(threads);
+    if (!summary.ok()) return summary.status();
+    summary->tile_samples_total = int64_t{plan->header.samples} * summary->tiles;
+    if (!options.preview_path.empty()) {
+      if (absl::Status s = bake.preview().Write(options.preview_path); !s.ok()) return s;
+    }
   }
+  if (absl::Status s = (*writer)->Finish(); !s.ok()) return s;
   std::error_code ec;
   summary->file_bytes = std::filesystem::file_size(options.output_path, ec);
   return summary;

@@ -34,13 +34,15 @@ struct BakeSummary {
   int tiles = 0;
   int tiles_all_lit = 0;  // tiles with no event at all (no caster can reach their rays)
   int64_t tasks = 0;
+  int64_t tile_samples_total = 0;  // light samples summed over tiles (adaptive bakes: < max)
   TaskStats tasks_stats;          // summed over threads (thread-seconds)
   AssemblyStats assembly;
   uint64_t file_bytes = 0;
 };
 
 // Same scene and parameters give the same file bytes whatever `threads` and
-// `samples_per_task`. On error nothing is left at output_path.
+// `samples_per_task`. On error nothing is left at output_path. Adaptive scenes
+// (bake.adaptiveTolerance > 0) are baked by client/adaptive_bake.h.
 absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOptions& options);
 
 }  // namespace pdsm

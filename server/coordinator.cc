@@ -235,6 +235,13 @@ absl::StatusOr<pdsm::v1::Job> Coordinator::SubmitBake(
   }
   absl::StatusOr<BakePlan> plan = PlanFromScene(request.scene(), "scene", true);
   if (!plan.ok()) return plan.status();
+  if (plan->header.adaptive()) {
+    // The scheduler hands out a tile's batches all at once; adaptive sampling needs it to
+    // issue a tile's next stage only after merging the previous one (docs/service.md).
+    return absl::FailedPreconditionError(
+        "scene.bake.adaptiveTolerance: adaptive sampling is not supported by the service yet; "
+        "bake it locally with `pdsm bake`, or submit without bake.adaptiveTolerance");
+  }
 
   JobRecord record;
   record.job_id = RandomHex(8);

@@ -17,6 +17,13 @@ void AssemblyStats::Add(const AssemblyStats& o) {
 
 PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts,
                       AssemblyStats* stats) {
+  PdsmTile tile = AssembleTile(header, parts, header.samples, stats);
+  tile.samples = 0;  // fixed-count bake: the header's count
+  return tile;
+}
+
+PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts,
+                      int tile_samples, AssemblyStats* stats) {
   const auto start = std::chrono::steady_clock::now();
   const TileEvents merged = MergeTileEvents(parts);
   PdsmTile tile;
@@ -24,13 +31,14 @@ PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> part
   tile.y0 = merged.y0;
   tile.width = merged.width;
   tile.height = merged.height;
+  tile.samples = tile_samples;
   tile.offsets.assign(merged.PixelCount() + 1, 0);
   // Compression's perpendicular metric measures depth in units of the baked depth range.
   const PdsmGeometry& g = header.geometry;
   const double depth_scale = std::max(g.z_far - g.z_near, 1e-30);
   for (size_t p = 0; p < merged.PixelCount(); ++p) {
     const std::vector<Event> events = ConsolidateEvents(merged.Pixel(p));
-    const std::vector<Vertex> function = FunctionFromEvents(events, header.samples);
+    const std::vector<Vertex> function = FunctionFromEvents(events, tile_samples);
     const std::vector<Vertex> compressed =
         CompressFunction(function, header.epsilon, header.compression_metric, depth_scale);
     tile.vertices.insert(tile.vertices.end(), compressed.begin(), compressed.end());

@@ -25,6 +25,11 @@ struct AssemblyStats {
 PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts,
                       AssemblyStats* stats);
 
+// Adaptive bakes (core/bake/adaptive_sampling.h): `parts` cover the first `tile_samples`
+// samples exactly once, and attenuation is count / tile_samples. Sets PdsmTile::samples.
+PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts,
+                      int tile_samples, AssemblyStats* stats);
+
 }  // namespace pdsm
 
 #endif  // PDSM_SERVER_TILE_ASSEMBLY_H_

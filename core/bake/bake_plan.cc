@@ -124,6 +124,10 @@ void FillHeader(const Scene& scene, BakePlan* plan) {
   h.slope_bias = scene.bake.slope_bias;
   h.sampling = scene.bake.sampling;
   h.seed = scene.bake.seed;
+  if (scene.bake.adaptive()) {
+    h.adaptive_tolerance = scene.bake.adaptive_tolerance;
+    h.adaptive_min_samples = scene.bake.adaptive_min_samples;
+  }
   h.tile_size = scene.bake.tile_size;
 }
 

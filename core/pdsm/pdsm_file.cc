@@ -5,6 +5,7 @@
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfCompression.h>
 #include <OpenEXR/ImfDeepFrameBuffer.h>
+#include <OpenEXR/ImfDeepTiledInputFile.h>
 #include <OpenEXR/ImfDeepTiledInputPart.h>
 #include <OpenEXR/ImfDeepTiledOutputFile.h>
 #include <OpenEXR/ImfDoubleAttribute.h>
@@ -39,6 +40,8 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "absl/strings/str_split.h"
 #include "absl/strings/string_view.h"
 
 namespace pdsm {
@@ -71,6 +74,10 @@ constexpr char kAttrSlopeBias[] = "pdsmSlopeBias";
 constexpr char kAttrSampling[] = "pdsmSampling";
 constexpr char kAttrSeed[] = "pdsmSeed";
 constexpr char kAttrTileSize[] = "pdsmTileSize";
+// Adaptive bakes only (absent otherwise, so fixed-count files are unchanged).
+constexpr char kAttrAdaptiveTolerance[] = "pdsmAdaptiveTolerance";
+constexpr char kAttrAdaptiveMinSamples[] = "pdsmAdaptiveMinSamples";
+constexpr char kAttrTileSamples[] = "pdsmTileSamples";
 
 constexpr char kDepthChannel[] = "Z";
 constexpr char kAttenuationChannel[] = "attenuation";
@@ -101,7 +108,9 @@ constexpr EnumName<CompressionMetric> kMetricNames[] = {
     {CompressionMetric::kVertical, "vertical"},
     {CompressionMetric::kPerpendicular, "perpendicular"}};
 constexpr EnumName<SamplingPattern> kSamplingNames[] = {
-    {SamplingPattern::kStratified, "stratified"}, {SamplingPattern::kUniform, "uniform"}};
+    {SamplingPattern::kStratified, "stratified"}, {SamplingPattern::kUniform, "uniform"},
+    {SamplingPattern::kSobol, "sobol"},           {SamplingPattern::kHalton, "halton"},
+    {SamplingPattern::kBlueNoise, "blue_noise"}};
 
 template <typename E, size_t N>
 std::string NameOf(const EnumName<E> (&table)[N], E value) {
@@ -183,6 +192,12 @@ Imf::Header ExrHeaderFromPdsm(const PdsmHeader& h) {
   // EXR has no 64-bit integer attribute: decimal text keeps all 64 bits.
   exr.insert(kAttrSeed, Imf::StringAttribute(absl::StrCat(h.seed)));
   exr.insert(kAttrTileSize, Imf::IntAttribute(h.tile_size));
+  if (h.adaptive()) {
+    exr.insert(kAttrAdaptiveTolerance, Imf::DoubleAttribute(h.adaptive_tolerance));
+    exr.insert(kAttrAdaptiveMinSamples, Imf::IntAttribute(h.adaptive_min_samples));
+    // Decimal counts, comma-separated, row-major tile order (EXR has no int-vector type).
+    exr.insert(kAttrTileSamples, Imf::StringAttribute(absl::StrJoin(h.tile_samples, ",")));
+  }
   return exr;
 }
 
@@ -308,6 +323,28 @@ void ReadBakeSettings(AttributeReader& in, const Imf::Header& exr, PdsmHeader* h
   }
 }
 
+// The adaptive attributes, when present: one count in [1, samples] per tile.
+void ReadAdaptive(AttributeReader& in, const Imf::Header& exr, PdsmHeader* h) {
+  if (exr.findTypedAttribute<Imf::DoubleAttribute>(kAttrAdaptiveTolerance) == nullptr) return;
+  h->adaptive_tolerance = in.Get<double>(kAttrAdaptiveTolerance);
+  h->adaptive_min_samples = in.Get<int>(kAttrAdaptiveMinSamples);
+  const std::string text = in.Get<std::string>(kAttrTileSamples);
+  if (!in.status().ok() || h->tile_size <= 0) return;
+  const int64_t tiles = ((h->geometry.width + h->tile_size - 1) / h->tile_size) *
+                        int64_t{(h->geometry.height + h->tile_size - 1) / h->tile_size};
+  const std::vector<absl::string_view> fields = absl::StrSplit(text, ',');
+  h->tile_samples.resize(fields.size());
+  bool ok = static_cast<int64_t>(fields.size()) == tiles;
+  for (size_t t = 0; ok && t < fields.size(); ++t) {
+    ok = absl::SimpleAtoi(fields[t], &h->tile_samples[t]) && h->tile_samples[t] >= 1 &&
+         h->tile_samples[t] <= h->samples;
+  }
+  if (!ok) {
+    in.Fail(absl::StrFormat("attribute %s: expected %d counts in [1, %d], comma-separated",
+                            kAttrTileSamples, tiles, h->samples));
+  }
+}
+
 absl::StatusOr<PdsmHeader> PdsmHeaderFromExr(const Imf::Header& exr, absl::string_view path) {
   if (absl::Status s = CheckPdsmLayout(exr, path); !s.ok()) return s;
   AttributeReader in(exr, path);
@@ -317,6 +354,7 @@ absl::StatusOr<PdsmHeader> PdsmHeaderFromExr(const Imf::Header& exr, absl::strin
   ReadLight(in, &h);
   ReadGeometry(in, exr, &h.geometry);
   ReadBakeSettings(in, exr, &h);
+  ReadAdaptive(in, exr, &h);
   if (!in.status().ok()) return in.status();
   return h;
 }
@@ -513,9 +551,12 @@ class ExrPdsmWriter final : public PdsmWriter {
                 std::unique_ptr<FileOStream> stream, std::unique_ptr<Imf::DeepTiledOutputFile> exr)
       : path_(std::move(path)),
         temp_path_(std::move(temp_path)),
+        header_(header),
         grid_{header.geometry.width, header.geometry.height, header.tile_size},
         stream_(std::move(stream)),
-        exr_(std::move(exr)) {}
+        exr_(std::move(exr)) {
+    if (header_.adaptive()) header_.tile_samples.assign(grid_.Count(), 0);
+  }
 
   ~ExrPdsmWriter() override {
     exr_.reset();
@@ -528,6 +569,7 @@ class ExrPdsmWriter final : public PdsmWriter {
     if (finished_) return absl::FailedPreconditionError(path_ + ": already finished");
     absl::StatusOr<int64_t> index = CheckTile(tile);
     if (!index.ok()) return index.status();
+    if (header_.adaptive()) header_.tile_samples[*index] = tile.samples;
     if (*index != next_tile_) {
       // Out of order: keep it until the tiles before it are written, so that the file's
       // bytes do not depend on the order of arrival.
@@ -552,6 +594,9 @@ class ExrPdsmWriter final : public PdsmWriter {
     }
     exr_.reset();  // writes the tile offset table
     if (absl::Status s = stream_->Close(); !s.ok()) return Fail(s);
+    if (header_.adaptive()) {
+      if (absl::Status s = RewriteWithTileSamples(); !s.ok()) return Fail(s);
+    }
     std::error_code ec;
     std::filesystem::rename(temp_path_, path_, ec);
     if (ec) {
@@ -584,7 +629,40 @@ class ExrPdsmWriter final : public PdsmWriter {
                           tile.offsets.size(), static_cast<size_t>(tile.width) * tile.height + 1));
     }
     if (absl::Status s = CheckTileFunctions(tile, path_); !s.ok()) return s;
+    if (header_.adaptive() && (tile.samples < 1 || tile.samples > header_.samples)) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("%s: tile (%d, %d) of an adaptive bake has %d samples, expected [1, %d]",
+                          path_, tile.x0, tile.y0, tile.samples, header_.samples));
+    }
     return index;
+  }
+
+  // The header went out before any tile, but an adaptive bake knows its tiles' sample counts
+  // only at the end: copy the finished tiles' compressed bytes (no decoding) into a second
+  // file whose header carries them, and make that the one renamed into place.
+  absl::Status RewriteWithTileSamples() {
+    absl::StatusOr<std::pair<std::FILE*, std::string>> temp = CreateTempFile(path_);
+    if (!temp.ok()) return temp.status();
+    FileOStream out(temp->first, temp->second);
+    try {
+      Imf::DeepTiledInputFile in(temp_path_.c_str(), Imf::globalThreadCount());
+      Imf::DeepTiledOutputFile copy(out, ExrHeaderFromPdsm(header_));
+      copy.copyPixels(in);
+    } catch (...) {
+      absl::Status status = out.error();
+      if (status.ok()) status = StatusFromCurrentException(temp->second, "rewriting");
+      out.Close().IgnoreError();
+      std::remove(temp->second.c_str());
+      return status;
+    }
+    absl::Status closed = out.Close();
+    if (!closed.ok()) {
+      std::remove(temp->second.c_str());
+      return closed;
+    }
+    std::remove(temp_path_.c_str());
+    temp_path_ = temp->second;
+    return absl::OkStatus();
   }
 
   // Hands one tile to OpenEXR. REQUIRES: it is tile next_tile_.
@@ -614,7 +692,8 @@ class ExrPdsmWriter final : public PdsmWriter {
   }
 
   const std::string path_;
-  const std::string temp_path_;
+  std::string temp_path_;  // the rewritten file's once RewriteWithTileSamples() succeeded
+  PdsmHeader header_;      // tile_samples filled as tiles arrive (adaptive bakes)
   const TileGrid grid_;
   std::unique_ptr<FileOStream> stream_;
   std::unique_ptr<Imf::DeepTiledOutputFile> exr_;  // destroyed before stream_

@@ -32,12 +32,25 @@ struct PdsmHeader {
   SamplingPattern sampling = SamplingPattern::kStratified;
   uint64_t seed = 0;
   int tile_size = 0;       // PDSM pixels per tile side, also the EXR tile size
+  // Adaptive sampling (docs/algorithms.md); 0 when off. `samples` is then the per-tile maximum
+  // and tile t was baked with the first tile_samples[t] samples (row-major tile order).
+  // tile_samples is empty for fixed-count bakes and in the header a bake starts writing with.
+  double adaptive_tolerance = 0;
+  int adaptive_min_samples = 0;
+  std::vector<int> tile_samples;
+
+  bool adaptive() const { return adaptive_tolerance > 0; }
+  // Light samples behind the functions of tile `tile_index`.
+  int TileSamples(size_t tile_index) const {
+    return tile_index < tile_samples.size() ? tile_samples[tile_index] : samples;
+  }
 };
 
 // One rectangle of pixels with their functions: the unit of writing and of assembling.
 struct PdsmTile {
   int x0 = 0, y0 = 0;       // first pixel
   int width = 0, height = 0;
+  int samples = 0;  // light samples behind its functions (adaptive bakes); 0: header.samples
   std::vector<uint64_t> offsets;  // width * height + 1, row-major from (x0, y0)
   std::vector<Vertex> vertices;
 

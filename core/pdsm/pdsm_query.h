@@ -17,6 +17,11 @@ double QueryAttenuation(const PdsmImage& pdsm, const glm::dvec3& p_world);
 // The same at a located point (pixel coordinates with centres at k + 0.5).
 double BilinearAttenuation(const PdsmImage& pdsm, const PdsmPoint& point);
 
+// Light samples behind the attenuation at p_world: header.samples for fixed-count bakes, the
+// tile's count (of the pixel holding the point) for adaptive ones; 0 outside the frustum.
+// The attenuation's sampling resolution is 1 / this.
+int SamplesAt(const PdsmImage& pdsm, const glm::dvec3& p_world);
+
 }  // namespace pdsm
 
 #endif  // PDSM_CORE_PDSM_PDSM_QUERY_H_

@@ -3,27 +3,11 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/sampling/blue_noise.h"
+#include "core/sampling/hash_rng.h"
+#include "core/sampling/low_discrepancy.h"
+
 namespace pdsm {
-namespace {
-
-// splitmix64: a fixed, platform-independent generator (std:: distributions are not).
-class SplitMix64 {
- public:
-  explicit SplitMix64(uint64_t seed) : state_(seed) {}
-  uint64_t Next() {
-    uint64_t z = (state_ += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-  }
-  // Uniform in [0, 1) with 53 random bits.
-  double NextDouble() { return static_cast<double>(Next() >> 11) * 0x1.0p-53; }
-
- private:
-  uint64_t state_;
-};
-
-}  // namespace
 
 std::vector<glm::dvec2> StratifiedUnitSquare(int count, uint64_t seed) {
   std::vector<glm::dvec2> points;
@@ -58,6 +42,17 @@ std::vector<glm::dvec2> UniformUnitSquare(int count, uint64_t seed) {
   return points;
 }
 
+std::vector<glm::dvec2> UnitSquareSamples(int count, SamplingPattern pattern, uint64_t seed) {
+  switch (pattern) {
+    case SamplingPattern::kUniform: return UniformUnitSquare(count, seed);
+    case SamplingPattern::kSobol: return SobolUnitSquare(count, seed);
+    case SamplingPattern::kHalton: return HaltonUnitSquare(count, seed);
+    case SamplingPattern::kBlueNoise: return BlueNoiseUnitSquare(count, seed);
+    case SamplingPattern::kStratified: break;
+  }
+  return StratifiedUnitSquare(count, seed);
+}
+
 glm::dvec2 ConcentricDisk(const glm::dvec2& u) {
   const glm::dvec2 d = 2.0 * u - 1.0;
   if (d.x == 0.0 && d.y == 0.0) return {0.0, 0.0};
@@ -75,9 +70,7 @@ glm::dvec2 ConcentricDisk(const glm::dvec2& u) {
 
 std::vector<glm::dvec2> GenerateLightSamples(const LightSpec& light, int count,
                                              SamplingPattern pattern, uint64_t seed) {
-  std::vector<glm::dvec2> unit = pattern == SamplingPattern::kUniform
-                                     ? UniformUnitSquare(count, seed)
-                                     : StratifiedUnitSquare(count, seed);
+  std::vector<glm::dvec2> unit = UnitSquareSamples(count, pattern, seed);
   for (glm::dvec2& p : unit) {
     switch (light.shape) {
       case LightShape::kRect:

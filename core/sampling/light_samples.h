@@ -22,6 +22,16 @@ std::vector<glm::dvec2> StratifiedUnitSquare(int count, uint64_t seed);
 // Independent uniform points in [0,1)^2.
 std::vector<glm::dvec2> UniformUnitSquare(int count, uint64_t seed);
 
+// The pattern's points in [0,1)^2 (core/sampling/low_discrepancy.h, blue_noise.h).
+std::vector<glm::dvec2> UnitSquareSamples(int count, SamplingPattern pattern, uint64_t seed);
+
+// Whether every prefix of the pattern's sequence is itself a well-spread set (Sobol, Halton,
+// blue noise, uniform), so that a tile may use only the first n samples (adaptive sampling).
+// Stratified is not: its first cells fill the bottom rows of the light.
+inline bool IsProgressive(SamplingPattern pattern) {
+  return pattern != SamplingPattern::kStratified;
+}
+
 // Shirley–Chiu concentric map of [0,1)^2 onto the unit disk; preserves area fractions.
 glm::dvec2 ConcentricDisk(const glm::dvec2& u);
 

@@ -39,7 +39,7 @@ struct LightSpec {
   double tan_half_angle = 0;  // sun: tan(angular diameter / 2)
 };
 
-enum class SamplingPattern { kStratified, kUniform };
+enum class SamplingPattern { kStratified, kUniform, kSobol, kHalton, kBlueNoise };
 enum class CompressionMetric { kVertical, kPerpendicular };
 
 struct FrustumOverride {
@@ -61,6 +61,11 @@ struct BakeSettings {
   SamplingPattern sampling = SamplingPattern::kStratified;
   CompressionMetric compression_metric = CompressionMetric::kVertical;
   std::optional<FrustumOverride> frustum;
+  // Adaptive sampling: 0 is off (every tile uses `samples`); > 0 lets a tile stop once its
+  // estimated error is at most this, `samples` being the maximum (docs/algorithms.md).
+  double adaptive_tolerance = 0;
+  int adaptive_min_samples = 16;
+  bool adaptive() const { return adaptive_tolerance > 0; }
 };
 
 struct Scene {

@@ -25,6 +25,7 @@
 #include "absl/strings/str_split.h"
 #include "absl/strings/string_view.h"
 #include "core/assets/mesh_asset.h"
+#include "core/sampling/light_samples.h"
 #include "core/scene/mesh_file.h"
 
 namespace pdsm {
@@ -118,6 +119,7 @@ class SceneBuilder {
   absl::StatusOr<BakeSettings> BuildBake(const pdsm::v1::BakeParams& bake,
                                          LightShape shape) const;
   absl::Status CheckUintRange(absl::string_view field, uint32_t value, int max) const;
+  absl::Status BuildAdaptive(const pdsm::v1::BakeParams& bake, BakeSettings* out) const;
   absl::StatusOr<FrustumOverride> BuildFrustum(const pdsm::v1::Frustum& frustum,
                                                LightShape shape) const;
 
@@ -509,6 +511,9 @@ absl::StatusOr<BakeSettings> SceneBuilder::BuildBake(const pdsm::v1::BakeParams&
     case pdsm::v1::SAMPLING_DEFAULT:
     case pdsm::v1::STRATIFIED: out.sampling = SamplingPattern::kStratified; break;
     case pdsm::v1::UNIFORM: out.sampling = SamplingPattern::kUniform; break;
+    case pdsm::v1::SOBOL: out.sampling = SamplingPattern::kSobol; break;
+    case pdsm::v1::HALTON: out.sampling = SamplingPattern::kHalton; break;
+    case pdsm::v1::BLUE_NOISE: out.sampling = SamplingPattern::kBlueNoise; break;
     default:
       return Error("bake.sampling",
                    absl::StrCat("unknown value (got ", bake.sampling(), ")"));
@@ -526,7 +531,40 @@ absl::StatusOr<BakeSettings> SceneBuilder::BuildBake(const pdsm::v1::BakeParams&
     if (!frustum.ok()) return frustum.status();
     out.frustum = *frustum;
   }
+  if (absl::Status s = BuildAdaptive(bake, &out); !s.ok()) return s;
   return out;
+}
+
+// Adaptive sampling needs a progressive pattern: a tile uses a prefix of the samples.
+absl::Status SceneBuilder::BuildAdaptive(const pdsm::v1::BakeParams& bake,
+                                         BakeSettings* out) const {
+  if (bake.has_adaptive_min_samples()) {
+    if (absl::Status s = CheckUintRange("bake.adaptiveMinSamples", bake.adaptive_min_samples(),
+                                        kMaxSamples);
+        !s.ok()) {
+      return s;
+    }
+    out->adaptive_min_samples = static_cast<int>(bake.adaptive_min_samples());
+  }
+  if (!bake.has_adaptive_tolerance()) return absl::OkStatus();
+  const double tolerance = bake.adaptive_tolerance();
+  if (absl::Status s = CheckFinite("bake.adaptiveTolerance", tolerance); !s.ok()) return s;
+  if (!(tolerance >= 0 && tolerance <= 1)) {
+    return Error("bake.adaptiveTolerance",
+                 absl::StrCat("must be in [0, 1] (got ", FormatDouble(tolerance), ")"));
+  }
+  out->adaptive_tolerance = tolerance;
+  if (!out->adaptive()) return absl::OkStatus();
+  if (bake.sampling() == pdsm::v1::SAMPLING_DEFAULT) {
+    out->sampling = SamplingPattern::kSobol;  // the default pattern of adaptive bakes
+  } else if (!IsProgressive(out->sampling)) {
+    return Error("bake.sampling",
+                 "STRATIFIED cannot be used with bake.adaptiveTolerance: a tile uses the first "
+                 "n samples, so the pattern must be progressive (SOBOL, HALTON, BLUE_NOISE, "
+                 "UNIFORM)");
+  }
+  out->adaptive_min_samples = std::min(out->adaptive_min_samples, out->samples);
+  return absl::OkStatus();
 }
 
 absl::StatusOr<Scene> SceneBuilder::Build(const pdsm::v1::Scene& message) const {

@@ -423,6 +423,46 @@ TEST_F(SceneLoaderTest, LimitsAreInclusive) {
   EXPECT_EQ(scene->bake.samples, kMaxSamples);
 }
 
+TEST_F(SceneLoaderTest, SamplingPatternsAndAdaptiveAreRead) {
+  for (auto [name, pattern] : {std::pair{"SOBOL", SamplingPattern::kSobol},
+                               std::pair{"HALTON", SamplingPattern::kHalton},
+                               std::pair{"BLUE_NOISE", SamplingPattern::kBlueNoise}}) {
+    absl::StatusOr<Scene> scene = Load(SceneJson(
+        kSquare, kRect,
+        absl::StrCat(R"({"samples": 128, "sampling": ")", name,
+                     R"(", "adaptiveTolerance": 0.03, "adaptiveMinSamples": 8})")));
+    ASSERT_TRUE(scene.ok()) << scene.status();
+    EXPECT_EQ(scene->bake.sampling, pattern);
+    EXPECT_TRUE(scene->bake.adaptive());
+    EXPECT_EQ(scene->bake.adaptive_tolerance, 0.03);
+    EXPECT_EQ(scene->bake.adaptive_min_samples, 8);
+  }
+  // Adaptive without a pattern: Sobol; the first batch is capped at the samples.
+  absl::StatusOr<Scene> scene =
+      Load(SceneJson(kSquare, kRect, R"({"samples": 4, "adaptiveTolerance": 0.1})"));
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  EXPECT_EQ(scene->bake.sampling, SamplingPattern::kSobol);
+  EXPECT_EQ(scene->bake.adaptive_min_samples, 4);
+  // Tolerance 0 is "off".
+  scene = Load(SceneJson(kSquare, kRect, R"({"adaptiveTolerance": 0})"));
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  EXPECT_FALSE(scene->bake.adaptive());
+  EXPECT_EQ(scene->bake.sampling, SamplingPattern::kStratified);
+}
+
+TEST_F(SceneLoaderTest, BadAdaptiveSettingsNameTheField) {
+  for (auto [bake, field] :
+       {std::pair{R"({"adaptiveTolerance": -0.1})", "bake.adaptiveTolerance"},
+        std::pair{R"({"adaptiveTolerance": 1.5})", "bake.adaptiveTolerance"},
+        std::pair{R"({"adaptiveMinSamples": 0})", "bake.adaptiveMinSamples"},
+        std::pair{R"({"adaptiveTolerance": 0.1, "sampling": "STRATIFIED"})", "bake.sampling"}}) {
+    absl::StatusOr<Scene> scene = Load(SceneJson(kSquare, kRect, bake));
+    ASSERT_FALSE(scene.ok()) << bake;
+    EXPECT_EQ(scene.status().code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_NE(scene.status().message().find(field), std::string::npos) << scene.status();
+  }
+}
+
 TEST_F(SceneLoaderTest, OverridesReplaceSetFieldsOnly) {
   pdsm::v1::BakeParams overrides;
   overrides.add_resolution(100);
