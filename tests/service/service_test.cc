@@ -52,6 +52,10 @@ TEST(Service, SubmitRefusesBadScenesBeforeSendingAnything) {
                   "\"assetSha256\": \"" + std::string(64, 'a') + "\"");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("meshes[1].assetSha256"), std::string::npos) << r.err;
+
+  r = submit_with("\"epsilon\": 0.01", "\"epsilon\": 0.01, \"adaptiveTolerance\": 0.05");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find(bad + ": bake.adaptiveTolerance"), std::string::npos) << r.err;
 }
 
 TEST(Service, ThreeWorkersMatchTheLocalBakeByteForByte) {
@@ -287,6 +291,16 @@ TEST(Service, BadCallersAndBadJobsGetTheRightStatusAndDisturbNothing) {
   too_big.mutable_bake()->add_resolution(512);
   too_big.mutable_bake()->add_resolution(512);
   EXPECT_EQ(submit(too_big).error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+
+  // Adaptive sampling is local-only for now (docs/algorithms.md, section 9).
+  pdsm::v1::Scene adaptive = too_big;
+  adaptive.mutable_bake()->set_resolution(0, 64);
+  adaptive.mutable_bake()->set_resolution(1, 64);
+  adaptive.mutable_bake()->set_adaptive_tolerance(0.05);
+  status = submit(adaptive);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_NE(status.error_message().find("adaptiveTolerance"), std::string::npos)
+      << status.error_message();
 
   pdsm::v1::Scene oversized = too_big;
   oversized.mutable_bake()->clear_resolution();
