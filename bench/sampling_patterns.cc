@@ -63,8 +63,8 @@ struct Row {
   Errors ground, volume;
 };
 
-absl::StatusOr<Row> BakeOnce(const Options& o, pdsm::v1::BakeParams params,
-                             const PointSet& ground, const PointSet& volume) {
+absl::StatusOr<Row> BakeOnce(const Options& o, pdsm::v1::BakeParams params, const PointSet& ground,
+                             const PointSet& volume) {
   params.add_resolution(o.resolution);
   params.add_resolution(o.resolution);
   params.set_shadow_map_resolution(o.sm);
@@ -110,8 +110,8 @@ absl::StatusOr<Row> BakeSeeds(const Options& o, const pdsm::v1::BakeParams& para
 
 void PrintRow(const char* pattern, const std::string& knob, const Row& r) {
   std::printf("| %s | %s | %.0f | %.0f | %.2f | %.4f | %.4f | %.4f | %.4f |\n", pattern,
-              knob.c_str(), r.samples_per_tile, r.shadow_maps, r.seconds, r.ground.mean, r.ground.p95, r.volume.mean,
-              r.volume.p95);
+              knob.c_str(), r.samples_per_tile, r.shadow_maps, r.seconds, r.ground.mean,
+              r.ground.p95, r.volume.mean, r.volume.p95);
   std::fflush(stdout);
 }
 
@@ -130,22 +130,27 @@ int Run(const Options& o) {
   // The point sets of tests/bake_accuracy_test.cc (plates: ground y = 0, casters 1..4).
   std::vector<glm::dvec3> grid, box;
   for (int i = 0; i < 40; ++i) {
-    for (int j = 0; j < 40; ++j) grid.emplace_back(-6 + 12 * (i + 0.5) / 40, 0.0, -6 + 12 * (j + 0.5) / 40);
+    for (int j = 0; j < 40; ++j)
+      grid.emplace_back(-6 + 12 * (i + 0.5) / 40, 0.0, -6 + 12 * (j + 0.5) / 40);
   }
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  for (int k = 0; k < 1500; ++k) box.emplace_back(-5 + 10 * u(rng), 0.05 + 3.85 * u(rng), -5 + 10 * u(rng));
+  for (int k = 0; k < 1500; ++k)
+    box.emplace_back(-5 + 10 * u(rng), 0.05 + 3.85 * u(rng), -5 + 10 * u(rng));
   absl::StatusOr<PointSet> ground = MakePoints(*scene, grid), volume = MakePoints(*scene, box);
   if (!ground.ok() || !volume.ok()) {
     std::fprintf(stderr, "reference failed\n");
     return 1;
   }
-  std::printf("| pattern | samples (max) / tolerance | samples per tile | shadow maps | seconds | "
-              "ground mean | ground p95 | free-space mean | free-space p95 |\n"
-              "|---|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "| pattern | samples (max) / tolerance | samples per tile | shadow maps | seconds | "
+      "ground mean | ground p95 | free-space mean | free-space p95 |\n"
+      "|---|---|---|---|---|---|---|---|---|\n");
   const std::pair<const char*, pdsm::v1::Sampling> patterns[] = {
-      {"stratified", pdsm::v1::STRATIFIED}, {"uniform", pdsm::v1::UNIFORM},
-      {"sobol", pdsm::v1::SOBOL},           {"halton", pdsm::v1::HALTON},
+      {"stratified", pdsm::v1::STRATIFIED},
+      {"uniform", pdsm::v1::UNIFORM},
+      {"sobol", pdsm::v1::SOBOL},
+      {"halton", pdsm::v1::HALTON},
       {"blue-noise", pdsm::v1::BLUE_NOISE}};
   for (int count : o.counts) {
     for (const auto& [name, sampling] : patterns) {
@@ -165,7 +170,9 @@ int Run(const Options& o) {
     p.set_adaptive_min_samples(16);
     absl::StatusOr<Row> row = BakeSeeds(o, p, *ground, *volume);
     if (!row.ok()) return std::fprintf(stderr, "%s\n", row.status().ToString().c_str()), 1;
-    PrintRow("sobol adaptive", std::to_string(o.counts.back()) + " / " + std::to_string(tolerance).substr(0, 5), *row);
+    PrintRow("sobol adaptive",
+             std::to_string(o.counts.back()) + " / " + std::to_string(tolerance).substr(0, 5),
+             *row);
   }
   return 0;
 }
@@ -211,9 +218,10 @@ int main(int argc, char** argv) {
     }
   }
   if (positional.size() != 2 || o.seeds < 1) {
-    std::fprintf(stderr, "usage: pdsm-bench-sampling SCENE.json OUT_DIR [--seeds N] "
-                         "[--counts 4,16,64,256] [--resolution R] [--sm R] [--tile-size T] "
-                         "[--tolerances ...]\n");
+    std::fprintf(stderr,
+                 "usage: pdsm-bench-sampling SCENE.json OUT_DIR [--seeds N] "
+                 "[--counts 4,16,64,256] [--resolution R] [--sm R] [--tile-size T] "
+                 "[--tolerances ...]\n");
     return 2;
   }
   o.scene_path = positional[0];

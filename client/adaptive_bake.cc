@@ -22,11 +22,11 @@ namespace {
 // One tile's progress through its stages.
 struct TileState {
   int stage = 0;
-  int samples = 0;                          // end of the stage's last range
-  std::vector<SampleRange> ranges;          // the current stage's ranges
+  int samples = 0;                             // end of the stage's last range
+  std::vector<SampleRange> ranges;             // the current stage's ranges
   std::vector<std::vector<TileEvents>> parts;  // per range, the batches returned so far
-  int tasks_left = 0;                       // batches of the current stage not yet returned
-  std::vector<TileEvents> before;           // merged events of all earlier ranges
+  int tasks_left = 0;                          // batches of the current stage not yet returned
+  std::vector<TileEvents> before;              // merged events of all earlier ranges
 };
 
 // A queued batch; ordered by tile first so that few tiles are in flight at once.
@@ -150,7 +150,8 @@ class AdaptiveBake {
     TileState& s = tiles_[tile];
     // Merge each range's batches: exact integer sums, independent of how it was split.
     std::vector<TileEvents> ranges;
-    for (const std::vector<TileEvents>& parts : stage_parts) ranges.push_back(MergeTileEvents(parts));
+    for (const std::vector<TileEvents>& parts : stage_parts)
+      ranges.push_back(MergeTileEvents(parts));
     for (size_t r = 0; r + 1 < ranges.size(); ++r) s.before.push_back(std::move(ranges[r]));
     TileEvents last = std::move(ranges.back());
     const int n2 = s.ranges.back().end - s.ranges.back().begin;
@@ -228,9 +229,8 @@ class AdaptiveBake {
 
 }  // namespace
 
-absl::StatusOr<BakeSummary> RunAdaptiveTiles(const BakePlan& plan,
-                                             const LocalBakeOptions& options, int threads,
-                                             PdsmWriter* writer) {
+absl::StatusOr<BakeSummary> RunAdaptiveTiles(const BakePlan& plan, const LocalBakeOptions& options,
+                                             int threads, PdsmWriter* writer) {
   AdaptiveBake bake(plan, options, writer);
   absl::StatusOr<BakeSummary> summary = bake.Run(threads);
   if (!summary.ok()) return summary;

@@ -14,9 +14,8 @@ namespace pdsm {
 
 // REQUIRES: plan.header.adaptive(). Writes every tile to `writer` (not Finish()) and the
 // preview when options.preview_path is set. `threads` >= 1.
-absl::StatusOr<BakeSummary> RunAdaptiveTiles(const BakePlan& plan,
-                                             const LocalBakeOptions& options, int threads,
-                                             PdsmWriter* writer);
+absl::StatusOr<BakeSummary> RunAdaptiveTiles(const BakePlan& plan, const LocalBakeOptions& options,
+                                             int threads, PdsmWriter* writer);
 
 }  // namespace pdsm
 

@@ -2,13 +2,13 @@
 // examples/plates, tiles outside the penumbrae stop at the first batch while penumbra tiles
 // take more; the result stays within the tolerance's promise against the exact reference
 // and a fixed-count bake; and the file is byte-identical whatever the threads and batches.
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "client/local_bake.h"
 #include "core/bake/adaptive_sampling.h"
@@ -90,8 +90,7 @@ bool HasPenumbra(const PdsmImage& image, int x, int y) {
   const auto f = image.Function(x, y);
   for (size_t k = 0; k < f.size(); ++k) {
     const double a = f[k].a;
-    const double length =
-        k + 1 < f.size() ? static_cast<double>(f[k + 1].z) - f[k].z : INFINITY;
+    const double length = k + 1 < f.size() ? static_cast<double>(f[k + 1].z) - f[k].z : INFINITY;
     if (a > 0.5 / kMaxSamples && a < 1 - 0.5 / kMaxSamples && length >= min_interval) {
       return true;
     }
@@ -174,20 +173,23 @@ std::vector<double> Query(const PdsmImage& image, const std::vector<glm::dvec3>&
 TEST_F(AdaptiveBakeTest, ErrorStaysWithinTheTolerance) {
   std::vector<glm::dvec3> points;
   for (int i = 0; i < 30; ++i) {
-    for (int j = 0; j < 30; ++j) points.emplace_back(-6 + 12 * (i + 0.5) / 30, 0.0, -6 + 12 * (j + 0.5) / 30);
+    for (int j = 0; j < 30; ++j)
+      points.emplace_back(-6 + 12 * (i + 0.5) / 30, 0.0, -6 + 12 * (j + 0.5) / 30);
   }
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  for (int k = 0; k < 600; ++k) points.emplace_back(-5 + 10 * u(rng), 0.05 + 3.85 * u(rng), -5 + 10 * u(rng));
+  for (int k = 0; k < 600; ++k)
+    points.emplace_back(-5 + 10 * u(rng), 0.05 + 3.85 * u(rng), -5 + 10 * u(rng));
   absl::StatusOr<std::vector<double>> exact = ExactAttenuation(*adaptive_scene_, points);
   ASSERT_TRUE(exact.ok()) << exact.status();
   const std::vector<double> adaptive = Query(*adaptive_, points), fixed = Query(*fixed_, points);
   const PointErrors vs_fixed = Errors(adaptive, fixed);
   const PointErrors adaptive_error = Errors(adaptive, *exact), fixed_error = Errors(fixed, *exact);
-  std::printf("adaptive vs fixed: mean %.4f p95 %.4f; vs exact: adaptive mean %.4f p95 %.4f, "
-              "fixed mean %.4f p95 %.4f\n",
-              vs_fixed.mean, vs_fixed.p95, adaptive_error.mean, adaptive_error.p95,
-              fixed_error.mean, fixed_error.p95);
+  std::printf(
+      "adaptive vs fixed: mean %.4f p95 %.4f; vs exact: adaptive mean %.4f p95 %.4f, "
+      "fixed mean %.4f p95 %.4f\n",
+      vs_fixed.mean, vs_fixed.p95, adaptive_error.mean, adaptive_error.p95, fixed_error.mean,
+      fixed_error.p95);
   EXPECT_LT(vs_fixed.p95, kTolerance);
   EXPECT_LT(adaptive_error.mean, fixed_error.mean + kTolerance / 4);
   EXPECT_LT(adaptive_error.p95, fixed_error.p95 + kTolerance);

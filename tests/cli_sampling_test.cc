@@ -1,9 +1,9 @@
 // `pdsm bake --sampling / --adaptive-tolerance / --adaptive-min-samples` and what `pdsm info`
 // says about the result.
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "tests/test_support.h"
 
@@ -16,8 +16,7 @@ using testing::RunCommand;
 using testing::TempDir;
 
 const std::string kPdsm = PDSM_CLI;
-const std::string kSmallBake =
-    " --resolution 32x32 --tile-size 8 --sm-resolution 256 --no-preview";
+const std::string kSmallBake = " --resolution 32x32 --tile-size 8 --sm-resolution 256 --no-preview";
 
 TEST(CliSampling, EveryPatternBakes) {
   TempDir dir;
@@ -57,11 +56,11 @@ TEST(CliSampling, AdaptiveWithStratifiedIsBadInput) {
 TEST(CliSampling, AdaptiveBakeReportsTileSamples) {
   TempDir dir;
   const std::string out = dir.File("a.exr");
-  CommandResult r = RunCommand(kPdsm + " bake " + ExamplePath("plates") + " -o " + out +
-                                   kSmallBake +
-                                   " --samples 64 --adaptive-tolerance 0.05 "
-                                   "--adaptive-min-samples 8",
-                               dir);
+  CommandResult r =
+      RunCommand(kPdsm + " bake " + ExamplePath("plates") + " -o " + out + kSmallBake +
+                     " --samples 64 --adaptive-tolerance 0.05 "
+                     "--adaptive-min-samples 8",
+                 dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("adaptive sampling: tolerance 0.05"), std::string::npos) << r.err;
   r = RunCommand(kPdsm + " info " + out, dir);
@@ -71,8 +70,7 @@ TEST(CliSampling, AdaptiveBakeReportsTileSamples) {
       << r.out;
   r = RunCommand(kPdsm + " info --json " + out, dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("\"adaptiveTolerance\": 0.050000000000000003"), std::string::npos)
-      << r.out;
+  EXPECT_NE(r.out.find("\"adaptiveTolerance\": 0.050000000000000003"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"tileSamples\": {\"min\": 8"), std::string::npos) << r.out;
 }
 

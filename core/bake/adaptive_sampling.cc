@@ -49,8 +49,8 @@ double SplitHalfError(const TileEvents& first, int n1, const TileEvents& second,
                       double min_interval) {
   double worst = 0;
   for (size_t p = 0; p < first.PixelCount(); ++p) {
-    worst = std::max(worst,
-                     SplitHalfPixelError(first.Pixel(p), n1, second.Pixel(p), n2, min_interval));
+    worst =
+        std::max(worst, SplitHalfPixelError(first.Pixel(p), n1, second.Pixel(p), n2, min_interval));
   }
   return worst;
 }

@@ -10,8 +10,8 @@ namespace {
 // The stages cover [0, max) exactly once, in order, each after the pilot doubling the count.
 TEST(AdaptiveStageRangesTest, StagesTileTheSamplesAndDouble) {
   for (auto [min_samples, max_samples] :
-       {std::pair{16, 256}, std::pair{16, 100}, std::pair{1, 1}, std::pair{1, 7},
-        std::pair{5, 5}, std::pair{7, 65536}, std::pair{64, 64}}) {
+       {std::pair{16, 256}, std::pair{16, 100}, std::pair{1, 1}, std::pair{1, 7}, std::pair{5, 5},
+        std::pair{7, 65536}, std::pair{64, 64}}) {
     int next = 0;
     int stage = 0;
     for (;; ++stage) {
@@ -50,8 +50,7 @@ TEST(SplitHalfErrorTest, DisagreementIsWeightedDifference) {
   const auto second = Events({{5.0f, 6}});
   EXPECT_DOUBLE_EQ(SplitHalfPixelError(first, 8, second, 8, 0.0), 0.25);
   // Unequal halves: n1 = 8, n2 = 24, both 50% in shadow -> no difference.
-  EXPECT_DOUBLE_EQ(SplitHalfPixelError(Events({{5.0f, 4}}), 8, Events({{5.0f, 12}}), 24, 0.0),
-                   0.0);
+  EXPECT_DOUBLE_EQ(SplitHalfPixelError(Events({{5.0f, 4}}), 8, Events({{5.0f, 12}}), 24, 0.0), 0.0);
 }
 
 // Events of the two halves at slightly different depths (one surface seen through different

@@ -45,8 +45,8 @@ std::vector<PdsmTile> Tiles(const PdsmHeader& h, const std::vector<int>& samples
   return tiles;
 }
 
-absl::Status Write(const std::string& path, const PdsmHeader& h,
-                   const std::vector<PdsmTile>& tiles, bool reversed) {
+absl::Status Write(const std::string& path, const PdsmHeader& h, const std::vector<PdsmTile>& tiles,
+                   bool reversed) {
   absl::StatusOr<std::unique_ptr<PdsmWriter>> writer = PdsmWriter::Create(path, h);
   if (!writer.ok()) return writer.status();
   for (size_t k = 0; k < tiles.size(); ++k) {

@@ -15,8 +15,10 @@ struct FixedPoint {
 
 // Squared distance on the unit torus, in (2^-32)^2 units; at most 2^63.
 uint64_t TorusDistance2(FixedPoint a, FixedPoint b) {
-  const uint64_t dx = static_cast<uint64_t>(std::abs(static_cast<int64_t>(static_cast<int32_t>(a.x - b.x))));
-  const uint64_t dy = static_cast<uint64_t>(std::abs(static_cast<int64_t>(static_cast<int32_t>(a.y - b.y))));
+  const uint64_t dx =
+      static_cast<uint64_t>(std::abs(static_cast<int64_t>(static_cast<int32_t>(a.x - b.x))));
+  const uint64_t dy =
+      static_cast<uint64_t>(std::abs(static_cast<int64_t>(static_cast<int32_t>(a.y - b.y))));
   return dx * dx + dy * dy;
 }
 
@@ -44,7 +46,8 @@ class PointGrid {
         for (const FixedPoint& q : points) best = std::min(best, TorusDistance2(p, q));
         return best;
       }
-      VisitRing(cx, cy, r, [&](int index) { best = std::min(best, TorusDistance2(p, points[index])); });
+      VisitRing(cx, cy, r,
+                [&](int index) { best = std::min(best, TorusDistance2(p, points[index])); });
       // Cells of ring r + 1 are at least r cell sizes away from any point of cell (cx, cy).
       const uint64_t reach = static_cast<uint64_t>(r) * cell_size;
       if (best != UINT64_MAX && best <= reach * reach) return best;
@@ -55,9 +58,7 @@ class PointGrid {
   int CellX(uint32_t coordinate) const {
     return log2_side_ == 0 ? 0 : static_cast<int>(coordinate >> (32 - log2_side_));
   }
-  size_t CellOf(FixedPoint p) const {
-    return static_cast<size_t>(CellX(p.y)) * side_ + CellX(p.x);
-  }
+  size_t CellOf(FixedPoint p) const { return static_cast<size_t>(CellX(p.y)) * side_ + CellX(p.x); }
 
   template <typename F>
   void VisitRing(int cx, int cy, int r, F&& visit) const {

@@ -10,9 +10,8 @@
 #define PDSM_CORE_SAMPLING_BLUE_NOISE_H_
 
 #include <cstdint>
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 namespace pdsm {
 

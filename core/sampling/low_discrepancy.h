@@ -8,9 +8,8 @@
 #define PDSM_CORE_SAMPLING_LOW_DISCREPANCY_H_
 
 #include <cstdint>
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 namespace pdsm {
 

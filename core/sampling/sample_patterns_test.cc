@@ -76,7 +76,8 @@ TEST(SamplePatternsTest, SobolIsA02Net) {
       for (int j = 0; j <= m; ++j) {
         std::vector<int> hits(n, 0);
         for (const glm::dvec2& p : points) {
-          const int bx = static_cast<int>(p.x * (1 << j)), by = static_cast<int>(p.y * (1 << (m - j)));
+          const int bx = static_cast<int>(p.x * (1 << j)),
+                    by = static_cast<int>(p.y * (1 << (m - j)));
           ++hits[by * (1 << j) + bx];
         }
         ASSERT_EQ(*std::min_element(hits.begin(), hits.end()), 1) << "m " << m << " j " << j;
