@@ -146,7 +146,9 @@ LightSpec RectLight(double half_width, double half_height) {
 
 TEST(GenerateLightSamplesTest, RectSamplesWithinHalfSizesAndCentred) {
   const LightSpec light = RectLight(1.5, 0.25);
-  for (SamplingPattern pattern : {SamplingPattern::kStratified, SamplingPattern::kUniform}) {
+  for (SamplingPattern pattern :
+       {SamplingPattern::kStratified, SamplingPattern::kUniform, SamplingPattern::kSobol,
+        SamplingPattern::kHalton, SamplingPattern::kBlueNoise}) {
     const auto samples = GenerateLightSamples(light, 4096, pattern, 3);
     ASSERT_EQ(samples.size(), 4096u);
     glm::dvec2 sum(0.0);

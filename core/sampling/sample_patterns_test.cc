@@ -42,14 +42,14 @@ TEST(SamplePatternsTest, DeterministicPerSeed) {
   }
 }
 
-// Fixed points: the same bits on every platform and library (integer arithmetic only).
-TEST(SamplePatternsTest, GoldenFirstPoints) {
-  EXPECT_EQ(OwenScrambleBase2(0, 0), OwenScrambleBase2(0, 0));
-  // Owen scrambling is a bijection on each level: distinct inputs stay distinct.
-  std::vector<uint32_t> seen;
-  for (uint32_t x = 0; x < 4096; ++x) seen.push_back(OwenScrambleBase2(x << 20, 7) >> 20);
-  std::sort(seen.begin(), seen.end());
-  EXPECT_EQ(std::unique(seen.begin(), seen.end()), seen.end());
+// Owen scrambling permutes each level of the binary tree: distinct inputs stay distinct.
+TEST(SamplePatternsTest, OwenScrambleIsABijectionPerLevel) {
+  for (uint64_t seed : {0ULL, 7ULL}) {
+    std::vector<uint32_t> seen;
+    for (uint32_t x = 0; x < 4096; ++x) seen.push_back(OwenScrambleBase2(x << 20, seed) >> 20);
+    std::sort(seen.begin(), seen.end());
+    EXPECT_EQ(std::unique(seen.begin(), seen.end()), seen.end()) << "seed " << seed;
+  }
 }
 
 // Progressive: a prefix is the smaller set itself, which adaptive sampling relies on.
@@ -97,6 +97,31 @@ TEST(SamplePatternsTest, HaltonStratifiesBothBases) {
         ++hits[static_cast<int>(p.y * ny) * nx + static_cast<int>(p.x * nx)];
       }
       ASSERT_EQ(*std::min_element(hits.begin(), hits.end()), 1) << a << "," << b;
+    }
+  }
+}
+
+// Mapped onto the disk (and the sun's disk of slopes) equal-area, like stratified: half the
+// samples fall within radius R / sqrt(2), a quarter in each quadrant.
+TEST(SamplePatternsTest, DiskAndSunMappingsAreEqualArea) {
+  for (SamplingPattern pattern : kNewPatterns) {
+    for (LightShape shape : {LightShape::kDisk, LightShape::kSun}) {
+      LightSpec light;
+      light.shape = shape;
+      light.radius = 2.0;
+      light.tan_half_angle = 0.004;
+      const double r = shape == LightShape::kDisk ? 2.0 : 0.004;
+      const auto samples = GenerateLightSamples(light, 4096, pattern, 5);
+      ASSERT_EQ(samples.size(), 4096u);
+      int inner = 0, quadrant = 0;
+      for (const glm::dvec2& p : samples) {
+        ASSERT_LE(glm::length(p), r * (1 + 1e-12));
+        inner += glm::length(p) < r / std::sqrt(2.0);
+        quadrant += p.x > 0 && p.y > 0;
+      }
+      // Independent samples would be within ~1.6% (2 sigma); these patterns are stratified.
+      EXPECT_NEAR(inner / 4096.0, 0.5, 0.01) << static_cast<int>(pattern);
+      EXPECT_NEAR(quadrant / 4096.0, 0.25, 0.01) << static_cast<int>(pattern);
     }
   }
 }
