@@ -111,13 +111,6 @@ int RunSubmit(const SubmitFlags& flags) {
   absl::StatusOr<Scene> local =
       SceneFromProto(*scene, flags.scene_path, /*base_dir=*/"", from_blobs);
   if (!local.ok()) return ReportError(local.status());
-  if (local->bake.adaptive()) {
-    // The service cannot bake it yet (the coordinator says FAILED_PRECONDITION): say so
-    // before uploading anything.
-    return ReportError(absl::InvalidArgumentError(absl::StrCat(
-        flags.scene_path, ": bake.adaptiveTolerance: adaptive sampling is not supported by the "
-        "service yet; bake it locally with `pdsm bake`")));
-  }
 
   absl::StatusOr<ServiceConnection> connection = Connect(flags.service);
   if (!connection.ok()) return ReportError(connection.status());

@@ -11,6 +11,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "core/assets/mesh_asset.h"
+#include "core/bake/adaptive_sampling.h"
 #include "core/bake/plan_fingerprint.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_query.h"
@@ -62,6 +63,12 @@ struct Coordinator::ActiveJob {
   std::string fingerprint;
   // Open tiles: (sample_begin, events) of each accepted batch.
   std::map<int, std::vector<std::pair<int, TileEvents>>> parts;
+  // Adaptive jobs: each open tile's stage and the merged events of its earlier stages.
+  struct AdaptiveTile {
+    int stage = 0;
+    std::vector<TileEvents> before;  // empty or one merged list
+  };
+  std::map<int, AdaptiveTile> adaptive;
   int tiles_done = 0;
   int64_t samples_done = 0;        // samples x tiles covered by accepted results
   int64_t samples_at_resume = 0;   // for the ETA: progress made by this process only
@@ -235,13 +242,6 @@ absl::StatusOr<pdsm::v1::Job> Coordinator::SubmitBake(
   }
   absl::StatusOr<BakePlan> plan = PlanFromScene(request.scene(), "scene", true);
   if (!plan.ok()) return plan.status();
-  if (plan->header.adaptive()) {
-    // The scheduler hands out a tile's batches all at once; adaptive sampling needs it to
-    // issue a tile's next stage only after merging the previous one (docs/service.md).
-    return absl::FailedPreconditionError(
-        "scene.bake.adaptiveTolerance: adaptive sampling is not supported by the service yet; "
-        "bake it locally with `pdsm bake`, or submit without bake.adaptiveTolerance");
-  }
 
   JobRecord record;
   record.job_id = RandomHex(8);
@@ -303,6 +303,9 @@ absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<in
   spec.sequence = record.sequence;
   spec.samples = (*job)->plan.header.samples;
   spec.samples_per_task = std::max(1, options_.samples_per_task);
+  if ((*job)->plan.header.adaptive()) {
+    spec.adaptive_min_samples = std::max(1, (*job)->plan.header.adaptive_min_samples);
+  }
   for (size_t t = 0; t < done.size(); ++t) {
     if (!done[t]) spec.tiles.push_back(static_cast<int>(t));
   }
@@ -376,8 +379,75 @@ absl::StatusOr<pdsm::v1::Job> Coordinator::CancelJob(const std::string& job_id) 
 
 // ---- Tiles and the final file ----------------------------------------------------------
 
+void Coordinator::JudgeStage(std::shared_ptr<ActiveJob> job, int tile_index,
+                             std::vector<std::pair<int, TileEvents>> parts) {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (job->ended) return;
+  }
+  const PdsmHeader& h = job->plan.header;
+  ActiveJob::AdaptiveTile state;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    state = std::move(job->adaptive[tile_index]);
+  }
+  // The same steps as the local bake (client/adaptive_bake.cc): merge each range of the
+  // stage, compare the last range with everything before it.
+  const std::vector<SampleRange> ranges =
+      AdaptiveStageRanges(state.stage, std::max(1, h.adaptive_min_samples), h.samples);
+  std::vector<TileEvents> before = std::move(state.before);
+  TileEvents last;
+  for (size_t r = 0; r < ranges.size(); ++r) {
+    std::vector<TileEvents> range_parts;
+    for (auto& [begin, events] : parts) {
+      if (begin >= ranges[r].begin && begin < ranges[r].end) {
+        range_parts.push_back(std::move(events));
+      }
+    }
+    TileEvents merged = MergeTileEvents(range_parts);
+    if (r + 1 < ranges.size()) {
+      before.push_back(std::move(merged));
+    } else {
+      last = std::move(merged);
+    }
+  }
+  const int n1 = ranges.back().begin, n2 = ranges.back().end - ranges.back().begin;
+  const int samples = ranges.back().end;
+  TileEvents first = MergeTileEvents(before);
+  bool done = samples >= h.samples;
+  if (!done) {
+    const double min_interval =
+        kAdaptiveSurfaceDepthFraction * (h.geometry.z_far - h.geometry.z_near);
+    done = SplitHalfError(first, n1, last, n2, min_interval) <= h.adaptive_tolerance;
+  }
+  if (done) {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      job->adaptive.erase(tile_index);
+      // Progress counts samples out of tiles x maximum: the ones a converged tile skips are
+      // done too, so a finished job reads 1.
+      job->samples_done += h.samples - samples;
+    }
+    std::vector<std::pair<int, TileEvents>> all;
+    all.emplace_back(0, std::move(first));
+    all.emplace_back(n1, std::move(last));
+    return AssembleAndStore(job, tile_index, std::move(all), samples);
+  }
+  std::vector<TileEvents> both;
+  both.push_back(std::move(first));
+  both.push_back(std::move(last));
+  state.before.clear();
+  state.before.push_back(MergeTileEvents(both));
+  ++state.stage;
+  std::lock_guard<std::mutex> lock(mu_);
+  if (job->ended) return;
+  job->adaptive[tile_index] = std::move(state);
+  scheduler_.AddStage(job->record.job_id, tile_index);
+}
+
 void Coordinator::AssembleAndStore(std::shared_ptr<ActiveJob> job, int tile_index,
-                                   std::vector<std::pair<int, TileEvents>> parts) {
+                                   std::vector<std::pair<int, TileEvents>> parts,
+                                   int tile_samples) {
   {
     std::lock_guard<std::mutex> lock(mu_);
     if (job->ended) return;  // cancelled or failed while queued
@@ -389,7 +459,9 @@ void Coordinator::AssembleAndStore(std::shared_ptr<ActiveJob> job, int tile_inde
   events.reserve(parts.size());
   for (auto& [begin, e] : parts) events.push_back(std::move(e));
   AssemblyStats stats;
-  const PdsmTile tile = pdsm::AssembleTile(job->plan.header, events, &stats);
+  const PdsmTile tile =
+      tile_samples > 0 ? pdsm::AssembleTile(job->plan.header, events, tile_samples, &stats)
+                       : pdsm::AssembleTile(job->plan.header, events, &stats);
   events.clear();
 
   const std::string& id = job->record.job_id;
@@ -700,7 +772,11 @@ absl::StatusOr<bool> Coordinator::ReportResult(const std::string& worker_id, uin
   if (!parts.empty()) {
     const int tile = lease->tile_index;
     Post([this, job, tile, p = std::move(parts)]() mutable {
-      AssembleAndStore(job, tile, std::move(p));
+      if (job->plan.header.adaptive()) {
+        JudgeStage(job, tile, std::move(p));
+      } else {
+        AssembleAndStore(job, tile, std::move(p), 0);
+      }
     });
   }
   return true;

@@ -95,8 +95,13 @@ class Coordinator {
   absl::StatusOr<BakePlan> PlanFromScene(const pdsm::v1::Scene& scene, const std::string& label,
                                          bool enforce_limits) const;
   pdsm::v1::Job ToProto(const JobRecord& record) const;
+  // `tile_samples` > 0: an adaptive tile baked with that many samples; 0: a fixed-count one.
   void AssembleAndStore(std::shared_ptr<ActiveJob> job, int tile_index,
-                        std::vector<std::pair<int, TileEvents>> parts);
+                        std::vector<std::pair<int, TileEvents>> parts, int tile_samples);
+  // Adaptive jobs: after a tile's stage, assemble the tile or queue its next stage
+  // (docs/algorithms.md section 9).
+  void JudgeStage(std::shared_ptr<ActiveJob> job, int tile_index,
+                  std::vector<std::pair<int, TileEvents>> parts);
   void FinishJob(std::shared_ptr<ActiveJob> job);
   void EndJob(const std::string& job_id, pdsm::v1::JobState state, const std::string& error);
   void Post(std::function<void()> work);

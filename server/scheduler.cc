@@ -5,6 +5,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
+#include "core/bake/adaptive_sampling.h"
 
 namespace pdsm {
 
@@ -27,14 +28,14 @@ void Scheduler::AddJob(const JobSpec& spec) {
   // Nonsensical sizes become one sample per batch rather than tiles that never complete.
   job.samples = std::max(1, spec.samples);
   job.samples_per_task = std::max(1, spec.samples_per_task);
-  job.batches =
-      static_cast<int>((int64_t{job.samples} + job.samples_per_task - 1) / job.samples_per_task);
+  job.adaptive_min_samples = std::clamp(spec.adaptive_min_samples, 0, job.samples);
   std::set<int> seen;
   for (int tile : spec.tiles) {
     if (seen.insert(tile).second) job.tile_order.push_back(tile);  // a repeat is the same tile
   }
   job.tiles_left = static_cast<int>(job.tile_order.size());
-  job.tasks_left = int64_t{job.tiles_left} * job.batches;
+  // Adaptive jobs: the tasks known so far (every tile's pilot); later stages add theirs.
+  job.tasks_left = int64_t{job.tiles_left} * static_cast<int64_t>(StageBatches(job, 0).size());
   order_.insert(job.key);
 }
 
@@ -77,11 +78,53 @@ bool Scheduler::OpenTile(Job& job) {
   const int position = static_cast<int>(job.next_tile++);
   Tile& tile = job.tiles[job.tile_order[position]];
   tile.position = position;
-  tile.tasks.resize(job.batches);
-  tile.tasks_left = job.batches;
-  for (int batch = 0; batch < job.batches; ++batch) job.pending.insert({position, batch});
+  AddTasks(job, tile, 0);
   ++tiles_open_;
+  return true;
+}
+
+std::vector<std::pair<int, int>> Scheduler::StageBatches(const Job& job, int stage) {
+  std::vector<SampleRange> ranges;
+  if (job.adaptive_min_samples > 0) {
+    ranges = AdaptiveStageRanges(stage, job.adaptive_min_samples, job.samples);
+  } else if (stage == 0) {
+    ranges.push_back({0, job.samples});
+  }
+  std::vector<std::pair<int, int>> batches;
+  for (const SampleRange& r : ranges) {
+    for (int64_t b = r.begin; b < r.end; b += job.samples_per_task) {
+      batches.emplace_back(static_cast<int>(b),
+                           static_cast<int>(std::min<int64_t>(r.end, b + job.samples_per_task)));
+    }
+  }
+  return batches;
+}
+
+void Scheduler::AddTasks(Job& job, Tile& tile, int stage) {
+  tile.stage = stage;
+  tile.tasks_left = 0;
+  for (const auto& [begin, end] : StageBatches(job, stage)) {
+    job.pending.insert({tile.position, static_cast<int>(tile.tasks.size())});
+    Task task;
+    task.sample_begin = begin;
+    task.sample_end = end;
+    tile.tasks.push_back(std::move(task));
+    ++tile.tasks_left;
+  }
   UpdateReady(job);
+}
+
+bool Scheduler::AddStage(const std::string& job_id, int tile_index) {
+  const auto job_it = jobs_.find(job_id);
+  if (job_it == jobs_.end() || job_it->second.adaptive_min_samples == 0) return false;
+  Job& job = job_it->second;
+  const auto tile_it = job.tiles.find(tile_index);
+  if (tile_it == job.tiles.end() || tile_it->second.tasks_left > 0) return false;
+  Tile& tile = tile_it->second;
+  const size_t added = StageBatches(job, tile.stage + 1).size();
+  if (added == 0) return false;
+  AddTasks(job, tile, tile.stage + 1);
+  job.tasks_left += static_cast<int64_t>(added);
   return true;
 }
 
@@ -99,9 +142,9 @@ TaskLease Scheduler::Issue(Job& job, TaskRef task, const std::string& worker_id,
   lease.lease_id = lease_id;
   lease.job_id = job.key.job_id;
   lease.tile_index = job.tile_order[task.first];
-  lease.sample_begin = static_cast<int>(int64_t{task.second} * job.samples_per_task);
-  lease.sample_end = static_cast<int>(
-      std::min<int64_t>(job.samples, int64_t{task.second + 1} * job.samples_per_task));
+  const Task& t = TileOf(job, task).tasks[task.second];
+  lease.sample_begin = t.sample_begin;
+  lease.sample_end = t.sample_end;
   lease.deadline_ms = deadline_ms;
   return lease;
 }
@@ -144,9 +187,8 @@ ResultOutcome Scheduler::Complete(const std::string& worker_id, uint64_t lease_i
   outcome.kind = tile.tasks_left == 0 ? ResultOutcome::kTileComplete : ResultOutcome::kAccepted;
   outcome.job_id = lease.job_id;
   outcome.tile_index = job.tile_order[lease.task.first];
-  outcome.sample_begin = static_cast<int>(int64_t{lease.task.second} * job.samples_per_task);
-  outcome.sample_end = static_cast<int>(
-      std::min<int64_t>(job.samples, int64_t{lease.task.second + 1} * job.samples_per_task));
+  outcome.sample_begin = tile.tasks[lease.task.second].sample_begin;
+  outcome.sample_end = tile.tasks[lease.task.second].sample_end;
   return outcome;
 }
 
@@ -224,9 +266,9 @@ std::optional<TaskLease> Scheduler::FindLease(uint64_t lease_id) const {
   lease.lease_id = lease_id;
   lease.job_id = info.job_id;
   lease.tile_index = job.tile_order[info.task.first];
-  lease.sample_begin = static_cast<int>(int64_t{info.task.second} * job.samples_per_task);
-  lease.sample_end = static_cast<int>(
-      std::min<int64_t>(job.samples, int64_t{info.task.second + 1} * job.samples_per_task));
+  const Task& task = job.tiles.at(lease.tile_index).tasks[info.task.second];
+  lease.sample_begin = task.sample_begin;
+  lease.sample_end = task.sample_end;
   lease.deadline_ms = info.deadline_ms;
   return lease;
 }
@@ -301,8 +343,8 @@ std::optional<JobFailure> Scheduler::CountFailure(Job& job, TaskRef task,
   failures.emplace_back(worker_id, reason);
   if (static_cast<int>(failures.size()) < options_.max_task_failures) return std::nullopt;
 
-  const int64_t begin = int64_t{task.second} * job.samples_per_task;
-  const int64_t end = std::min<int64_t>(job.samples, begin + job.samples_per_task);
+  const int64_t begin = TileOf(job, task).tasks[task.second].sample_begin;
+  const int64_t end = TileOf(job, task).tasks[task.second].sample_end;
   std::string why = absl::StrCat("tile ", job.tile_order[task.first], " samples [", begin, ", ",
                                  end, ") failed on ", failures.size(), " workers:");
   for (const auto& [worker, what] : failures) absl::StrAppend(&why, " ", worker, ": ", what, ";");

@@ -6,7 +6,8 @@
 // A job's work is its tiles x sample batches. Tasks are handed out tile by tile: at most
 // `max_open_tiles` tiles (over all jobs) have work issued but are not yet assembled, which is
 // what bounds the coordinator's memory whatever the job size. Jobs run by priority (higher
-// first), then in submission order.
+// first), then in submission order. Adaptive jobs hand out a tile's work in stages: the next
+// stage's batches are queued only when the service calls AddStage().
 #ifndef PDSM_SERVER_SCHEDULER_H_
 #define PDSM_SERVER_SCHEDULER_H_
 
@@ -39,6 +40,10 @@ struct JobSpec {
   std::vector<int> tiles;       // tiles still to do (a resumed job lists only unfinished ones)
   int samples = 1;              // light samples of the bake
   int samples_per_task = 1;     // batch size; the last batch of a tile may be smaller
+  // Adaptive sampling (core/bake/adaptive_sampling.h): > 0 makes a tile's work come in stages
+  // of these first samples; after each stage completes the service either assembles the tile
+  // or calls AddStage(). 0: one stage holding all `samples`.
+  int adaptive_min_samples = 0;
 };
 
 struct TaskLease {
@@ -105,6 +110,11 @@ class Scheduler {
   // every active worker excluded. Call periodically.
   std::vector<JobFailure> Tick(int64_t now_ms);
 
+  // Adaptive jobs: queues the next stage of a tile whose stage just completed (kTileComplete)
+  // instead of assembling it. Returns false, changing nothing, for an unknown job or tile, a
+  // tile with work outstanding, a fixed-count job, or a tile past its last stage.
+  bool AddStage(const std::string& job_id, int tile_index);
+
   // Frees the tile's slot after the service has stored it.
   // REQUIRES: Complete() returned kTileComplete for it.
   void TileAssembled(const std::string& job_id, int tile_index);
@@ -127,6 +137,7 @@ class Scheduler {
  private:
   // A sample batch of an open tile.
   struct Task {
+    int sample_begin = 0, sample_end = 0;
     bool done = false;
     std::optional<uint64_t> lease_id;  // set while leased
     // (worker, reason) of each failure; the workers are distinct since a task never goes back
@@ -137,6 +148,7 @@ class Scheduler {
   // Job::tile_order, so a job's memory follows its open tiles, not its size.
   struct Tile {
     int position = 0;         // in Job::tile_order
+    int stage = 0;            // adaptive jobs: the stage whose tasks are the last of `tasks`
     std::vector<Task> tasks;  // by batch
     int tasks_left = 0;
   };
@@ -153,7 +165,7 @@ class Scheduler {
     JobKey key;
     int samples = 1;
     int samples_per_task = 1;
-    int batches = 1;              // per tile
+    int adaptive_min_samples = 0;  // 0: fixed-count job
     std::vector<int> tile_order;  // tiles in the order they open
     size_t next_tile = 0;         // next tile of tile_order to open
     std::map<int, Tile> tiles;    // open tiles by tile index
@@ -174,6 +186,9 @@ class Scheduler {
 
   std::optional<TaskLease> TryLease(Job& job, const std::string& worker_id, int64_t now_ms);
   bool OpenTile(Job& job);
+  // The sample ranges of a tile's stage, cut into batches of samples_per_task.
+  static std::vector<std::pair<int, int>> StageBatches(const Job& job, int stage);
+  void AddTasks(Job& job, Tile& tile, int stage);
   TaskLease Issue(Job& job, TaskRef task, const std::string& worker_id, int64_t now_ms);
   Tile& TileOf(Job& job, TaskRef task);
   LeaseMap::iterator FindCurrent(const std::string& worker_id, uint64_t lease_id);

@@ -76,6 +76,54 @@ TEST(SchedulerTest, BatchesCoverSamplesExactlyOnceInTileThenBatchOrder) {
   EXPECT_EQ(got, want);
 }
 
+// Adaptive jobs: a tile's pilot (two halves) goes out first; its next stage only when the
+// service asks for it after the stage completed, and the tile stays open until assembled.
+TEST(SchedulerTest, AdaptiveStagesGoOutOnlyWhenAsked) {
+  Scheduler scheduler(SmallOptions());
+  JobSpec job = MakeJob("a", {3}, /*samples=*/40, /*samples_per_task=*/6);
+  job.adaptive_min_samples = 8;
+  scheduler.AddJob(job);
+  auto drain = [&]() {
+    std::vector<std::tuple<int, int, int>> got;
+    ResultOutcome last;
+    while (std::optional<TaskLease> lease = scheduler.Lease("w", 0)) {
+      got.emplace_back(lease->tile_index, lease->sample_begin, lease->sample_end);
+      last = scheduler.Complete("w", lease->lease_id, 0);
+    }
+    EXPECT_EQ(last.kind, ResultOutcome::kTileComplete);
+    return got;
+  };
+  // Pilot [0, 4) and [4, 8), batches of at most 6 within each range.
+  EXPECT_EQ(drain(), (std::vector<std::tuple<int, int, int>>{{3, 0, 4}, {3, 4, 8}}));
+  EXPECT_FALSE(scheduler.JobComplete("a"));
+  ASSERT_TRUE(scheduler.AddStage("a", 3));
+  EXPECT_EQ(drain(), (std::vector<std::tuple<int, int, int>>{{3, 8, 14}, {3, 14, 16}}));
+  ASSERT_TRUE(scheduler.AddStage("a", 3));
+  EXPECT_EQ(drain(), (std::vector<std::tuple<int, int, int>>{
+                         {3, 16, 22}, {3, 22, 28}, {3, 28, 32}}));
+  ASSERT_TRUE(scheduler.AddStage("a", 3));
+  EXPECT_EQ(drain(), (std::vector<std::tuple<int, int, int>>{{3, 32, 38}, {3, 38, 40}}));
+  EXPECT_FALSE(scheduler.AddStage("a", 3));  // past the last stage
+  scheduler.TileAssembled("a", 3);
+  EXPECT_TRUE(scheduler.JobComplete("a"));
+}
+
+TEST(SchedulerTest, AddStageRefusesFixedJobsAndBusyTiles) {
+  Scheduler scheduler(SmallOptions());
+  scheduler.AddJob(MakeJob("fixed", {0}, 4, 2));
+  const TaskLease lease = MustLease(scheduler, "w", 0);
+  EXPECT_FALSE(scheduler.AddStage("fixed", 0));
+  JobSpec job = MakeJob("a", {0}, 16, 16);
+  job.adaptive_min_samples = 4;
+  scheduler.AddJob(job);
+  scheduler.Complete("w", lease.lease_id, 0);
+  MustLease(scheduler, "w", 0);  // fixed's second batch
+  const TaskLease adaptive = MustLease(scheduler, "w", 0);
+  ASSERT_EQ(adaptive.job_id, "a");
+  EXPECT_FALSE(scheduler.AddStage("a", 0));  // its pilot is still out
+  EXPECT_FALSE(scheduler.AddStage("missing", 0));
+}
+
 TEST(SchedulerTest, PendingTasksOfOpenTilesGoBeforeANewTile) {
   Scheduler scheduler(SmallOptions());
   scheduler.AddJob(MakeJob("j", {0, 1}, /*samples=*/2, /*samples_per_task=*/1));

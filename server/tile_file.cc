@@ -27,6 +27,9 @@ constexpr size_t kHeaderBytes = sizeof(kMagic) + 4 + 4 * 4 + 8 + 8;
 constexpr size_t kChecksumBytes = 8;
 constexpr size_t kOffsetBytes = 8;
 constexpr size_t kVertexBytes = 8;  // float z, float a
+// Version 2 (tiles of adaptive bakes) appends int32 samples after the vertices.
+constexpr uint32_t kFixedSamplesVersion = 1;
+constexpr size_t kSamplesBytes = 4;
 
 // FNV-1a, 64 bits.
 uint64_t Checksum(std::string_view bytes) {
@@ -76,12 +79,15 @@ absl::Status CheckTileForWrite(const PdsmTile& tile, const std::string& path) {
 }
 
 std::string Encode(const PdsmTile& tile) {
+  // Fixed-count tiles keep version 1, byte for byte.
+  const bool adaptive = tile.samples > 0;
   const size_t size = kHeaderBytes + tile.offsets.size() * kOffsetBytes +
-                      tile.vertices.size() * kVertexBytes + kChecksumBytes;
+                      tile.vertices.size() * kVertexBytes + (adaptive ? kSamplesBytes : 0) +
+                      kChecksumBytes;
   std::string bytes(size, '\0');
   ByteWriter out(bytes.data());
   out.Bytes(kMagic, sizeof(kMagic));
-  out.U32(kTileFileVersion);
+  out.U32(adaptive ? kTileFileVersion : kFixedSamplesVersion);
   out.I32(tile.x0);
   out.I32(tile.y0);
   out.I32(tile.width);
@@ -93,6 +99,7 @@ std::string Encode(const PdsmTile& tile) {
     out.F32(v.z);
     out.F32(v.a);
   }
+  if (adaptive) out.I32(tile.samples);
   out.U64(Checksum(std::string_view(bytes).substr(0, size - kChecksumBytes)));
   return bytes;
 }
@@ -181,7 +188,8 @@ absl::StatusOr<PdsmTile> Decode(const std::string& bytes, const std::string& pat
   tile.height = in.I32();
   const uint64_t offset_count = in.U64();
   const uint64_t vertex_count = in.U64();
-  if (version == kTileFileVersion) {
+  const size_t trailer = version == kTileFileVersion ? kSamplesBytes : 0;
+  if (version == kTileFileVersion || version == kFixedSamplesVersion) {
     // Sizes first, for a better message than a checksum mismatch on a truncated file.
     if (tile.x0 < 0 || tile.y0 < 0 || tile.width < 0 || tile.height < 0) {
       return corrupt(absl::StrFormat("negative corner or size (%d, %d) %dx%d", tile.x0, tile.y0,
@@ -194,7 +202,8 @@ absl::StatusOr<PdsmTile> Decode(const std::string& bytes, const std::string& pat
     }
     // Both counts are at most size / 8 before they are multiplied: no overflow.
     if (offset_count > size / kOffsetBytes || vertex_count > size / kVertexBytes ||
-        kHeaderBytes + offset_count * kOffsetBytes + vertex_count * kVertexBytes + kChecksumBytes !=
+        kHeaderBytes + offset_count * kOffsetBytes + vertex_count * kVertexBytes + trailer +
+                kChecksumBytes !=
             size) {
       return corrupt(absl::StrFormat(
           "%d bytes, but its header describes %d offsets and %d vertices (truncated?)", size,
@@ -210,7 +219,9 @@ absl::StatusOr<PdsmTile> Decode(const std::string& bytes, const std::string& pat
         absl::StrFormat("tile file %s: version %d is newer than this build reads (%d)", path,
                         version, kTileFileVersion));
   }
-  if (version != kTileFileVersion) return corrupt(absl::StrCat("invalid version ", version));
+  if (version != kTileFileVersion && version != kFixedSamplesVersion) {
+    return corrupt(absl::StrCat("invalid version ", version));
+  }
 
   tile.offsets.resize(offset_count);
   for (uint64_t& offset : tile.offsets) offset = in.U64();
@@ -228,6 +239,10 @@ absl::StatusOr<PdsmTile> Decode(const std::string& bytes, const std::string& pat
   for (Vertex& v : tile.vertices) {
     v.z = in.F32();
     v.a = in.F32();
+  }
+  if (trailer > 0) {
+    tile.samples = in.I32();
+    if (tile.samples < 1) return corrupt(absl::StrFormat("%d samples", tile.samples));
   }
   return tile;
 }

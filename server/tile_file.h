@@ -9,6 +9,8 @@
 //   uint64   vertex_count   (= the last offset)
 //   uint64   offsets[offset_count]   (start at 0, nondecreasing)
 //   float32  z, a            per vertex, vertex_count times
+//   int32    samples         version 2 only: the tile's light samples (adaptive bakes); a
+//                            tile with samples == 0 (fixed-count bake) is written as version 1
 //   uint64   checksum: FNV-1a 64 of every byte before it
 #ifndef PDSM_SERVER_TILE_FILE_H_
 #define PDSM_SERVER_TILE_FILE_H_
@@ -22,7 +24,7 @@
 
 namespace pdsm {
 
-inline constexpr uint32_t kTileFileVersion = 1;
+inline constexpr uint32_t kTileFileVersion = 2;
 
 // Writes `tile` to `path`, crash-safe: the bytes go to `path + ".tmp"`, are flushed and synced,
 // the file is renamed onto `path` and the folder is synced. So `path` holds either its old

@@ -100,6 +100,30 @@ TEST(TileFileTest, RoundTripIsExact) {
   EXPECT_EQ(ReadBytes(path).size(), 44 + 7 * 8 + 8 * 8 + 8u);
 }
 
+// Tiles of adaptive bakes carry their sample count (version 2); fixed-count tiles keep the
+// version-1 bytes.
+TEST(TileFileTest, AdaptiveTileKeepsItsSampleCount) {
+  TempDir dir;
+  PdsmTile tile = SmallTile();
+  tile.samples = 48;
+  ASSERT_TRUE(WriteTileFile(dir.File("a"), tile).ok());
+  absl::StatusOr<PdsmTile> read = ReadTileFile(dir.File("a"));
+  ASSERT_TRUE(read.ok()) << read.status();
+  ExpectTilesEqual(*read, tile);
+  EXPECT_EQ(read->samples, 48);
+  const std::string bytes = ReadBytes(dir.File("a"));
+  EXPECT_EQ(bytes.size(), 44 + 7 * 8 + 8 * 8 + 4 + 8u);
+  EXPECT_EQ(bytes[8], 2);  // version
+  for (size_t cut = 1; cut < 12; ++cut) {
+    WriteText(dir.File("cut"), bytes.substr(0, bytes.size() - cut));
+    EXPECT_EQ(ReadTileFile(dir.File("cut")).status().code(), absl::StatusCode::kDataLoss);
+  }
+  tile.samples = 0;
+  ASSERT_TRUE(WriteTileFile(dir.File("f"), tile).ok());
+  EXPECT_EQ(ReadBytes(dir.File("f"))[8], 1);
+  EXPECT_EQ(ReadTileFile(dir.File("f"))->samples, 0);
+}
+
 TEST(TileFileTest, RoundTripOfTileWithoutVertices) {
   TempDir dir;
   PdsmTile tile;

@@ -1,5 +1,6 @@
 // The distributed service end to end: real coordinator and worker processes on 127.0.0.1.
 // Every bake is compared byte for byte with `pdsm bake` of the same scene.
+#include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <mutex>
@@ -8,6 +9,7 @@
 #include <grpcpp/generic/generic_stub.h>
 #include <gtest/gtest.h>
 
+#include "core/pdsm/pdsm_file.h"
 #include "tests/service/service_cluster.h"
 
 namespace pdsm::testing {
@@ -52,10 +54,6 @@ TEST(Service, SubmitRefusesBadScenesBeforeSendingAnything) {
                   "\"assetSha256\": \"" + std::string(64, 'a') + "\"");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("meshes[1].assetSha256"), std::string::npos) << r.err;
-
-  r = submit_with("\"epsilon\": 0.01", "\"epsilon\": 0.01, \"adaptiveTolerance\": 0.05");
-  EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find(bad + ": bake.adaptiveTolerance"), std::string::npos) << r.err;
 }
 
 TEST(Service, ThreeWorkersMatchTheLocalBakeByteForByte) {
@@ -98,6 +96,35 @@ TEST(Service, ThreeWorkersMatchTheLocalBakeByteForByte) {
   const std::string again = cluster.Submit(scene, "--idempotency-key retry-1");
   EXPECT_EQ(first, again);
   EXPECT_EQ(cluster.WaitForEnd(first).state(), pdsm::v1::SUCCEEDED);
+}
+
+// Adaptive sampling on the farm: the coordinator issues a tile's next stage only after
+// merging and judging the previous one, and the file equals the local bake's bytes.
+TEST(Service, AdaptiveJobMatchesTheLocalBakeByteForByte) {
+  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "5"}));
+  ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
+  for (int i = 0; i < 2; ++i) cluster.AddWorker();
+  const std::string scene = WriteServiceScene(cluster.dir(), 64, 64, 16);
+  std::string text = ReadBytes(scene);
+  const std::string from = "\"epsilon\": 0.01";
+  text.replace(text.find(from), from.size(),
+               "\"epsilon\": 0.01, \"adaptiveTolerance\": 0.05, \"adaptiveMinSamples\": 8");
+  WriteText(scene, text);
+  const std::string expected = LocalBakeBytes(cluster.dir(), scene);
+  ASSERT_FALSE(expected.empty());
+  absl::StatusOr<PdsmHeader> header = ReadPdsmHeader(cluster.dir().File("local.exr"));
+  ASSERT_TRUE(header.ok()) << header.status();
+  ASSERT_EQ(header->tile_samples.size(), 16u);
+  // Some tiles stop at the pilot, some go further: the stages really are judged.
+  EXPECT_EQ(*std::min_element(header->tile_samples.begin(), header->tile_samples.end()), 8);
+  EXPECT_GT(*std::max_element(header->tile_samples.begin(), header->tile_samples.end()), 8);
+
+  const std::string job_id = cluster.Submit(scene);
+  const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
+  ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error() << cluster.Log("coordinator.log");
+  EXPECT_EQ(job.tiles_done(), 16);
+  EXPECT_DOUBLE_EQ(job.progress(), 1.0);
+  EXPECT_TRUE(FetchBytes(cluster, job_id) == expected) << "fetched PDSM differs from local bake";
 }
 
 TEST(Service, KilledWorkersDoNotChangeTheBytes) {
@@ -291,16 +318,6 @@ TEST(Service, BadCallersAndBadJobsGetTheRightStatusAndDisturbNothing) {
   too_big.mutable_bake()->add_resolution(512);
   too_big.mutable_bake()->add_resolution(512);
   EXPECT_EQ(submit(too_big).error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
-
-  // Adaptive sampling is local-only for now (docs/algorithms.md, section 9).
-  pdsm::v1::Scene adaptive = too_big;
-  adaptive.mutable_bake()->set_resolution(0, 64);
-  adaptive.mutable_bake()->set_resolution(1, 64);
-  adaptive.mutable_bake()->set_adaptive_tolerance(0.05);
-  status = submit(adaptive);
-  EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
-  EXPECT_NE(status.error_message().find("adaptiveTolerance"), std::string::npos)
-      << status.error_message();
 
   pdsm::v1::Scene oversized = too_big;
   oversized.mutable_bake()->clear_resolution();
