@@ -98,18 +98,24 @@ TEST(Service, ThreeWorkersMatchTheLocalBakeByteForByte) {
   EXPECT_EQ(cluster.WaitForEnd(first).state(), pdsm::v1::SUCCEEDED);
 }
 
+// Turns the service scene into an adaptive one; returns its path.
+std::string MakeAdaptive(const std::string& scene, double tolerance, int min_samples) {
+  std::string text = ReadBytes(scene);
+  const std::string from = "\"epsilon\": 0.01";
+  text.replace(text.find(from), from.size(),
+               "\"epsilon\": 0.01, \"adaptiveTolerance\": " + std::to_string(tolerance) +
+                   ", \"adaptiveMinSamples\": " + std::to_string(min_samples));
+  WriteText(scene, text);
+  return scene;
+}
+
 // Adaptive sampling on the farm: the coordinator issues a tile's next stage only after
 // merging and judging the previous one, and the file equals the local bake's bytes.
 TEST(Service, AdaptiveJobMatchesTheLocalBakeByteForByte) {
   ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "5"}));
   ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
   for (int i = 0; i < 2; ++i) cluster.AddWorker();
-  const std::string scene = WriteServiceScene(cluster.dir(), 64, 64, 16);
-  std::string text = ReadBytes(scene);
-  const std::string from = "\"epsilon\": 0.01";
-  text.replace(text.find(from), from.size(),
-               "\"epsilon\": 0.01, \"adaptiveTolerance\": 0.05, \"adaptiveMinSamples\": 8");
-  WriteText(scene, text);
+  const std::string scene = MakeAdaptive(WriteServiceScene(cluster.dir(), 64, 64, 16), 0.05, 8);
   const std::string expected = LocalBakeBytes(cluster.dir(), scene);
   ASSERT_FALSE(expected.empty());
   absl::StatusOr<PdsmHeader> header = ReadPdsmHeader(cluster.dir().File("local.exr"));
@@ -222,6 +228,29 @@ TEST(Service, CoordinatorKilledMidJobResumesWithoutRecomputingFinishedTiles) {
   EXPECT_EQ(job.tile_assemblies(), job.tiles_total());
   EXPECT_TRUE(FetchBytes(cluster, job_id) == expected);
   EXPECT_TRUE(FetchBytes(cluster, done_before) == expected);
+}
+
+// A restarted coordinator reopens an adaptive job's unfinished tiles at their pilot; the
+// decisions come out the same, and so do the bytes.
+TEST(Service, CoordinatorKilledMidAdaptiveJobGivesTheSameBytes) {
+  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "16", "--lease-seconds", "2"}));
+  ASSERT_TRUE(cluster.StartCoordinator());
+  const std::string scene =
+      MakeAdaptive(WriteServiceScene(cluster.dir(), 128, 256, 16, 1024), 0.02, 16);
+  const std::string expected = LocalBakeBytes(cluster.dir(), scene);
+  cluster.AddWorker();
+  const std::string job_id = cluster.Submit(scene);
+  const pdsm::v1::Job partial = cluster.WaitUntil(job_id, seconds(60), [](const auto& j) {
+    return j.tiles_done() >= 8 || Ended(j);
+  });
+  ASSERT_FALSE(Ended(partial)) << "the job ended before the coordinator could be killed";
+  cluster.coordinator().Signal(SIGKILL);
+  cluster.coordinator().Wait(seconds(10));
+  ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
+  const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
+  ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error();
+  EXPECT_EQ(job.tile_assemblies(), job.tiles_total());
+  EXPECT_TRUE(FetchBytes(cluster, job_id) == expected);
 }
 
 TEST(Service, CancelStopsTheJobAndFreesTheWorkers) {
