@@ -12,6 +12,8 @@ void AddOverrideFlags(CLI::App* cmd, OverrideFlags* flags) {
   cmd->add_option("--sm-resolution", flags->sm_resolution, "Shadow-map texels across the window");
   cmd->add_option("--epsilon", flags->epsilon, "Compression tolerance in [0, 1]");
   cmd->add_option("--tile-size", flags->tile_size, "PDSM pixels per tile side");
+  cmd->add_flag("--surfaces-only", flags->surfaces_only,
+                "Keep A(z) only near receiver surfaces (static receivers; elsewhere NaN)");
 }
 
 absl::StatusOr<pdsm::v1::BakeParams> ToBakeParams(const OverrideFlags& flags) {
@@ -48,6 +50,7 @@ absl::StatusOr<pdsm::v1::BakeParams> ToBakeParams(const OverrideFlags& flags) {
   }
   if (!s.ok()) return s;
   if (flags.epsilon) params.set_epsilon(*flags.epsilon);
+  if (flags.surfaces_only) params.set_surfaces_only(true);
   return params;
 }
 

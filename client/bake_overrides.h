@@ -18,6 +18,7 @@ struct OverrideFlags {
   std::string resolution;
   std::optional<int64_t> samples, sm_resolution, tile_size;
   std::optional<double> epsilon;
+  bool surfaces_only = false;  // --surfaces-only
 };
 
 void AddOverrideFlags(CLI::App* command, OverrideFlags* flags);

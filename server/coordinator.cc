@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <filesystem>
+#include <optional>
 #include <random>
 
 #include <spdlog/spdlog.h>
@@ -382,7 +383,12 @@ void Coordinator::AssembleAndStore(std::shared_ptr<ActiveJob> job, int tile_inde
   events.reserve(parts.size());
   for (auto& [begin, e] : parts) events.push_back(std::move(e));
   AssemblyStats stats;
-  const PdsmTile tile = pdsm::AssembleTile(job->plan.header, events, &stats);
+  std::optional<TileWindows> windows;  // surfaces-only bakes: the tile's receiver windows
+  if (job->plan.header.surfaces_only) {
+    windows = ComputeReceiverWindows(job->plan, job->plan.tiles.at(tile_index));
+  }
+  const PdsmTile tile =
+      pdsm::AssembleTile(job->plan.header, events, &stats, windows ? &*windows : nullptr);
   events.clear();
 
   const std::string& id = job->record.job_id;

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <vector>
 
+#include "core/bake/surface_function.h"
 #include "core/events/consolidation.h"
 #include "core/pdsm/compression.h"
 
@@ -16,7 +17,7 @@ void AssemblyStats::Add(const AssemblyStats& o) {
 }
 
 PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts,
-                      AssemblyStats* stats) {
+                      AssemblyStats* stats, const TileWindows* windows) {
   const auto start = std::chrono::steady_clock::now();
   const TileEvents merged = MergeTileEvents(parts);
   PdsmTile tile;
@@ -30,9 +31,15 @@ PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> part
   const double depth_scale = std::max(g.z_far - g.z_near, 1e-30);
   for (size_t p = 0; p < merged.PixelCount(); ++p) {
     const std::vector<Event> events = ConsolidateEvents(merged.Pixel(p));
-    const std::vector<Vertex> function = FunctionFromEvents(events, header.samples);
-    const std::vector<Vertex> compressed =
-        CompressFunction(function, header.epsilon, header.compression_metric, depth_scale);
+    std::vector<Vertex> compressed;
+    if (windows != nullptr) {
+      compressed = SurfaceFunction(events, windows->Pixel(p), header.samples, header.epsilon,
+                                   header.compression_metric, depth_scale);
+    } else {
+      const std::vector<Vertex> function = FunctionFromEvents(events, header.samples);
+      compressed =
+          CompressFunction(function, header.epsilon, header.compression_metric, depth_scale);
+    }
     tile.vertices.insert(tile.vertices.end(), compressed.begin(), compressed.end());
     tile.offsets[p + 1] = tile.vertices.size();
     stats->merged_events += static_cast<int64_t>(merged.Pixel(p).size());

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <span>
 
+#include "core/bake/receiver_windows.h"
 #include "core/events/event.h"
 #include "core/pdsm/pdsm_image.h"
 
@@ -21,9 +22,10 @@ struct AssemblyStats {
 };
 
 // REQUIRES: `parts` are results for the same tile whose batches together cover every sample
-// of the bake exactly once.
+// of the bake exactly once. `windows`: the tile's receiver windows
+// (ComputeReceiverWindows) when header.surfaces_only, else null.
 PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts,
-                      AssemblyStats* stats);
+                      AssemblyStats* stats, const TileWindows* windows = nullptr);
 
 }  // namespace pdsm
 

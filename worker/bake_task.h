@@ -29,11 +29,11 @@ struct TaskStats {
   int64_t shadow_maps = 0;
   int64_t shadow_map_texels = 0;
   int64_t events = 0;             // before merging
+  int64_t texels_walked = 0;      // shadow-map texels visited by scan conversion
+  int64_t tiles_skipped = 0;      // tasks of tiles no caster reaches (no shadow map at all)
+  int64_t ray_segments = 0;       // ray pieces scan-converted (rays x samples, x windows)
   void Add(const TaskStats& o);
 };
-
-// Largest shadow map one task renders for one sample, in texels (1 GiB of float depths).
-inline constexpr int64_t kMaxShadowMapTexels = int64_t{1} << 28;
 
 // Runs tasks of one plan. Owns a renderer (an OSMesa context): one runner per thread.
 class TaskRunner {

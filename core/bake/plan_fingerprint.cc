@@ -40,6 +40,7 @@ void AddHeader(const PdsmHeader& h, Feeder* f) {
   f->Add(h.samples), f->Add(h.shadow_map_resolution), f->Add(h.epsilon);
   f->Add(h.compression_metric), f->Add(h.depth_bias), f->Add(h.slope_bias), f->Add(h.sampling);
   f->Add(h.seed), f->Add(h.tile_size);
+  f->Add(g.z_valid_min), f->Add(h.surfaces_only);
 }
 
 }  // namespace
@@ -54,6 +55,11 @@ std::string PlanFingerprint(const BakePlan& plan) {
   f.Add(plan.tiles_x), f.Add(plan.tiles_y);
   for (const glm::vec3& p : plan.casters.positions) f.Add(p);
   for (uint32_t i : plan.casters.indices) f.Add(i);
+  f.Add(plan.z_scan_floor);
+  if (plan.header.surfaces_only) {  // the receivers place the depth windows
+    for (const glm::vec3& p : plan.receivers.positions) f.Add(p);
+    for (uint32_t i : plan.receivers.indices) f.Add(i);
+  }
   return f.FinalHex();
 }
 

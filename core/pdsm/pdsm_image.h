@@ -32,6 +32,10 @@ struct PdsmHeader {
   SamplingPattern sampling = SamplingPattern::kStratified;
   uint64_t seed = 0;
   int tile_size = 0;       // PDSM pixels per tile side, also the EXR tile size
+  // Surfaces-only bake (docs/algorithms.md): functions hold only depth windows around the
+  // receiver surfaces; elsewhere they evaluate to NaN (attenuation NaN vertices bracket the
+  // windows), or to 0 in pixels that hold no vertex.
+  bool surfaces_only = false;
 };
 
 // One rectangle of pixels with their functions: the unit of writing and of assembling.

@@ -61,6 +61,9 @@ struct BakeSettings {
   SamplingPattern sampling = SamplingPattern::kStratified;
   CompressionMetric compression_metric = CompressionMetric::kVertical;
   std::optional<FrustumOverride> frustum;
+  // Keep each ray's function only near the receiver surfaces it can be queried at
+  // (docs/algorithms.md, "Surfaces only"); free-space queries are then undefined (NaN).
+  bool surfaces_only = false;
 };
 
 struct Scene {
