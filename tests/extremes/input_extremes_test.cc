@@ -1,5 +1,7 @@
 // NaN, infinity and out-of-range numbers anywhere in a scene file are refused with
 // INVALID_ARGUMENT naming the file and the field, and `pdsm bake` exits 2 with that message.
+#include <cctype>
+#include <ostream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -34,6 +36,10 @@ struct BadNumber {
   const char* value;
   const char* field;  // what the message must name
 };
+
+void PrintTo(const BadNumber& bad, std::ostream* os) {
+  *os << bad.placeholder + 1 << " = " << bad.value;
+}
 
 std::string SceneWith(const BadNumber& bad) {
   std::string text = kTemplate;
@@ -72,7 +78,17 @@ TEST_P(ExtremesInput, RefusedNamingTheField) {
       << scene.status();
 }
 
-INSTANTIATE_TEST_SUITE_P(Fields, ExtremesInput, ::testing::ValuesIn(kCases));
+// Test names say which placeholder and which value: "POS_NaN", "SIZE_1e400".
+std::string CaseName(const ::testing::TestParamInfo<BadNumber>& info) {
+  std::string name = std::string(info.param.placeholder + 1) + "_";
+  for (const char* c = info.param.value; *c; ++c) {
+    if (std::isalnum(static_cast<unsigned char>(*c))) name += *c;
+    if (*c == '-') name += "minus";
+  }
+  return name;
+}
+
+INSTANTIATE_TEST_SUITE_P(Fields, ExtremesInput, ::testing::ValuesIn(kCases), CaseName);
 
 // The template itself is valid: the refusals above come from the bad number alone.
 TEST(ExtremesInputTemplate, GoodValuesLoad) {
