@@ -24,6 +24,7 @@ struct Bounds3 {
 struct WindowFit {
   double s_lo = kInf, s_hi = -kInf, t_lo = kInf, t_hi = -kInf;
   double z_near_casters = kInf, z_far_all = -kInf;
+  double z_near_receivers = kInf;
   bool empty() const { return s_lo > s_hi; }
 };
 
@@ -44,8 +45,8 @@ int ClipTriangleNear(const glm::dvec3 tri[3], double z_min, glm::dvec3 out[4]) {
   return n;
 }
 
-void FitTriangle(const glm::dvec3 tri[3], bool casts, Projection projection, double z_min,
-                 WindowFit* fit) {
+void FitTriangle(const glm::dvec3 tri[3], bool casts, bool receives, Projection projection,
+                 double z_min, WindowFit* fit) {
   glm::dvec3 clipped[4];
   const int n = projection == Projection::kPerspective ? ClipTriangleNear(tri, z_min, clipped)
                                                       : 3;
@@ -62,6 +63,7 @@ void FitTriangle(const glm::dvec3 tri[3], bool casts, Projection projection, dou
     fit->t_lo = std::min(fit->t_lo, t);
     fit->t_hi = std::max(fit->t_hi, t);
     if (casts) fit->z_near_casters = std::min(fit->z_near_casters, p.z);
+    if (receives) fit->z_near_receivers = std::min(fit->z_near_receivers, p.z);
     fit->z_far_all = std::max(fit->z_far_all, p.z);
   }
 }
@@ -131,9 +133,12 @@ void FillHeader(const Scene& scene, BakePlan* plan) {
 // The nearest depth perspective rays are scanned from (docs/algorithms.md, "Depth range"):
 // a ray's segment in sample (a, b)'s shadow map spans |a| w / pitch texels from w = 1/z to
 // the far end, so a tile's window is about (X + alpha w)(Y + beta w) texels, X and Y the
-// tile's own extent. The floor is the depth where that reaches the texel budget for the
-// widest sample; nearer points are not resolved. 0 when there is no limit (a point light).
-double ScanFloor(const BakePlan& plan) {
+// tile's own extent. The floor is the deeper of
+//  - the depth where that reaches the texel budget for the widest sample (memory), and
+//  - the depth where one ray crosses kMaxRayTexels texels per axis (time), but never deeper
+//    than half the nearest receiver's depth: the receivers stay resolved.
+// Nearer points are not resolved. 0 when there is no limit (a point light).
+double ScanFloor(const BakePlan& plan, double z_near_receivers) {
   const PdsmGeometry& g = plan.header.geometry;
   if (g.projection != Projection::kPerspective) return 0;
   double a_max = 0, b_max = 0;
@@ -153,7 +158,10 @@ double ScanFloor(const BakePlan& plan) {
   const double l = alpha * y + beta * x;
   if (!(c > 0) || !(l > 0)) return 0;
   const double w = 2 * c / (l + std::sqrt(l * l + 4 * alpha * beta * c));
-  return 1.0 / w;
+  const double memory_floor = 1.0 / w;
+  double time_floor = std::max(alpha, beta) / kMaxRayTexels;
+  if (std::isfinite(z_near_receivers)) time_floor = std::min(time_floor, 0.5 * z_near_receivers);
+  return std::max(memory_floor, time_floor);
 }
 
 // The bounds of the scene's triangles (only receivers when asked) beyond z_min, projected.
@@ -166,7 +174,7 @@ WindowFit FitScene(const Scene& scene, const PdsmGeometry& g, double z_min, bool
                                  g.frame.LightFromWorld(mesh.positions_world[mesh.indices[k + 1]]),
                                  g.frame.LightFromWorld(mesh.positions_world[mesh.indices[k + 2]])};
       if (std::max({tri[0].z, tri[1].z, tri[2].z}) < z_min) continue;  // behind the light
-      FitTriangle(tri, Casts(mesh.role), g.projection, z_min, &fit);
+      FitTriangle(tri, Casts(mesh.role), Receives(mesh.role), g.projection, z_min, &fit);
     }
   }
   return fit;
@@ -250,7 +258,7 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
   plan.samples = GenerateLightSamples(scene.light, scene.bake.samples, scene.bake.sampling,
                                       scene.bake.seed);
   MakeTiles(&plan);
-  plan.z_scan_floor = ScanFloor(plan);
+  plan.z_scan_floor = ScanFloor(plan, fit.z_near_receivers);
   if (!scene.bake.frustum && plan.z_scan_floor > g.z_near) {
     // Casters nearer than the floor (within about 1e-3 of the light plane) would stretch the
     // fitted window towards tan 85 degrees, leaving the receivers a few pixels. Fit it to what
@@ -259,7 +267,7 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
     if (!refit.empty()) {
       SetWindow(refit, &g);
       SetLattice(scene, &plan);
-      plan.z_scan_floor = std::max(plan.z_scan_floor, ScanFloor(plan));
+      plan.z_scan_floor = std::max(plan.z_scan_floor, ScanFloor(plan, fit.z_near_receivers));
     }
   }
   // Casters nearer than the floor still shadow what lies beyond it (they are drawn), but

@@ -58,6 +58,10 @@ inline constexpr int64_t kMaxShadowMapTexels = int64_t{1} << 28;
 // The texel budget the scan floor is chosen for: 2^24 texels (64 MiB, 4096^2) per shadow map,
 // or four times the tile's own extent when that is larger.
 inline constexpr int64_t kShadowMapTexelBudget = int64_t{1} << 24;
+// The texels per axis one ray may cross in one shadow map before the scan floor moves out
+// (unless that would leave receivers unresolved): bounds the scan's time as the budget above
+// bounds memory. Ordinary scenes walk tens of texels per ray.
+inline constexpr double kMaxRayTexels = 512;
 
 // Widest field of view a perspective PDSM is fitted to: |s|, |t| <= tan(85 degrees).
 inline constexpr double kMaxWindowTangent = 11.430052302761343;
