@@ -19,7 +19,9 @@ namespace pdsm {
 
 struct BakeTask {
   int tile_index = 0;
-  int sample_begin = 0;  // [sample_begin, sample_end) of plan.samples
+  // [sample_begin, sample_end) of plan.samples. Empty: a tile no caster reaches, returned
+  // all lit at once (no reach, no shadow map).
+  int sample_begin = 0;
   int sample_end = 0;
 };
 

@@ -36,8 +36,8 @@ struct BakePlan {
   ShadowMapLattice lattice;
   double z_clip_near = 0;           // shadow maps clip geometry nearer than this
   double z_clip_far = 0;            // sun shadow maps clip geometry farther than this
-  // Perspective rays are scanned from no nearer than this (ScanFloor in bake_plan.cc: the
-  // depth where a tile's shadow map reaches kShadowMapTexelBudget); 0 for the sun.
+  // Perspective rays are scanned from no nearer than this (ScanFloor in bake_plan.cc: where a
+  // tile's shadow map reaches kShadowMapTexelBudget, or a ray kMaxRayTexels); 0 for the sun.
   double z_scan_floor = 0;
   std::vector<TileRect> tiles;      // row-major grid of header.tile_size
   int tiles_x = 0, tiles_y = 0;
