@@ -465,6 +465,48 @@ TEST_P(TileReachTest, CasterFarToTheSideIsCulled) {
   EXPECT_GT(right_tiles, 0);
 }
 
+// An occluder 1e-4 under the light: the plan's scan floor keeps every tile's shadow map within
+// the texel budget and every ray within kMaxRayTexels per axis, records the floor as the
+// PDSM's nearest valid depth, and keeps the window on the receivers (not stretched to
+// tan 85 degrees by the occluder's projection).
+TEST(ScanFloor, NearLightOccluderStaysWithinTheBudgets) {
+  Scene scene = MakeScene(LightShape::kRect, 3, 10);
+  TriangleMesh near_light;
+  near_light.role = MeshRole::kCasterOnly;
+  near_light.positions_world = {{-0.5, 10 - 1e-4, -0.5}, {0.5, 10 - 1e-4, -0.5},
+                                {0.0, 10 - 1e-4, 0.5}};
+  near_light.indices = {0, 1, 2};
+  scene.meshes.push_back(near_light);
+  const BakePlan plan = Plan(scene);
+  const PdsmGeometry& g = plan.geometry();
+  EXPECT_LT(g.z_near, 2e-4);
+  ASSERT_GT(plan.z_scan_floor, g.z_near);
+  EXPECT_EQ(g.z_valid_min, plan.z_scan_floor);
+  EXPECT_LT(plan.z_scan_floor, 1.0);  // the ground is at depth 10, the casters at 2 to 8
+  EXPECT_LT(g.s_max - g.s_min, 2.5);  // the 20 x 20 ground at depth 10: about 2 wide
+  const double tile_x = plan.header.tile_size * g.PixelPitchS() / plan.lattice.pitch_s + 2;
+  const double tile_y = plan.header.tile_size * g.PixelPitchT() / plan.lattice.pitch_t + 2;
+  const double budget = std::max(static_cast<double>(kShadowMapTexelBudget), 4 * tile_x * tile_y);
+  int64_t largest = 0;
+  for (const TileRect& tile : plan.tiles) {
+    const TileReach reach = ComputeTileReach(plan, tile);
+    for (const RayBlock& b : reach.blocks) EXPECT_GE(b.z_begin, plan.z_scan_floor);
+    for (const glm::dvec2& sample : plan.samples) {
+      ShadowMapWindow window;
+      for (const RayBlock& b : reach.blocks) {
+        window = UnionWindow(window, ShadowMapWindowFor(plan, b.rect, sample, b.z_begin));
+        const RayInShadowMap ray = RayForSample(plan, g.PixelCenterS(b.rect.x0),
+                                                g.PixelCenterT(b.rect.y0), sample, b.z_begin);
+        EXPECT_LE(std::abs(ray.st_far.x - ray.st_near.x) / plan.lattice.pitch_s,
+                  kMaxRayTexels * (1 + 1e-9));
+      }
+      largest = std::max(largest, int64_t{window.width} * window.height);
+    }
+  }
+  EXPECT_GT(largest, 0);
+  EXPECT_LE(static_cast<double>(largest), budget);
+}
+
 TEST_P(TileReachTest, NoCastersMeansEmptyReach) {
   const BakePlan plan = Plan(MakeScene(GetParam(), 1, 0));
   EXPECT_FALSE(plan.has_casters());
