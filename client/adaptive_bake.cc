@@ -13,6 +13,7 @@
 
 #include "client/preview_image.h"
 #include "core/bake/adaptive_sampling.h"
+#include "core/bake/receiver_windows.h"
 #include "server/tile_assembly.h"
 #include "worker/bake_task.h"
 
@@ -177,7 +178,10 @@ class AdaptiveBake {
   absl::Status WriteTile(TaskRunner& runner, const std::vector<TileEvents>& parts, int samples,
                          AssemblyStats* assembly) {
     const TileRect& rect = plan_.tiles[parts.front().tile_index];
-    const PdsmTile tile = AssembleTile(plan_.header, parts, samples, assembly);
+    std::optional<TileWindows> windows;  // surfaces-only: the tile's receiver windows
+    if (plan_.header.surfaces_only) windows = ComputeReceiverWindows(plan_, rect);
+    const PdsmTile tile =
+        AssembleTile(plan_.header, parts, samples, assembly, windows ? &*windows : nullptr);
     {
       std::lock_guard<std::mutex> lock(mu_);
       if (tile.vertices.empty()) ++summary_.tiles_all_lit;

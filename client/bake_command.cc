@@ -35,7 +35,8 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags, const std::string&
                "baked \"%s\": %dx%d PDSM, %d samples, %d tiles (%d all lit), %lld tasks\n"
                "  time %.2fs; shadow maps %.2f thread-s (%lld maps, %.1f Mtexels), "
                "scan conversion %.2f thread-s, merge+compress %.3f thread-s\n"
-               "  events %lld -> %lld merged -> %lld consolidated -> %lld vertices\n",
+               "  events %lld -> %lld merged -> %lld consolidated -> %lld vertices\n"
+               "  scan: %lld ray segments, %.1f Mtexels walked; %lld tiles skipped (no caster)\n",
                scene.name.c_str(), scene.bake.width, scene.bake.height, scene.bake.samples, s.tiles,
                s.tiles_all_lit, static_cast<long long>(s.tasks), s.seconds,
                s.tasks_stats.shadow_map_seconds, static_cast<long long>(s.tasks_stats.shadow_maps),
@@ -43,7 +44,10 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags, const std::string&
                s.assembly.seconds, static_cast<long long>(s.tasks_stats.events),
                static_cast<long long>(s.assembly.merged_events),
                static_cast<long long>(s.assembly.consolidated_events),
-               static_cast<long long>(s.assembly.vertices));
+               static_cast<long long>(s.assembly.vertices),
+               static_cast<long long>(s.tasks_stats.ray_segments),
+               s.tasks_stats.texels_walked / 1e6,
+               static_cast<long long>(s.tasks_stats.tiles_skipped));
   if (scene.bake.adaptive() && s.tiles > 0) {
     std::fprintf(stderr, "  adaptive sampling: tolerance %g, %.1f samples per tile on average "
                  "(first batch %d, max %d)\n", scene.bake.adaptive_tolerance,

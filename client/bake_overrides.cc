@@ -21,6 +21,8 @@ void AddOverrideFlags(CLI::App* cmd, OverrideFlags* flags) {
                   "at most this; --samples becomes the per-tile maximum (0: off)");
   cmd->add_option("--adaptive-min-samples", flags->adaptive_min_samples,
                   "Adaptive sampling: samples of a tile's first batch");
+  cmd->add_flag("--surfaces-only", flags->surfaces_only,
+                "Keep A(z) only near receiver surfaces (static receivers; elsewhere NaN)");
 }
 
 namespace {
@@ -80,6 +82,7 @@ absl::StatusOr<pdsm::v1::BakeParams> ToBakeParams(const OverrideFlags& flags) {
   if (!s.ok()) return s;
   if (flags.epsilon) params.set_epsilon(*flags.epsilon);
   if (flags.adaptive_tolerance) params.set_adaptive_tolerance(*flags.adaptive_tolerance);
+  if (flags.surfaces_only) params.set_surfaces_only(true);
   return params;
 }
 

@@ -22,6 +22,7 @@ struct OverrideFlags {
   std::string sampling;  // a bake.sampling name, any case, '-' for '_' ("blue-noise")
   std::optional<double> adaptive_tolerance;
   std::optional<int64_t> adaptive_min_samples;
+  bool surfaces_only = false;  // --surfaces-only
 };
 
 void AddOverrideFlags(CLI::App* command, OverrideFlags* flags);

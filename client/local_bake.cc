@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -13,18 +14,25 @@
 #include "client/adaptive_bake.h"
 #include "client/preview_image.h"
 #include "core/bake/bake_plan.h"
+#include "core/bake/receiver_windows.h"
+#include "core/bake/tile_reach.h"
 #include "core/pdsm/pdsm_file.h"
 
 namespace pdsm {
 namespace {
 
 // Tasks are ordered tile by tile, so only the tiles that threads are working on hold partial
-// results: peak memory is bounded by the tiles in flight, not by the PDSM's size.
+// results: peak memory is bounded by the tiles in flight, not by the PDSM's size. A tile no
+// caster can reach gets one task with no sample: it is written all lit without any shadow map.
 std::vector<BakeTask> MakeTasks(const BakePlan& plan, int samples_per_task) {
   const int total = static_cast<int>(plan.samples.size());
   const int batch = samples_per_task > 0 ? samples_per_task : total;
   std::vector<BakeTask> tasks;
   for (const TileRect& tile : plan.tiles) {
+    if (!TileHasCasters(plan, tile)) {
+      tasks.push_back(BakeTask{tile.index, 0, 0});
+      continue;
+    }
     for (int begin = 0; begin < total; begin += batch) {
       tasks.push_back(BakeTask{tile.index, begin, std::min(total, begin + batch)});
     }
@@ -91,6 +99,7 @@ class LocalBake {
   absl::Status RunTask(TaskRunner& runner, const BakeTask& task, TaskStats* stats,
                        AssemblyStats* assembly) {
     absl::StatusOr<TileEvents> events = runner.Run(task, stats);
+    if (events.ok() && task.sample_begin == task.sample_end) ++stats->tiles_skipped;
     if (!events.ok()) return events.status();
     std::vector<TileEvents> parts;
     {
@@ -108,7 +117,9 @@ class LocalBake {
   absl::Status FinishTile(TaskRunner& runner, const std::vector<TileEvents>& parts,
                           AssemblyStats* assembly) {
     const TileRect& rect = plan_.tiles[parts.front().tile_index];
-    const PdsmTile tile = AssembleTile(plan_.header, parts, assembly);
+    std::optional<TileWindows> windows;
+    if (plan_.header.surfaces_only) windows = ComputeReceiverWindows(plan_, rect);
+    const PdsmTile tile = AssembleTile(plan_.header, parts, assembly, windows ? &*windows : nullptr);
     if (tile.vertices.empty()) {
       std::lock_guard<std::mutex> lock(mu_);
       ++summary_.tiles_all_lit;

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <vector>
 
+#include "core/bake/surface_function.h"
 #include "core/events/consolidation.h"
 #include "core/pdsm/compression.h"
 
@@ -16,14 +17,14 @@ void AssemblyStats::Add(const AssemblyStats& o) {
 }
 
 PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts,
-                      AssemblyStats* stats) {
-  PdsmTile tile = AssembleTile(header, parts, header.samples, stats);
+                      AssemblyStats* stats, const TileWindows* windows) {
+  PdsmTile tile = AssembleTile(header, parts, header.samples, stats, windows);
   tile.samples = 0;  // fixed-count bake: the header's count
   return tile;
 }
 
 PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts,
-                      int tile_samples, AssemblyStats* stats) {
+                      int tile_samples, AssemblyStats* stats, const TileWindows* windows) {
   const auto start = std::chrono::steady_clock::now();
   const TileEvents merged = MergeTileEvents(parts);
   PdsmTile tile;
@@ -38,9 +39,15 @@ PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> part
   const double depth_scale = std::max(g.z_far - g.z_near, 1e-30);
   for (size_t p = 0; p < merged.PixelCount(); ++p) {
     const std::vector<Event> events = ConsolidateEvents(merged.Pixel(p));
-    const std::vector<Vertex> function = FunctionFromEvents(events, tile_samples);
-    const std::vector<Vertex> compressed =
-        CompressFunction(function, header.epsilon, header.compression_metric, depth_scale);
+    std::vector<Vertex> compressed;
+    if (windows != nullptr) {
+      compressed = SurfaceFunction(events, windows->Pixel(p), tile_samples, header.epsilon,
+                                   header.compression_metric, depth_scale);
+    } else {
+      const std::vector<Vertex> function = FunctionFromEvents(events, tile_samples);
+      compressed =
+          CompressFunction(function, header.epsilon, header.compression_metric, depth_scale);
+    }
     tile.vertices.insert(tile.vertices.end(), compressed.begin(), compressed.end());
     tile.offsets[p + 1] = tile.vertices.size();
     stats->merged_events += static_cast<int64_t>(merged.Pixel(p).size());

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <span>
 
+#include "core/bake/receiver_windows.h"
 #include "core/events/event.h"
 #include "core/pdsm/pdsm_image.h"
 
@@ -21,14 +22,16 @@ struct AssemblyStats {
 };
 
 // REQUIRES: `parts` are results for the same tile whose batches together cover every sample
-// of the bake exactly once.
+// of the bake exactly once. `windows`: the tile's receiver windows
+// (ComputeReceiverWindows) when header.surfaces_only, else null.
 PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts,
-                      AssemblyStats* stats);
+                      AssemblyStats* stats, const TileWindows* windows = nullptr);
 
 // Adaptive bakes (core/bake/adaptive_sampling.h): `parts` cover the first `tile_samples`
 // samples exactly once, and attenuation is count / tile_samples. Sets PdsmTile::samples.
 PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts,
-                      int tile_samples, AssemblyStats* stats);
+                      int tile_samples, AssemblyStats* stats,
+                      const TileWindows* windows = nullptr);
 
 }  // namespace pdsm
 

@@ -3,13 +3,17 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "absl/strings/str_format.h"
+#include "core/bake/receiver_windows.h"
 #include "core/bake/tile_reach.h"
 #include "worker/scan_convert.h"
 
 namespace pdsm {
 namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -34,6 +38,77 @@ double FootprintScale(const BakePlan& plan) {
   return std::max(1.0, pixel / plan.lattice.pitch_s);
 }
 
+struct BlockScan {
+  TileRect rect;
+  double z_begin, z_end;  // light-space depths; z_end = +infinity: to w = 0
+};
+
+// The blocks of rays to scan, each with its depth range: from the block's z_begin to the
+// ray's natural end, or (surfaces only) to the deepest window of its pixels. A block whose
+// windows all lie nearer than z_begin is all lit where it is defined: not scanned.
+std::vector<BlockScan> ScannedBlocks(const BakePlan& plan, const TileReach& reach,
+                                     const std::optional<TileWindows>& windows) {
+  const PdsmGeometry& g = plan.geometry();
+  const double natural_end = g.projection == Projection::kPerspective ? kInf : g.z_far;
+  std::vector<BlockScan> out;
+  for (const RayBlock& block : reach.blocks) {
+    BlockScan scan{block.rect, block.z_begin, natural_end};
+    if (windows) {
+      double shallowest = kInf, deepest = -kInf;
+      for (int y = block.rect.y0; y < block.rect.y0 + block.rect.height; ++y) {
+        for (int x = block.rect.x0; x < block.rect.x0 + block.rect.width; ++x) {
+          const size_t p = static_cast<size_t>(y - windows->rect.y0) * windows->rect.width +
+                           (x - windows->rect.x0);
+          for (const DepthWindow& w : windows->Pixel(p)) {
+            if (!(w.hi > block.z_begin)) continue;  // lit: nothing shadows it
+            shallowest = std::min(shallowest, w.lo);
+            deepest = std::max(deepest, w.hi);
+          }
+        }
+      }
+      if (!(deepest > block.z_begin)) continue;
+      scan.z_begin = std::max(block.z_begin, shallowest);
+      scan.z_end = std::min(natural_end, deepest);
+      if (!(scan.z_end > scan.z_begin)) continue;
+    }
+    out.push_back(scan);
+  }
+  return out;
+}
+
+// Scan-converts every ray of one block through one sample's shadow map.
+void ScanBlock(const BakePlan& plan, const ShadowMapView& view, const BlockScan& b,
+               const glm::dvec2& sample, const TileWindows* windows, const TileRect& tile,
+               std::vector<std::vector<Event>>* pixel_events, TaskStats* stats) {
+  const PdsmGeometry& g = plan.geometry();
+  int64_t walked = 0, segments = 0;
+  for (int y = b.rect.y0; y < b.rect.y0 + b.rect.height; ++y) {
+    const double t = g.PixelCenterT(y);
+    for (int x = b.rect.x0; x < b.rect.x0 + b.rect.width; ++x) {
+      const double s = g.PixelCenterS(x);
+      const size_t p = static_cast<size_t>(y - tile.y0) * tile.width + (x - tile.x0);
+      std::vector<Event>* events = &(*pixel_events)[p];
+      if (windows == nullptr) {
+        walked += ScanConvertRay(view, RayForSample(plan, s, t, sample, b.z_begin),
+                                 g.projection, events);
+        ++segments;
+        continue;
+      }
+      // Surfaces only: each depth window is one closed piece of the ray.
+      for (const DepthWindow& w : windows->Pixel(p)) {
+        const double lo = std::max(w.lo, b.z_begin);
+        const double hi = std::min(w.hi, b.z_end);
+        if (!(lo < hi)) continue;
+        walked += ScanConvertRay(view, RayForSample(plan, s, t, sample, lo, hi), g.projection,
+                                 events, SegmentEnd::kClose);
+        ++segments;
+      }
+    }
+  }
+  stats->texels_walked += walked;
+  stats->ray_segments += segments;
+}
+
 }  // namespace
 
 void TaskStats::Add(const TaskStats& o) {
@@ -42,6 +117,9 @@ void TaskStats::Add(const TaskStats& o) {
   shadow_maps += o.shadow_maps;
   shadow_map_texels += o.shadow_map_texels;
   events += o.events;
+  texels_walked += o.texels_walked;
+  ray_segments += o.ray_segments;
+  tiles_skipped += o.tiles_skipped;
 }
 
 absl::StatusOr<std::unique_ptr<TaskRunner>> TaskRunner::Create(const BakePlan& plan) {
@@ -69,13 +147,17 @@ absl::StatusOr<TileEvents> TaskRunner::Run(const BakeTask& task, TaskStats* stat
                                            const std::function<bool()>& cancelled) {
   const TileRect& tile = plan_.tiles.at(task.tile_index);
   TileEvents result = EmptyTileEvents(tile);
+  if (task.sample_begin >= task.sample_end) return result;
   const TileReach reach = ComputeTileReach(plan_, tile);
   if (reach.empty()) return result;  // nothing can shadow these rays: all lit, no work
+  std::optional<TileWindows> windows;
+  if (plan_.header.surfaces_only) windows = ComputeReceiverWindows(plan_, tile);
+  const std::vector<BlockScan> blocks = ScannedBlocks(plan_, reach, windows);
+  if (blocks.empty()) return result;
   if (absl::Status s = UploadCasters(reach); !s.ok()) return s;
 
   const PdsmGeometry& g = plan_.geometry();
-  const size_t pixels = result.PixelCount();
-  std::vector<std::vector<Event>> pixel_events(pixels);
+  std::vector<std::vector<Event>> pixel_events(result.PixelCount());
   std::vector<float> depth;
   ShadowMapCamera camera;
   camera.projection = g.projection;
@@ -92,13 +174,17 @@ absl::StatusOr<TileEvents> TaskRunner::Run(const BakeTask& task, TaskStats* stat
     }
     const glm::dvec2& sample = plan_.samples.at(k);
     camera.sample = sample;
-    camera.window = ShadowMapWindowFor(plan_, tile, sample, reach.z_near);
+    // Only the texels the blocks' clipped segments cross.
+    camera.window = ShadowMapWindow{};
+    for (const BlockScan& b : blocks) {
+      camera.window = UnionWindow(
+          camera.window, ShadowMapWindowFor(plan_, b.rect, sample, b.z_begin, b.z_end));
+    }
     const int64_t texels = int64_t{camera.window.width} * camera.window.height;
     if (texels > kMaxShadowMapTexels) {
       return absl::ResourceExhaustedError(absl::StrFormat(
-          "tile %d, sample %d: its shadow map would need %dx%d texels (limit %d); occluders "
-          "very near the light plane spread each ray over many texels: lower "
-          "shadowMapResolution or tileSize",
+          "tile %d, sample %d: its shadow map would need %dx%d texels (limit %d): "
+          "lower shadowMapResolution or tileSize",
           tile.index, k, camera.window.width, camera.window.height, kMaxShadowMapTexels));
     }
     auto render_start = std::chrono::steady_clock::now();
@@ -109,19 +195,15 @@ absl::StatusOr<TileEvents> TaskRunner::Run(const BakeTask& task, TaskStats* stat
 
     auto scan_start = std::chrono::steady_clock::now();
     const ShadowMapView view{depth.data(), plan_.lattice, camera.window};
-    for (int j = 0; j < tile.height; ++j) {
-      const double t = g.PixelCenterT(tile.y0 + j);
-      for (int i = 0; i < tile.width; ++i) {
-        const double s = g.PixelCenterS(tile.x0 + i);
-        const RayInShadowMap ray = RayForSample(plan_, s, t, sample, reach.z_near);
-        ScanConvertRay(view, ray, g.projection, &pixel_events[size_t(j) * tile.width + i]);
-      }
+    for (const BlockScan& b : blocks) {
+      ScanBlock(plan_, view, b, sample, windows ? &*windows : nullptr, tile, &pixel_events,
+                stats);
     }
     stats->scan_seconds += SecondsSince(scan_start);
   }
 
   auto sort_start = std::chrono::steady_clock::now();
-  for (size_t p = 0; p < pixels; ++p) {
+  for (size_t p = 0; p < pixel_events.size(); ++p) {
     stats->events += static_cast<int64_t>(pixel_events[p].size());
     NormalizeEvents(&pixel_events[p]);
     result.events.insert(result.events.end(), pixel_events[p].begin(), pixel_events[p].end());

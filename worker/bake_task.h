@@ -19,7 +19,9 @@ namespace pdsm {
 
 struct BakeTask {
   int tile_index = 0;
-  int sample_begin = 0;  // [sample_begin, sample_end) of plan.samples
+  // [sample_begin, sample_end) of plan.samples. Empty: a tile no caster reaches, returned
+  // all lit at once (no reach, no shadow map).
+  int sample_begin = 0;
   int sample_end = 0;
 };
 
@@ -29,11 +31,11 @@ struct TaskStats {
   int64_t shadow_maps = 0;
   int64_t shadow_map_texels = 0;
   int64_t events = 0;             // before merging
+  int64_t texels_walked = 0;      // shadow-map texels visited by scan conversion
+  int64_t tiles_skipped = 0;      // tasks of tiles no caster reaches (no shadow map at all)
+  int64_t ray_segments = 0;       // ray pieces scan-converted (rays x samples, x windows)
   void Add(const TaskStats& o);
 };
-
-// Largest shadow map one task renders for one sample, in texels (1 GiB of float depths).
-inline constexpr int64_t kMaxShadowMapTexels = int64_t{1} << 28;
 
 // Runs tasks of one plan. Owns a renderer (an OSMesa context): one runner per thread.
 class TaskRunner {

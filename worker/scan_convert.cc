@@ -34,6 +34,13 @@ class EventEmitter {
  public:
   explicit EventEmitter(std::vector<Event>* events) : events_(events) {}
 
+  // Ends a segment that stops short of the ray's end: a shadowed ray leaves at z, so that
+  // another segment of the same ray can start from the lit state.
+  void Close(double z) {
+    if (shadowed_) Emit(z, -1);
+    shadowed_ = false;
+  }
+
   void Piece(double z_in, double z_out, double z_sm) {
     if (z_sm <= z_in) {
       if (!shadowed_) Emit(z_in, +1);
@@ -57,8 +64,8 @@ class EventEmitter {
 
 }  // namespace
 
-void ScanConvertRay(const ShadowMapView& sm, const RayInShadowMap& ray, Projection projection,
-                    std::vector<Event>* events) {
+int64_t ScanConvertRay(const ShadowMapView& sm, const RayInShadowMap& ray, Projection projection,
+                    std::vector<Event>* events, SegmentEnd end) {
   const ShadowMapLattice& lat = sm.lattice;
   const ShadowMapWindow& win = sm.window;
   // Window-relative continuous texel coordinates of the segment's ends.
@@ -81,7 +88,9 @@ void ScanConvertRay(const ShadowMapView& sm, const RayInShadowMap& ray, Projecti
   const DepthAlongRay depth_at(ray, projection);
   EventEmitter emitter(events);
   double z_in = ray.z_near;
+  int64_t walked = 0;
   while (true) {
+    ++walked;
     const double f_out = std::min({next_x, next_y, 1.0});
     const double z_out = depth_at(f_out);
     const double z_sm = sm.depth[static_cast<size_t>(iy) * win.width + ix];
@@ -98,6 +107,8 @@ void ScanConvertRay(const ShadowMapView& sm, const RayInShadowMap& ray, Projecti
     if (ix < 0 || ix >= win.width || iy < 0 || iy >= win.height) break;
     z_in = z_out;
   }
+  if (end == SegmentEnd::kClose) emitter.Close(ray.z_far);
+  return walked;
 }
 
 }  // namespace pdsm

@@ -14,6 +14,7 @@
 #ifndef PDSM_WORKER_SCAN_CONVERT_H_
 #define PDSM_WORKER_SCAN_CONVERT_H_
 
+#include <cstdint>
 #include <vector>
 
 #include "core/bake/shadow_map_lattice.h"
@@ -31,10 +32,19 @@ struct ShadowMapView {
   ShadowMapWindow window;
 };
 
-// Appends the ray's events for this sample, in increasing depth, to `events`.
+// What a segment's end means: kOpen, the ray's state holds on (the ray's natural end);
+// kClose, the segment is one piece of the ray (a surfaces-only depth window): a shadowed ray
+// leaves at ray.z_far, so the next piece starts lit and counts do not pile up.
+enum class SegmentEnd { kOpen, kClose };
+
+// Appends the ray's events for this sample between ray.z_near and ray.z_far, in increasing
+// depth, to `events`. Starting mid-ray is exact from the start on: a texel's state depends
+// only on its own depth (enter at z_near when the first texel is already behind a caster).
 // REQUIRES: the ray's segment lies inside the view's window (ShadowMapWindowFor).
-void ScanConvertRay(const ShadowMapView& shadow_map, const RayInShadowMap& ray,
-                    Projection projection, std::vector<Event>* events);
+// Returns the number of texels walked.
+int64_t ScanConvertRay(const ShadowMapView& shadow_map, const RayInShadowMap& ray,
+                    Projection projection, std::vector<Event>* events,
+                    SegmentEnd end = SegmentEnd::kOpen);
 
 }  // namespace pdsm
 

@@ -113,3 +113,42 @@ TEST(ScanConvert, DiagonalRayVisitsEveryCrossedTexel) {
 
 }  // namespace
 }  // namespace pdsm
+
+namespace pdsm {
+namespace {
+
+// A segment that is one piece of a ray (surfaces-only windows) closes a shadow at its end, so
+// pieces of one ray add up: two pieces give the same attenuation inside them as the whole ray.
+TEST(ScanConvert, ClosedSegmentsAddUpToTheWholeRay) {
+  const std::vector<float> depths = {kEmpty, 1.5f, 1.5f, kEmpty, 3.2f, kEmpty};
+  ShadowMapView view;
+  view.depth = depths.data();
+  view.lattice = ShadowMapLattice{0.0, 0.0, 1.0, 1.0};
+  view.window = ShadowMapWindow{0, 0, 6, 1};
+  // Depth z lies at s = z - 1 along this orthographic ray.
+  auto ray = [](double z0, double z1) {
+    return RayInShadowMap{{z0 - 1.0, 0.5}, {z1 - 1.0, 0.5}, z0, z1};
+  };
+  std::vector<Event> whole, pieces;
+  ScanConvertRay(view, ray(1.0, 7.0), Projection::kOrthographic, &whole);
+  // Pieces [2.5, 3.5] (inside the first shadow, which ends at 4) and [4.5, 6.5].
+  EXPECT_EQ(ScanConvertRay(view, ray(2.5, 3.5), Projection::kOrthographic, &pieces,
+                           SegmentEnd::kClose),
+            2);
+  ScanConvertRay(view, ray(4.5, 6.5), Projection::kOrthographic, &pieces, SegmentEnd::kClose);
+  auto hidden_at = [](const std::vector<Event>& events, double z) {
+    int sum = 0;
+    for (const Event& e : events) sum += e.z <= z ? e.count : 0;
+    return sum;
+  };
+  for (double z : {2.5, 3.0, 3.49, 4.5, 5.0, 5.5, 6.0, 6.49}) {
+    EXPECT_EQ(hidden_at(pieces, z), hidden_at(whole, z)) << "z " << z;
+  }
+  // Each piece ends lit: the counts sum to zero.
+  EXPECT_EQ(hidden_at(pieces, 100.0), 0);
+  EXPECT_EQ(hidden_at(whole, 3.0), 1);
+  EXPECT_EQ(hidden_at(whole, 5.0), 1);  // behind the occluder at 3.2
+}
+
+}  // namespace
+}  // namespace pdsm

@@ -24,6 +24,7 @@ struct Bounds3 {
 struct WindowFit {
   double s_lo = kInf, s_hi = -kInf, t_lo = kInf, t_hi = -kInf;
   double z_near_casters = kInf, z_far_all = -kInf;
+  double z_near_receivers = kInf;
   bool empty() const { return s_lo > s_hi; }
 };
 
@@ -44,8 +45,8 @@ int ClipTriangleNear(const glm::dvec3 tri[3], double z_min, glm::dvec3 out[4]) {
   return n;
 }
 
-void FitTriangle(const glm::dvec3 tri[3], bool casts, Projection projection, double z_min,
-                 WindowFit* fit) {
+void FitTriangle(const glm::dvec3 tri[3], bool casts, bool receives, Projection projection,
+                 double z_min, WindowFit* fit) {
   glm::dvec3 clipped[4];
   const int n = projection == Projection::kPerspective ? ClipTriangleNear(tri, z_min, clipped)
                                                       : 3;
@@ -62,6 +63,7 @@ void FitTriangle(const glm::dvec3 tri[3], bool casts, Projection projection, dou
     fit->t_lo = std::min(fit->t_lo, t);
     fit->t_hi = std::max(fit->t_hi, t);
     if (casts) fit->z_near_casters = std::min(fit->z_near_casters, p.z);
+    if (receives) fit->z_near_receivers = std::min(fit->z_near_receivers, p.z);
     fit->z_far_all = std::max(fit->z_far_all, p.z);
   }
 }
@@ -129,6 +131,76 @@ void FillHeader(const Scene& scene, BakePlan* plan) {
     h.adaptive_min_samples = scene.bake.adaptive_min_samples;
   }
   h.tile_size = scene.bake.tile_size;
+  h.surfaces_only = scene.bake.surfaces_only;
+}
+
+// The nearest depth perspective rays are scanned from (docs/algorithms.md, "Depth range"):
+// a ray's segment in sample (a, b)'s shadow map spans |a| w / pitch texels from w = 1/z to
+// the far end, so a tile's window is about (X + alpha w)(Y + beta w) texels, X and Y the
+// tile's own extent. The floor is the deeper of
+//  - the depth where that reaches the texel budget for the widest sample (memory), and
+//  - the depth where one ray crosses kMaxRayTexels texels per axis (time), but never deeper
+//    than half the nearest receiver's depth: the receivers stay resolved.
+// Nearer points are not resolved. 0 when there is no limit (a point light).
+double ScanFloor(const BakePlan& plan, double z_near_receivers) {
+  const PdsmGeometry& g = plan.header.geometry;
+  if (g.projection != Projection::kPerspective) return 0;
+  double a_max = 0, b_max = 0;
+  for (const glm::dvec2& sample : plan.samples) {
+    a_max = std::max(a_max, std::abs(sample.x));
+    b_max = std::max(b_max, std::abs(sample.y));
+  }
+  const double tile = plan.header.tile_size;
+  const double x = tile * g.PixelPitchS() / plan.lattice.pitch_s + 2;
+  const double y = tile * g.PixelPitchT() / plan.lattice.pitch_t + 2;
+  const double budget = std::min(static_cast<double>(kMaxShadowMapTexels),
+                                 std::max(static_cast<double>(kShadowMapTexelBudget), 4 * x * y));
+  const double alpha = a_max / plan.lattice.pitch_s, beta = b_max / plan.lattice.pitch_t;
+  // Positive root of alpha beta w^2 + (alpha y + beta x) w + x y - budget = 0, in the form
+  // that stays finite when alpha beta = 0.
+  const double c = budget - x * y;
+  const double l = alpha * y + beta * x;
+  if (!(c > 0) || !(l > 0)) return 0;
+  const double w = 2 * c / (l + std::sqrt(l * l + 4 * alpha * beta * c));
+  const double memory_floor = 1.0 / w;
+  double time_floor = std::max(alpha, beta) / kMaxRayTexels;
+  if (std::isfinite(z_near_receivers)) time_floor = std::min(time_floor, 0.5 * z_near_receivers);
+  return std::max(memory_floor, time_floor);
+}
+
+// The bounds of the scene's triangles (only receivers when asked) beyond z_min, projected.
+WindowFit FitScene(const Scene& scene, const PdsmGeometry& g, double z_min, bool receivers_only) {
+  WindowFit fit;
+  for (const TriangleMesh& mesh : scene.meshes) {
+    if (receivers_only && !Receives(mesh.role)) continue;
+    for (size_t k = 0; k + 2 < mesh.indices.size(); k += 3) {
+      const glm::dvec3 tri[3] = {g.frame.LightFromWorld(mesh.positions_world[mesh.indices[k]]),
+                                 g.frame.LightFromWorld(mesh.positions_world[mesh.indices[k + 1]]),
+                                 g.frame.LightFromWorld(mesh.positions_world[mesh.indices[k + 2]])};
+      if (std::max({tri[0].z, tri[1].z, tri[2].z}) < z_min) continue;  // behind the light
+      FitTriangle(tri, Casts(mesh.role), Receives(mesh.role), g.projection, z_min, &fit);
+    }
+  }
+  return fit;
+}
+
+// The window from a fit. A margin of 1e-3 of the window keeps silhouettes on the border
+// inside it.
+void SetWindow(const WindowFit& fit, PdsmGeometry* g) {
+  const double ms = 1e-3 * std::max(fit.s_hi - fit.s_lo, 1e-9);
+  const double mt = 1e-3 * std::max(fit.t_hi - fit.t_lo, 1e-9);
+  g->s_min = fit.s_lo - ms;
+  g->s_max = fit.s_hi + ms;
+  g->t_min = fit.t_lo - mt;
+  g->t_max = fit.t_hi + mt;
+}
+
+// The global shadow-map lattice: square texels, shadowMapResolution across the window.
+void SetLattice(const Scene& scene, BakePlan* plan) {
+  const PdsmGeometry& g = plan->header.geometry;
+  const double texel_pitch = std::max(g.s_max - g.s_min, g.t_max - g.t_min) /
+                             scene.bake.shadow_map_resolution;
+  plan->lattice = ShadowMapLattice{g.s_min, g.t_min, texel_pitch, texel_pitch};
 }
 
 }  // namespace
@@ -153,16 +225,7 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
   const double scene_size =
       world_bounds.empty() ? 1.0 : std::max(glm::length(world_bounds.hi - world_bounds.lo), 1e-30);
   const double z_min_fit = 1e-6 * scene_size;
-  WindowFit fit;
-  for (const TriangleMesh& mesh : scene.meshes) {
-    for (size_t k = 0; k + 2 < mesh.indices.size(); k += 3) {
-      const glm::dvec3 tri[3] = {g.frame.LightFromWorld(mesh.positions_world[mesh.indices[k]]),
-                                 g.frame.LightFromWorld(mesh.positions_world[mesh.indices[k + 1]]),
-                                 g.frame.LightFromWorld(mesh.positions_world[mesh.indices[k + 2]])};
-      if (std::max({tri[0].z, tri[1].z, tri[2].z}) < z_min_fit) continue;  // behind the light
-      FitTriangle(tri, Casts(mesh.role), g.projection, z_min_fit, &fit);
-    }
-  }
+  const WindowFit fit = FitScene(scene, g, z_min_fit, /*receivers_only=*/false);
 
   if (scene.bake.frustum) {
     const FrustumOverride& f = *scene.bake.frustum;
@@ -183,13 +246,7 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
     g.z_near = 1;
     g.z_far = 2;
   } else {
-    // A margin of 1e-3 of the window keeps silhouettes on the border inside it.
-    const double ms = 1e-3 * std::max(fit.s_hi - fit.s_lo, 1e-9);
-    const double mt = 1e-3 * std::max(fit.t_hi - fit.t_lo, 1e-9);
-    g.s_min = fit.s_lo - ms;
-    g.s_max = fit.s_hi + ms;
-    g.t_min = fit.t_lo - mt;
-    g.t_max = fit.t_hi + mt;
+    SetWindow(fit, &g);
     g.z_far = fit.z_far_all;
     g.z_near = std::isfinite(fit.z_near_casters) ? fit.z_near_casters : fit.z_far_all;
   }
@@ -201,12 +258,25 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
                          : g.z_near - 1e-6 * std::max(std::abs(g.z_far - g.z_near), 1e-9);
   plan.z_clip_far = g.z_far + 1e-3 * std::max(g.z_far - g.z_near, 1e-9);
 
-  const double texel_pitch = std::max(g.s_max - g.s_min, g.t_max - g.t_min) /
-                             scene.bake.shadow_map_resolution;
-  plan.lattice = ShadowMapLattice{g.s_min, g.t_min, texel_pitch, texel_pitch};
+  SetLattice(scene, &plan);
   plan.samples = GenerateLightSamples(scene.light, scene.bake.samples, scene.bake.sampling,
                                       scene.bake.seed);
   MakeTiles(&plan);
+  plan.z_scan_floor = ScanFloor(plan, fit.z_near_receivers);
+  if (!scene.bake.frustum && plan.z_scan_floor > g.z_near) {
+    // Casters nearer than the floor (within about 1e-3 of the light plane) would stretch the
+    // fitted window towards tan 85 degrees, leaving the receivers a few pixels. Fit it to what
+    // lies beyond the floor: the receivers (their whole extent) when there are any.
+    const WindowFit refit = FitScene(scene, g, plan.z_scan_floor, /*receivers_only=*/true);
+    if (!refit.empty()) {
+      SetWindow(refit, &g);
+      SetLattice(scene, &plan);
+      plan.z_scan_floor = std::max(plan.z_scan_floor, ScanFloor(plan, fit.z_near_receivers));
+    }
+  }
+  // Casters nearer than the floor still shadow what lies beyond it (they are drawn), but
+  // points nearer than it are outside what the PDSM resolves: queries there are NaN.
+  if (plan.z_scan_floor > g.z_near) g.z_valid_min = plan.z_scan_floor;
   for (const TriangleMesh& mesh : scene.meshes) {
     if (Casts(mesh.role)) AppendMesh(mesh, g.frame, &plan.casters);
     if (Receives(mesh.role)) AppendMesh(mesh, g.frame, &plan.receivers);

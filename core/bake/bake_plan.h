@@ -36,6 +36,9 @@ struct BakePlan {
   ShadowMapLattice lattice;
   double z_clip_near = 0;           // shadow maps clip geometry nearer than this
   double z_clip_far = 0;            // sun shadow maps clip geometry farther than this
+  // Perspective rays are scanned from no nearer than this (ScanFloor in bake_plan.cc: where a
+  // tile's shadow map reaches kShadowMapTexelBudget, or a ray kMaxRayTexels); 0 for the sun.
+  double z_scan_floor = 0;
   std::vector<TileRect> tiles;      // row-major grid of header.tile_size
   int tiles_x = 0, tiles_y = 0;
   LightSpaceMesh casters;
@@ -49,6 +52,16 @@ struct BakePlan {
 // 6e-8 relative, the rasterizer's interpolation adds a few ulps; 1e-5 of the farthest depth
 // covers both with margin. The slope-scaled part is added per texel by the renderer.
 double DefaultDepthBias(double z_far);
+
+// Largest shadow map one task renders for one sample, in texels (1 GiB of float depths).
+inline constexpr int64_t kMaxShadowMapTexels = int64_t{1} << 28;
+// The texel budget the scan floor is chosen for: 2^24 texels (64 MiB, 4096^2) per shadow map,
+// or four times the tile's own extent when that is larger.
+inline constexpr int64_t kShadowMapTexelBudget = int64_t{1} << 24;
+// The texels per axis one ray may cross in one shadow map before the scan floor moves out
+// (unless that would leave receivers unresolved): bounds the scan's time as the budget above
+// bounds memory. Ordinary scenes walk tens of texels per ray.
+inline constexpr double kMaxRayTexels = 512;
 
 // Widest field of view a perspective PDSM is fitted to: |s|, |t| <= tan(85 degrees).
 inline constexpr double kMaxWindowTangent = 11.430052302761343;

@@ -42,6 +42,7 @@ void AddHeader(const PdsmHeader& h, Feeder* f) {
   f->Add(h.seed), f->Add(h.tile_size);
   // Only adaptive bakes feed these, so fixed-count plans keep their fingerprints.
   if (h.adaptive()) f->Add(h.adaptive_tolerance), f->Add(h.adaptive_min_samples);
+  f->Add(g.z_valid_min), f->Add(h.surfaces_only);
 }
 
 }  // namespace
@@ -56,6 +57,11 @@ std::string PlanFingerprint(const BakePlan& plan) {
   f.Add(plan.tiles_x), f.Add(plan.tiles_y);
   for (const glm::vec3& p : plan.casters.positions) f.Add(p);
   for (uint32_t i : plan.casters.indices) f.Add(i);
+  f.Add(plan.z_scan_floor);
+  if (plan.header.surfaces_only) {  // the receivers place the depth windows
+    for (const glm::vec3& p : plan.receivers.positions) f.Add(p);
+    for (uint32_t i : plan.receivers.indices) f.Add(i);
+  }
   return f.FinalHex();
 }
 

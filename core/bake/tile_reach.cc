@@ -9,7 +9,7 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Extent of the tile's ray origins: its pixel centres in window coordinates.
+// Extent of a rectangle's ray origins: its pixel centres in window coordinates.
 struct TileSpan {
   double s_lo, s_hi, t_lo, t_hi;
 };
@@ -17,6 +17,21 @@ struct TileSpan {
 TileSpan SpanOf(const PdsmGeometry& g, const TileRect& tile) {
   return {g.PixelCenterS(tile.x0), g.PixelCenterS(tile.x0 + tile.width - 1),
           g.PixelCenterT(tile.y0), g.PixelCenterT(tile.y0 + tile.height - 1)};
+}
+
+// The samples' extent on each axis, widened to hold 0: the bounds below use min(0, a) and
+// max(0, a) over the samples.
+struct SampleExtent {
+  glm::dvec2 neg, pos;
+};
+
+SampleExtent ExtentOf(const BakePlan& plan) {
+  glm::dvec2 lo(kInf), hi(-kInf);
+  for (const glm::dvec2& sample : plan.samples) {
+    lo = glm::min(lo, sample);
+    hi = glm::max(hi, sample);
+  }
+  return {glm::min(lo, glm::dvec2(0.0)), glm::max(hi, glm::dvec2(0.0))};
 }
 
 // A linear function f(p) = dot(coef, p) + constant of light-space points; the region that can
@@ -31,13 +46,8 @@ struct HalfSpace {
 // perspective: a point P shadows ray q from sample (a, b) iff P = S + l (Q - S), which gives
 // x_P - s_q z_P = a (1 - l) in [min(0, a), max(0, a)]; sun: x_P - s_q = -a (z_q - z_P).
 std::vector<HalfSpace> ShadowingRegion(const BakePlan& plan, const TileSpan& span) {
-  glm::dvec2 lo(kInf), hi(-kInf);
-  for (const glm::dvec2& sample : plan.samples) {
-    lo = glm::min(lo, sample);
-    hi = glm::max(hi, sample);
-  }
-  const glm::dvec2 neg = glm::min(lo, glm::dvec2(0.0));
-  const glm::dvec2 pos = glm::max(hi, glm::dvec2(0.0));
+  const SampleExtent e = ExtentOf(plan);
+  const glm::dvec2 neg = e.neg, pos = e.pos;
   const double slack = 1e-9 * (1.0 + std::max(std::abs(span.s_hi), std::abs(span.t_hi)));
   const PdsmGeometry& g = plan.geometry();
   std::vector<HalfSpace> region;
@@ -58,11 +68,61 @@ std::vector<HalfSpace> ShadowingRegion(const BakePlan& plan, const TileSpan& spa
   return region;
 }
 
+// The nearest depth at which a point of `tri` can shadow a ray of `span` (docs/algorithms.md).
+// With g_hi = x_P - s_hi z_P > 0, a perspective shadow needs a (1 - l) >= g_hi, so
+// l <= 1 - g_hi / max(a) and z_Q = z_P / l >= z_P / (1 - g_hi / max(a)); the sun needs
+// z_Q - z_P >= g_hi / max(-a). Each g is linear, so its minimum over the triangle is at a
+// vertex; the largest of the four bounds holds. +infinity: the triangle cannot shadow.
+double NearestShadowedDepth(const BakePlan& plan, const SampleExtent& e, const TileSpan& span,
+                            const glm::dvec3 tri[3]) {
+  const bool sun = plan.geometry().projection == Projection::kOrthographic;
+  double g_min[4] = {kInf, kInf, kInf, kInf};
+  double z_min = kInf;
+  for (int k = 0; k < 3; ++k) {
+    const glm::dvec3& p = tri[k];
+    const double zs = sun ? 1.0 : p.z;  // perspective measures offsets at the point's depth
+    g_min[0] = std::min(g_min[0], p.x - span.s_hi * zs);
+    g_min[1] = std::min(g_min[1], span.s_lo * zs - p.x);
+    g_min[2] = std::min(g_min[2], p.y - span.t_hi * zs);
+    g_min[3] = std::min(g_min[3], span.t_lo * zs - p.y);
+    z_min = std::min(z_min, p.z);
+  }
+  // The sample reach that offsets each side: x beyond s_hi needs a > 0 (perspective) or
+  // a < 0 (sun), and so on.
+  const double reach[4] = {sun ? -e.neg.x : e.pos.x, sun ? e.pos.x : -e.neg.x,
+                           sun ? -e.neg.y : e.pos.y, sun ? e.pos.y : -e.neg.y};
+  double f = 0;
+  for (int k = 0; k < 4; ++k) {
+    if (g_min[k] <= 0) continue;
+    if (!(reach[k] > 0)) return kInf;
+    f = std::max(f, g_min[k] / reach[k]);
+  }
+  // Only the part at z >= z_clip_near is drawn into shadow maps.
+  z_min = std::max(z_min, plan.z_clip_near);
+  if (sun) return z_min + f;
+  if (f >= 1.0) return kInf;
+  return z_min / (1.0 - f);
+}
+
+// The tile cut into blocks of kRayBlockSize pixels, row-major.
+std::vector<TileRect> BlocksOf(const TileRect& tile) {
+  std::vector<TileRect> blocks;
+  for (int y = tile.y0; y < tile.y0 + tile.height; y += kRayBlockSize) {
+    for (int x = tile.x0; x < tile.x0 + tile.width; x += kRayBlockSize) {
+      TileRect block;
+      block.x0 = x;
+      block.y0 = y;
+      block.width = std::min(kRayBlockSize, tile.x0 + tile.width - x);
+      block.height = std::min(kRayBlockSize, tile.y0 + tile.height - y);
+      blocks.push_back(block);
+    }
+  }
+  return blocks;
+}
+
 }  // namespace
 
-TileReach ComputeTileReach(const BakePlan& plan, const TileRect& tile) {
-  TileReach reach;
-  reach.z_near = kInf;
+bool TileHasCasters(const BakePlan& plan, const TileRect& tile) {
   const std::vector<HalfSpace> region = ShadowingRegion(plan, SpanOf(plan.geometry(), tile));
   const LightSpaceMesh& mesh = plan.casters;
   for (size_t k = 0; k < mesh.TriangleCount(); ++k) {
@@ -72,37 +132,79 @@ TileReach ComputeTileReach(const BakePlan& plan, const TileRect& tile) {
     const bool outside = std::any_of(region.begin(), region.end(), [&](const HalfSpace& h) {
       return h(p[0]) > 0 && h(p[1]) > 0 && h(p[2]) > 0;
     });
+    if (!outside) return true;
+  }
+  return false;
+}
+
+TileReach ComputeTileReach(const BakePlan& plan, const TileRect& tile) {
+  TileReach reach;
+  reach.z_near = kInf;
+  const PdsmGeometry& g = plan.geometry();
+  const std::vector<HalfSpace> region = ShadowingRegion(plan, SpanOf(g, tile));
+  const LightSpaceMesh& mesh = plan.casters;
+  std::vector<glm::dvec3> kept;  // 3 vertices per kept triangle
+  for (size_t k = 0; k < mesh.TriangleCount(); ++k) {
+    const glm::dvec3 p[3] = {glm::dvec3(mesh.positions[mesh.indices[3 * k]]),
+                             glm::dvec3(mesh.positions[mesh.indices[3 * k + 1]]),
+                             glm::dvec3(mesh.positions[mesh.indices[3 * k + 2]])};
+    const bool outside = std::any_of(region.begin(), region.end(), [&](const HalfSpace& h) {
+      return h(p[0]) > 0 && h(p[1]) > 0 && h(p[2]) > 0;
+    });
     if (outside) continue;
     reach.triangles.push_back(static_cast<uint32_t>(k));
-    reach.z_near = std::min({reach.z_near, p[0].z, p[1].z, p[2].z});
+    kept.insert(kept.end(), p, p + 3);
   }
-  reach.z_near = std::max(reach.z_near, plan.z_clip_near);
+  if (reach.triangles.empty()) return reach;
+
+  // Per block of rays: the nearest depth any kept triangle can shadow them from. The block's
+  // span is widened by one shadow-map texel: a texel holds the depth seen at its centre, up to
+  // half a texel from where the ray crosses it.
+  const SampleExtent extent = ExtentOf(plan);
+  const double z_last = g.projection == Projection::kOrthographic ? plan.z_clip_far : kInf;
+  for (const TileRect& block : BlocksOf(tile)) {
+    TileSpan span = SpanOf(g, block);
+    span.s_lo -= plan.lattice.pitch_s;
+    span.s_hi += plan.lattice.pitch_s;
+    span.t_lo -= plan.lattice.pitch_t;
+    span.t_hi += plan.lattice.pitch_t;
+    double z_begin = kInf;
+    for (size_t k = 0; k < kept.size(); k += 3) {
+      z_begin = std::min(z_begin, NearestShadowedDepth(plan, extent, span, &kept[k]));
+    }
+    // No caster can shadow these rays (before the sun's rays end): all lit.
+    if (std::isinf(z_begin) || z_begin > z_last) continue;
+    z_begin = std::max({z_begin, plan.z_clip_near, plan.z_scan_floor});
+    reach.blocks.push_back(RayBlock{block, z_begin});
+    reach.z_near = std::min(reach.z_near, z_begin);
+  }
   return reach;
 }
 
 RayInShadowMap RayForSample(const BakePlan& plan, double s, double t, const glm::dvec2& sample,
-                            double z_near) {
+                            double z_near, double z_far) {
   const PdsmGeometry& g = plan.geometry();
   RayInShadowMap ray;
   ray.z_near = z_near;
   if (g.projection == Projection::kPerspective) {
+    ray.z_far = z_far > 0 ? std::max(z_far, z_near) : kInf;
     const double w_max = 1.0 / z_near;
+    const double w_min = std::isinf(ray.z_far) ? 0.0 : 1.0 / ray.z_far;
     ray.st_near = {s - sample.x * w_max, t - sample.y * w_max};
-    ray.st_far = {s, t};
-    ray.z_far = kInf;
+    ray.st_far = {s - sample.x * w_min, t - sample.y * w_min};
   } else {
-    ray.z_far = std::max(g.z_far, z_near);
+    ray.z_far = std::max(z_far > 0 ? z_far : g.z_far, z_near);
     ray.st_near = {s - sample.x * z_near, t - sample.y * z_near};
     ray.st_far = {s - sample.x * ray.z_far, t - sample.y * ray.z_far};
   }
   return ray;
 }
 
-ShadowMapWindow ShadowMapWindowFor(const BakePlan& plan, const TileRect& tile,
-                                   const glm::dvec2& sample, double z_near) {
-  const TileSpan span = SpanOf(plan.geometry(), tile);
-  const RayInShadowMap lo = RayForSample(plan, span.s_lo, span.t_lo, sample, z_near);
-  const RayInShadowMap hi = RayForSample(plan, span.s_hi, span.t_hi, sample, z_near);
+ShadowMapWindow ShadowMapWindowFor(const BakePlan& plan, const TileRect& rect,
+                                   const glm::dvec2& sample, double z_near, double z_far) {
+  const TileSpan span = SpanOf(plan.geometry(), rect);
+  const RayInShadowMap lo = RayForSample(plan, span.s_lo, span.t_lo, sample, z_near, z_far);
+  const RayInShadowMap hi = RayForSample(plan, span.s_hi, span.t_hi, sample, z_near, z_far);
   const double s_lo = std::min(lo.st_near.x, lo.st_far.x);
   const double t_lo = std::min(lo.st_near.y, lo.st_far.y);
   const double s_hi = std::max(hi.st_near.x, hi.st_far.x);
@@ -113,6 +215,17 @@ ShadowMapWindow ShadowMapWindowFor(const BakePlan& plan, const TileRect& tile,
   window.width = static_cast<int>(plan.lattice.TexelS(s_hi) - window.x0 + 1);
   window.height = static_cast<int>(plan.lattice.TexelT(t_hi) - window.y0 + 1);
   return window;
+}
+
+ShadowMapWindow UnionWindow(const ShadowMapWindow& a, const ShadowMapWindow& b) {
+  if (a.width <= 0 || a.height <= 0) return b;
+  if (b.width <= 0 || b.height <= 0) return a;
+  ShadowMapWindow u;
+  u.x0 = std::min(a.x0, b.x0);
+  u.y0 = std::min(a.y0, b.y0);
+  u.width = static_cast<int>(std::max(a.x0 + a.width, b.x0 + b.width) - u.x0);
+  u.height = static_cast<int>(std::max(a.y0 + a.height, b.y0 + b.height) - u.y0);
+  return u;
 }
 
 }  // namespace pdsm

@@ -1,7 +1,8 @@
 // What one tile's PDSM rays can meet (thesis 3.3): the casters that can shadow any of its
-// rays from any light sample, the nearest depth among them, and for each sample the window of
-// the global shadow-map lattice that the tile's ray segments cross. Shadow maps rendered for a
-// tile cover only that window and draw only those casters.
+// rays from any light sample, the nearest depth from which each block of its rays can be
+// shadowed, and for each sample the window of the global shadow-map lattice that the rays'
+// clipped segments cross. Shadow maps rendered for a tile cover only that window and draw
+// only those casters.
 #ifndef PDSM_CORE_BAKE_TILE_REACH_H_
 #define PDSM_CORE_BAKE_TILE_REACH_H_
 
@@ -15,15 +16,35 @@
 
 namespace pdsm {
 
+// Rays are clipped per block of kRayBlockSize x kRayBlockSize pixels: small enough that a
+// caster over one corner of a tile does not make every ray of the tile start near it, large
+// enough that the bound costs little next to the scan itself.
+inline constexpr int kRayBlockSize = 8;
+
+// A block of a tile's rays and the nearest depth at which any caster of the tile's reach can
+// shadow any of them (conservative, shadow-map texel discretisation included). No event of
+// these rays is nearer than z_begin.
+struct RayBlock {
+  TileRect rect;  // absolute PDSM pixels; rect.index is unused
+  double z_begin = 0;
+};
+
 struct TileReach {
   std::vector<uint32_t> triangles;  // indices of plan.casters triangles (not vertices)
-  double z_near = 0;                // rays are scan-converted from here on
-  bool empty() const { return triangles.empty(); }
+  std::vector<RayBlock> blocks;     // blocks some caster can shadow; the others are all lit
+  double z_near = 0;                // min over blocks of z_begin
+  bool empty() const { return blocks.empty(); }
 };
 
 // Conservative: a triangle is dropped only when it cannot lie between any light sample and any
-// point of any of the tile's rays.
+// point of any of the tile's rays; a block's z_begin is never deeper than a point of its rays
+// that some sample sees through a kept triangle (docs/algorithms.md, "What a tile's rays can
+// reach"). z_begin is also at least plan.z_scan_floor.
 TileReach ComputeTileReach(const BakePlan& plan, const TileRect& tile);
+
+// Whether any caster can shadow any ray of the tile: ComputeTileReach's triangle test alone,
+// stopping at the first triangle kept. False: the tile is all lit and needs no shadow map.
+bool TileHasCasters(const BakePlan& plan, const TileRect& tile);
 
 // A PDSM ray of the tile seen in one sample's shadow map: a straight segment in lattice
 // (s, t) coordinates from its nearest to its farthest point (DESIGN.md: linear in w = 1/z for
@@ -33,12 +54,18 @@ struct RayInShadowMap {
   double z_near, z_far;  // z_far = +infinity for perspective lights (w = 0)
 };
 
+// The ray's segment from z_near to z_far; z_far <= 0 means the ray's natural end: +infinity
+// (perspective) or the plan's z_far (sun).
 RayInShadowMap RayForSample(const BakePlan& plan, double s, double t, const glm::dvec2& sample,
-                            double z_near);
+                            double z_near, double z_far = 0);
 
-// The lattice window holding every ray segment of the tile for this sample.
-ShadowMapWindow ShadowMapWindowFor(const BakePlan& plan, const TileRect& tile,
-                                   const glm::dvec2& sample, double z_near);
+// The lattice window holding every ray segment [z_near, z_far] of the pixels of `rect` for
+// this sample (z_far as in RayForSample).
+ShadowMapWindow ShadowMapWindowFor(const BakePlan& plan, const TileRect& rect,
+                                   const glm::dvec2& sample, double z_near, double z_far = 0);
+
+// The smallest window holding both; an empty window (width 0) is the identity.
+ShadowMapWindow UnionWindow(const ShadowMapWindow& a, const ShadowMapWindow& b);
 
 }  // namespace pdsm
 

@@ -338,8 +338,22 @@ TEST_P(TileReachTest, ShadowMapWindowHoldsEveryRaySegment) {
 // ---------------------------------------------------------------------------------------------
 // Culling.
 
+// The block of the reach holding the ray's pixel, or null.
+const RayBlock* BlockOf(const BakePlan& plan, const TileReach& reach, const RandomRay& ray) {
+  const PdsmGeometry& g = plan.geometry();
+  const int i = static_cast<int>(std::lround((ray.s - g.s_min) / g.PixelPitchS() - 0.5));
+  const int j = static_cast<int>(std::lround((ray.t - g.t_min) / g.PixelPitchT() - 0.5));
+  for (const RayBlock& b : reach.blocks) {
+    if (i >= b.rect.x0 && i < b.rect.x0 + b.rect.width && j >= b.rect.y0 &&
+        j < b.rect.y0 + b.rect.height) {
+      return &b;
+    }
+  }
+  return nullptr;
+}
+
 // If a sample's segment to a point of one of the tile's rays crosses a caster, the caster is in
-// the tile's reach, and the crossing is no nearer than the reach's z_near.
+// the tile's reach, and the shadowed point is no nearer than its block's z_begin.
 void CheckConservativeCulling(LightShape shape, double far_factor) {
   int hits = 0;
   for (uint64_t seed : {11, 12, 13, 14}) {
@@ -372,8 +386,13 @@ void CheckConservativeCulling(LightShape shape, double far_factor) {
                           << " shadows tile " << ray.tile->index << " ray (" << ray.s << ", "
                           << ray.t << ") at z " << z << " from sample (" << sample.x << ", "
                           << sample.y << ") but was culled";
-        const double hit_z = light_end.z + *hit * (q.z - light_end.z);
-        ASSERT_GE(hit_z, reach.z_near * (1 - 1e-12)) << "seed " << seed << " trial " << trial;
+        // The shadowed point is no nearer than the reach's z_near, where the tile's rays start.
+        ASSERT_GE(q.z, reach.z_near * (1 - 1e-12)) << "seed " << seed << " trial " << trial;
+        // The shadowed point q is no nearer than its block's z_begin (per-ray clipping).
+        const RayBlock* block = BlockOf(plan, reach, ray);
+        ASSERT_NE(block, nullptr) << "seed " << seed << " trial " << trial
+                                  << ": a shadowed ray's block was dropped";
+        ASSERT_GE(q.z, block->z_begin * (1 - 1e-12)) << "seed " << seed << " trial " << trial;
       }
     }
   }
@@ -399,11 +418,21 @@ TEST_P(TileReachTest, ReachIsUniqueAndItsDepthBoundsItsTriangles) {
         << "a triangle listed twice";
     if (reach.empty()) continue;
     EXPECT_GE(reach.z_near, plan.z_clip_near);
+    // Rays start no nearer than the nearest kept caster: nothing can shadow them before it.
+    double nearest = kInf;
     for (uint32_t k : reach.triangles) {
       ASSERT_LT(k, plan.casters.TriangleCount());
       for (int corner = 0; corner < 3; ++corner) {
-        EXPECT_LE(reach.z_near, CasterVertex(plan, k, corner).z + 1e-12);
+        nearest = std::min(nearest, CasterVertex(plan, k, corner).z);
       }
+    }
+    EXPECT_GE(reach.z_near, nearest * (1 - 1e-12));
+    for (const RayBlock& b : reach.blocks) {
+      EXPECT_GE(b.z_begin, reach.z_near);
+      EXPECT_GE(b.rect.x0, tile.x0);
+      EXPECT_LE(b.rect.x0 + b.rect.width, tile.x0 + tile.width);
+      EXPECT_GE(b.rect.y0, tile.y0);
+      EXPECT_LE(b.rect.y0 + b.rect.height, tile.y0 + tile.height);
     }
   }
   // Culling culls: with 40 small casters over 12 tiles, far fewer than all pairs are kept.
@@ -434,6 +463,48 @@ TEST_P(TileReachTest, CasterFarToTheSideIsCulled) {
   EXPECT_GT(kept_left, 0);
   EXPECT_EQ(culled_right, right_tiles);
   EXPECT_GT(right_tiles, 0);
+}
+
+// An occluder 1e-4 under the light: the plan's scan floor keeps every tile's shadow map within
+// the texel budget and every ray within kMaxRayTexels per axis, records the floor as the
+// PDSM's nearest valid depth, and keeps the window on the receivers (not stretched to
+// tan 85 degrees by the occluder's projection).
+TEST(ScanFloor, NearLightOccluderStaysWithinTheBudgets) {
+  Scene scene = MakeScene(LightShape::kRect, 3, 10);
+  TriangleMesh near_light;
+  near_light.role = MeshRole::kCasterOnly;
+  near_light.positions_world = {{-0.5, 10 - 1e-4, -0.5}, {0.5, 10 - 1e-4, -0.5},
+                                {0.0, 10 - 1e-4, 0.5}};
+  near_light.indices = {0, 1, 2};
+  scene.meshes.push_back(near_light);
+  const BakePlan plan = Plan(scene);
+  const PdsmGeometry& g = plan.geometry();
+  EXPECT_LT(g.z_near, 2e-4);
+  ASSERT_GT(plan.z_scan_floor, g.z_near);
+  EXPECT_EQ(g.z_valid_min, plan.z_scan_floor);
+  EXPECT_LT(plan.z_scan_floor, 1.0);  // the ground is at depth 10, the casters at 2 to 8
+  EXPECT_LT(g.s_max - g.s_min, 2.5);  // the 20 x 20 ground at depth 10: about 2 wide
+  const double tile_x = plan.header.tile_size * g.PixelPitchS() / plan.lattice.pitch_s + 2;
+  const double tile_y = plan.header.tile_size * g.PixelPitchT() / plan.lattice.pitch_t + 2;
+  const double budget = std::max(static_cast<double>(kShadowMapTexelBudget), 4 * tile_x * tile_y);
+  int64_t largest = 0;
+  for (const TileRect& tile : plan.tiles) {
+    const TileReach reach = ComputeTileReach(plan, tile);
+    for (const RayBlock& b : reach.blocks) EXPECT_GE(b.z_begin, plan.z_scan_floor);
+    for (const glm::dvec2& sample : plan.samples) {
+      ShadowMapWindow window;
+      for (const RayBlock& b : reach.blocks) {
+        window = UnionWindow(window, ShadowMapWindowFor(plan, b.rect, sample, b.z_begin));
+        const RayInShadowMap ray = RayForSample(plan, g.PixelCenterS(b.rect.x0),
+                                                g.PixelCenterT(b.rect.y0), sample, b.z_begin);
+        EXPECT_LE(std::abs(ray.st_far.x - ray.st_near.x) / plan.lattice.pitch_s,
+                  kMaxRayTexels * (1 + 1e-9));
+      }
+      largest = std::max(largest, int64_t{window.width} * window.height);
+    }
+  }
+  EXPECT_GT(largest, 0);
+  EXPECT_LE(static_cast<double>(largest), budget);
 }
 
 TEST_P(TileReachTest, NoCastersMeansEmptyReach) {

@@ -78,6 +78,9 @@ constexpr char kAttrTileSize[] = "pdsmTileSize";
 constexpr char kAttrAdaptiveTolerance[] = "pdsmAdaptiveTolerance";
 constexpr char kAttrAdaptiveMinSamples[] = "pdsmAdaptiveMinSamples";
 constexpr char kAttrTileSamples[] = "pdsmTileSamples";
+// Optional attributes (written only when not at their default; absent reads as the default).
+constexpr char kAttrZValidMin[] = "pdsmZValidMin";
+constexpr char kAttrSurfacesOnly[] = "pdsmSurfacesOnly";
 
 constexpr char kDepthChannel[] = "Z";
 constexpr char kAttenuationChannel[] = "attenuation";
@@ -198,6 +201,8 @@ Imf::Header ExrHeaderFromPdsm(const PdsmHeader& h) {
     // Decimal counts, comma-separated, row-major tile order (EXR has no int-vector type).
     exr.insert(kAttrTileSamples, Imf::StringAttribute(absl::StrJoin(h.tile_samples, ",")));
   }
+  if (g.z_valid_min != 0) exr.insert(kAttrZValidMin, Imf::DoubleAttribute(g.z_valid_min));
+  if (h.surfaces_only) exr.insert(kAttrSurfacesOnly, Imf::IntAttribute(1));
   return exr;
 }
 
@@ -215,6 +220,13 @@ class AttributeReader {
       return T();
     }
     return attr->value();
+  }
+
+  // An optional attribute: `fallback` when absent; of the wrong type is an error.
+  template <typename T>
+  T GetOptional(const char* name, T fallback) {
+    if (exr_.find(name) == exr_.end()) return fallback;
+    return Get<T>(name);
   }
 
   template <typename E, size_t N>
@@ -301,6 +313,7 @@ void ReadGeometry(AttributeReader& in, const Imf::Header& exr, PdsmGeometry* g) 
   g->t_max = window_max.y;
   g->z_near = in.Get<double>(kAttrZNear);
   g->z_far = in.Get<double>(kAttrZFar);
+  g->z_valid_min = in.GetOptional<double>(kAttrZValidMin, 0.0);
 }
 
 void ReadBakeSettings(AttributeReader& in, const Imf::Header& exr, PdsmHeader* h) {
@@ -317,6 +330,7 @@ void ReadBakeSettings(AttributeReader& in, const Imf::Header& exr, PdsmHeader* h
         absl::StrFormat("attribute %s: \"%s\" is not a uint64", kAttrSeed, absl::CEscape(seed)));
   }
   h->tile_size = in.Get<int>(kAttrTileSize);
+  h->surfaces_only = in.GetOptional<int>(kAttrSurfacesOnly, 0) != 0;
   if (in.status().ok() && h->tile_size != static_cast<int>(exr.tileDescription().xSize)) {
     in.Fail(absl::StrFormat("attribute %s = %d disagrees with the EXR tile size %d", kAttrTileSize,
                             h->tile_size, exr.tileDescription().xSize));

@@ -34,6 +34,9 @@ struct PdsmGeometry {
   int height = 0;
   double s_min = -1, s_max = 1, t_min = -1, t_max = 1;  // the window
   double z_near = 0, z_far = 0;  // depth range holding casters (near) and any geometry (far)
+  // Points nearer than this are outside what the PDSM resolves (a caster lies nearer than the
+  // bake's scan floor, docs/algorithms.md): Locate refuses them. 0: no limit.
+  double z_valid_min = 0;
 
   double PixelPitchS() const { return (s_max - s_min) / width; }
   double PixelPitchT() const { return (t_max - t_min) / height; }
@@ -48,13 +51,14 @@ struct PdsmGeometry {
     return glm::dvec2(p_light.x / p_light.z, p_light.y / p_light.z);
   }
 
-  // The point in pixel coordinates; nullopt outside the frustum (behind the light, or
-  // outside the window).
+  // The point in pixel coordinates; nullopt outside the frustum (behind the light, outside
+  // the window, or nearer than z_valid_min).
   std::optional<PdsmPoint> Locate(const glm::dvec3& p_world) const {
     const glm::dvec3 p_light = frame.LightFromWorld(p_world);
     const auto st = WindowFromLight(p_light);
     if (!st) return std::nullopt;
     if (st->x < s_min || st->x > s_max || st->y < t_min || st->y > t_max) return std::nullopt;
+    if (p_light.z < z_valid_min) return std::nullopt;
     return PdsmPoint{(st->x - s_min) / PixelPitchS(), (st->y - t_min) / PixelPitchT(),
                      p_light.z};
   }

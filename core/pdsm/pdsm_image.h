@@ -44,6 +44,10 @@ struct PdsmHeader {
   int TileSamples(size_t tile_index) const {
     return tile_index < tile_samples.size() ? tile_samples[tile_index] : samples;
   }
+  // Surfaces-only bake (docs/algorithms.md): functions hold only depth windows around the
+  // receiver surfaces; elsewhere they evaluate to NaN (attenuation NaN vertices bracket the
+  // windows), or to 0 in pixels that hold no vertex.
+  bool surfaces_only = false;
 };
 
 // One rectangle of pixels with their functions: the unit of writing and of assembling.

@@ -66,6 +66,9 @@ struct BakeSettings {
   double adaptive_tolerance = 0;
   int adaptive_min_samples = 16;
   bool adaptive() const { return adaptive_tolerance > 0; }
+  // Keep each ray's function only near the receiver surfaces it can be queried at
+  // (docs/algorithms.md, "Surfaces only"); free-space queries are then undefined (NaN).
+  bool surfaces_only = false;
 };
 
 struct Scene {

@@ -26,6 +26,7 @@
 #include "absl/strings/string_view.h"
 #include "core/assets/mesh_asset.h"
 #include "core/sampling/light_samples.h"
+#include "core/scene/json_number_range.h"
 #include "core/scene/mesh_file.h"
 
 namespace pdsm {
@@ -506,6 +507,7 @@ absl::StatusOr<BakeSettings> SceneBuilder::BuildBake(const pdsm::v1::BakeParams&
   if (bake.has_depth_bias()) out.depth_bias = bake.depth_bias();
   if (bake.has_slope_bias()) out.slope_bias = bake.slope_bias();
   if (bake.has_seed()) out.seed = bake.seed();
+  if (bake.has_surfaces_only()) out.surfaces_only = bake.surfaces_only();
 
   switch (bake.sampling()) {
     case pdsm::v1::SAMPLING_DEFAULT:
@@ -643,6 +645,12 @@ absl::StatusOr<std::set<std::string>> ParseWithOverrides(const std::string& path
   options.ignore_unknown_fields = false;  // a misspelt field must not be silently dropped
   const auto parsed = google::protobuf::util::JsonStringToMessage(*text, message, options);
   if (!parsed.ok()) {
+    // The parser names no field for a number beyond double's range (1e400): find it.
+    if (const std::optional<OutOfRangeNumber> bad = FindOutOfRangeNumber(*text)) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          path, ": ", bad->field, ": must be finite (got ", bad->literal,
+          ", beyond the range of a double)"));
+    }
     return absl::InvalidArgumentError(
         absl::StrCat(path, ": invalid scene JSON: ",
                      OneLineJsonError(std::string(parsed.message()))));

@@ -1,0 +1,45 @@
+// Surfaces-only bakes (docs/algorithms.md, "Surfaces only"): for each PDSM ray, the depth
+// windows around the receiver surfaces a query may need. A query at a point on a receiver
+// blends the four pixels around its projection, so the windows of a pixel hold the depths of
+// every receiver point that projects within one pixel pitch of the pixel's centre (its
+// bilinear support), found from the receivers' triangles without any rendering.
+#ifndef PDSM_CORE_BAKE_RECEIVER_WINDOWS_H_
+#define PDSM_CORE_BAKE_RECEIVER_WINDOWS_H_
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "core/bake/bake_plan.h"
+
+namespace pdsm {
+
+// A closed depth interval [lo, hi], light-space z.
+struct DepthWindow {
+  double lo = 0, hi = 0;
+  bool operator==(const DepthWindow&) const = default;
+};
+
+// Per-pixel windows of one tile, row-major from (rect.x0, rect.y0): sorted, disjoint,
+// each padded for float rounding (kWindowRelativePad).
+struct TileWindows {
+  TileRect rect;
+  std::vector<uint64_t> offsets;  // rect.width * rect.height + 1
+  std::vector<DepthWindow> windows;
+
+  std::span<const DepthWindow> Pixel(size_t p) const {
+    return {windows.data() + offsets[p], windows.data() + offsets[p + 1]};
+  }
+};
+
+// Relative padding of every window, in units of its depth: 2^-15, 16 times the events'
+// consolidation distance, so neither float rounding of depths nor consolidation moves an
+// event of a receiver point out of its window.
+inline constexpr double kWindowRelativePad = 0x1.0p-15;
+
+// Deterministic: depends only on the plan and the tile.
+TileWindows ComputeReceiverWindows(const BakePlan& plan, const TileRect& tile);
+
+}  // namespace pdsm
+
+#endif  // PDSM_CORE_BAKE_RECEIVER_WINDOWS_H_
