@@ -23,11 +23,21 @@ double SceneRadius(const ViewScene& scene) {
 Camera DefaultCamera(const ViewScene& scene) {
   const LightFrame& f = scene.frame();
   Camera camera;
-  camera.target_world = 0.5 * (scene.bounds_min_world + scene.bounds_max_world);
-  // From the light's side (-n), tilted along the light's axes for some perspective.
-  const glm::dvec3 direction = glm::normalize(-f.n + 0.75 * f.u + 0.55 * f.v);
+  // The casters and the shadows they throw around them.
+  camera.target_world = 0.5 * (scene.casters_min_world + scene.casters_max_world);
+  const double radius =
+      std::max(0.75 * glm::length(scene.casters_max_world - scene.casters_min_world), 1e-3);
+  // From above, turned about 60 degrees in azimuth away from the light's side: shadows fall
+  // beside their casters in view instead of hiding behind them.
+  const glm::dvec3 up(0, 1, 0);
+  glm::dvec3 toward_light = -f.n - up * glm::dot(-f.n, up);
+  if (glm::length(toward_light) < 0.2) toward_light = f.u - up * glm::dot(f.u, up);
+  if (glm::length(toward_light) < 1e-6) toward_light = glm::dvec3(1, 0, 0);
+  toward_light = glm::normalize(toward_light);
+  const glm::dvec3 side = glm::cross(up, toward_light);
+  const glm::dvec3 direction = glm::normalize(0.9 * up + 0.7 * side + 0.35 * toward_light);
   const double half_fov = 0.5 * glm::radians(camera.fov_y_degrees);
-  const double distance = 0.85 * SceneRadius(scene) / std::sin(half_fov);
+  const double distance = radius / std::sin(half_fov);
   camera.eye_world = camera.target_world + distance * direction;
   return camera;
 }

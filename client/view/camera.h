@@ -19,8 +19,8 @@ struct Camera {
   double fov_y_degrees = 45;
 };
 
-// Looks at the centre of the scene's bounds from the light's side (so lit receivers face the
-// camera), far enough to hold the whole bounding sphere.
+// Looks down at the casters' bounds from above, turned away from the light's side so that
+// shadows fall beside their casters, far enough to hold 1.5x their bounding sphere.
 Camera DefaultCamera(const ViewScene& scene);
 
 // "EX,EY,EZ,TX,TY,TZ[,FOV_DEG]" (world). INVALID_ARGUMENT naming `flag`.

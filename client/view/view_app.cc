@@ -9,6 +9,7 @@
 #include "client/view/image_io.h"
 #include "client/view/pdsm_source.h"
 #include "core/scene/scene_loader.h"
+#include "spdlog/sinks/stdout_color_sinks.h"
 #include "spdlog/spdlog.h"
 
 namespace pdsm::view {
@@ -49,7 +50,8 @@ absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
     spdlog::warn("{}", std::string(s.message()));
   }
   view.baked = BuildBakedMeshes(view.scene, view.frame());
-  SceneBounds(view.scene, &view.bounds_min_world, &view.bounds_max_world);
+  SceneBounds(view.scene, false, &view.bounds_min_world, &view.bounds_max_world);
+  SceneBounds(view.scene, true, &view.casters_min_world, &view.casters_max_world);
   for (size_t i = 0; i < options.objects.size(); ++i) {
     absl::StatusOr<DynamicObject> object = MakeDynamicObject(options.objects[i], i);
     if (!object.ok()) return object.status();
@@ -103,6 +105,8 @@ int RunViewer(int argc, char** argv) {
     std::fprintf(stderr, "pdsm-view: %s\n", std::string(options.status().message()).c_str());
     return kExitBadInput;
   }
+  // Logs (warnings, GL details) go to stderr: stdout carries the tile order and file names.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("pdsm-view"));
   spdlog::set_level(options->verbose ? spdlog::level::debug : spdlog::level::warn);
   absl::StatusOr<ViewScene> scene = LoadViewScene(*options);
   absl::Status status = scene.status();

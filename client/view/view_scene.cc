@@ -167,16 +167,21 @@ absl::StatusOr<DrawMesh> LoadObjectMesh(const std::string& path, const std::stri
   return mesh;
 }
 
-void SceneBounds(const Scene& scene, glm::dvec3* min_world, glm::dvec3* max_world) {
+void SceneBounds(const Scene& scene, bool casters_only, glm::dvec3* min_world,
+                 glm::dvec3* max_world) {
   glm::dvec3 lo(std::numeric_limits<double>::infinity());
   glm::dvec3 hi(-std::numeric_limits<double>::infinity());
   for (const TriangleMesh& mesh : scene.meshes) {
+    if (casters_only && !Casts(mesh.role)) continue;
     for (const glm::dvec3& p : mesh.positions_world) {
       lo = glm::min(lo, p);
       hi = glm::max(hi, p);
     }
   }
-  if (lo.x > hi.x) lo = hi = glm::dvec3(0.0);  // no geometry
+  if (lo.x > hi.x) {
+    if (casters_only) return SceneBounds(scene, false, min_world, max_world);
+    lo = hi = glm::dvec3(0.0);  // no geometry
+  }
   *min_world = lo;
   *max_world = hi;
 }

@@ -40,6 +40,8 @@ struct ViewScene {
   std::vector<DynamicObject> dynamic_objects;
   glm::dvec3 bounds_min_world{0.0};  // of the baked meshes
   glm::dvec3 bounds_max_world{0.0};
+  glm::dvec3 casters_min_world{0.0};  // of the casting meshes: what the default camera frames
+  glm::dvec3 casters_max_world{0.0};
 
   const LightFrame& frame() const { return pdsm.header.geometry.frame; }
   // light_from_world as a matrix, and light_from_object for a dynamic object (double).
@@ -62,8 +64,10 @@ DrawMesh MakeUnitSphere(int segments = 48, int rings = 24);
 // A mesh file (Assimp) as an object-space DrawMesh; `context` names the flag for errors.
 absl::StatusOr<DrawMesh> LoadObjectMesh(const std::string& path, const std::string& context);
 
-// Axis-aligned bounds of the scene's meshes (world).
-void SceneBounds(const Scene& scene, glm::dvec3* min_world, glm::dvec3* max_world);
+// Axis-aligned bounds of the scene's meshes (world); only of casters with `casters_only`
+// (all meshes when none casts).
+void SceneBounds(const Scene& scene, bool casters_only, glm::dvec3* min_world,
+                 glm::dvec3* max_world);
 
 }  // namespace pdsm::view
 

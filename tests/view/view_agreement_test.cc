@@ -122,7 +122,7 @@ TEST(ViewAgreement, DynamicSphereReceivesPdsmShadow) {
 // the bake), while in the shadow-map modes it casts (it is drawn into the maps).
 TEST(ViewAgreement, DynamicSphereCastsOnlyInShadowMapModes) {
   TempDir dir;
-  const std::string sphere = "--sphere 5,1.5,5,1";
+  const std::string sphere = "--sphere -3,1.5,1.5,0.6";
   const FloatImage pdsm_without = RenderAttenuation("pdsm", "", dir);
   const FloatImage pdsm_with = RenderAttenuation("pdsm", sphere, dir);
   const FloatImage hard_without = RenderAttenuation("hard", "", dir);

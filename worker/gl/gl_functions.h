@@ -69,7 +69,7 @@ using GetProcAddressFn = GlProc (*)(const char* name);
   X(PFNGLGETUNIFORMLOCATIONPROC, GetUniformLocation)           \
   X(PFNGLUNIFORM1FPROC, Uniform1f)                             \
   X(PFNGLUNIFORM1IPROC, Uniform1i)                             \
-  X(PFNGLUNIFORMMATRIX4FVPROC, UniformMatrix4fv)                \
+  X(PFNGLUNIFORMMATRIX4FVPROC, UniformMatrix4fv)               \
   /* Used by the viewer (client/view): */                      \
   X(PFNGLUNIFORM2FPROC, Uniform2f)                             \
   X(PFNGLUNIFORM3FPROC, Uniform3f)                             \
