@@ -116,7 +116,10 @@ std::vector<DrawMesh> BuildBakedMeshes(const Scene& scene, const LightFrame& fra
     const TriangleMesh& source = scene.meshes[m];
     DrawMesh mesh;
     mesh.label = source.label;
-    mesh.albedo = kPalette[m % std::size(kPalette)];
+    // Receivers alone (ground planes) stay neutral; casters get the colours.
+    mesh.albedo = source.role == MeshRole::kReceiverOnly
+                      ? kPalette[0]
+                      : kPalette[1 + m % (std::size(kPalette) - 1)];
     mesh.positions.reserve(source.indices.size());
     mesh.normals.reserve(source.indices.size());
     for (size_t i = 0; i + 2 < source.indices.size(); i += 3) {
