@@ -116,11 +116,17 @@ float Pcf(vec3 p) {
   return sum / (side * side);
 }
 
-// Vogel (golden-angle spiral) disk: evenly spread taps without a table.
-vec2 VogelDisk(int i, int n) {
+// Vogel (golden-angle spiral) disk: evenly spread taps without a table, turned by `rotation`.
+vec2 VogelDisk(int i, int n, float rotation) {
   float r = sqrt((float(i) + 0.5) / float(n));
-  float theta = float(i) * 2.39996323;
+  float theta = float(i) * 2.39996323 + rotation;
   return r * vec2(cos(theta), sin(theta));
+}
+
+// Interleaved gradient noise (Jimenez 2014): a per-pixel disk rotation turns the banding of
+// a few fixed taps into fine, deterministic noise.
+float PixelRotation() {
+  return 6.2831853 * fract(52.9829189 * fract(dot(gl_FragCoord.xy, vec2(0.06711056, 0.00583715))));
 }
 
 // Window units covered by the light seen from depth z_receiver through depth z_between
@@ -131,17 +137,19 @@ vec2 LightFootprint(float z_between, float z_receiver) {
 }
 
 // PCSS (Fernando 2005) with the real light size: blocker search over the light's footprint
-// from the nearest caster depth, penumbra from the average blocker depth, then PCF.
+// from the nearest caster depth, penumbra from the average blocker depth, then PCF; both over
+// a 32-tap disk rotated per pixel.
 float Pcss(vec3 p) {
   const int kTaps = 32;
   const float kMaxRadiusTexels = 48.0;
   vec2 centre = ShadowMapTexel(p, vec2(0.0));
+  float rotation = PixelRotation();
   vec2 texels_per_unit = vec2(sm_size) / sm_window_size;
   vec2 search = min(LightFootprint(z_near, p.z) * texels_per_unit, vec2(kMaxRadiusTexels));
   float blocker_sum = 0.0;
   int blockers = 0;
   for (int i = 0; i < kTaps; ++i) {
-    ivec2 texel = ivec2(floor(centre + VogelDisk(i, kTaps) * search));
+    ivec2 texel = ivec2(floor(centre + VogelDisk(i, kTaps, rotation) * search));
     if (any(lessThan(texel, ivec2(0))) || any(greaterThanEqual(texel, sm_size))) continue;
     float z_caster = texelFetch(shadow_map, texel, 0).r;
     if (z_caster < p.z) { blocker_sum += z_caster; ++blockers; }
@@ -152,7 +160,7 @@ float Pcss(vec3 p) {
                         vec2(kMaxRadiusTexels)), vec2(0.5));
   float sum = 0.0;
   for (int i = 0; i < kTaps; ++i) {
-    sum += ShadowTest(ivec2(floor(centre + VogelDisk(i, kTaps) * radius)), p.z);
+    sum += ShadowTest(ivec2(floor(centre + VogelDisk(i, kTaps, rotation) * radius)), p.z);
   }
   return sum / float(kTaps);
 }
