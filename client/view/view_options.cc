@@ -57,6 +57,14 @@ absl::StatusOr<std::vector<DynamicObjectSpec>> ParseObjects(
       for (int row = 0; row < 4; ++row) {
         for (int col = 0; col < 4; ++col) spec.world_from_object[col][row] = (*n)[row * 4 + col];
       }
+      // Normals need the inverse; a flat or affine-broken transform has none.
+      const double det = glm::determinant(glm::dmat3(spec.world_from_object));
+      if (!(std::abs(det) > 1e-12) || spec.world_from_object[0][3] != 0 ||
+          spec.world_from_object[1][3] != 0 || spec.world_from_object[2][3] != 0 ||
+          spec.world_from_object[3][3] != 1) {
+        return absl::InvalidArgumentError(absl::StrCat(
+            "--object-transform[", i, "]: must be affine (last row 0,0,0,1) and invertible"));
+      }
     }
     objects.push_back(spec);
   }
@@ -139,6 +147,10 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
   }
   if (!o.job_id.empty() && o.service.server.empty()) {
     return absl::InvalidArgumentError("--job needs --server ADDR (or $PDSM_SERVER)");
+  }
+  if (!o.headless && (!o.compare.empty() || o.bench_frames > 0 || !o.attenuation_path.empty())) {
+    return absl::InvalidArgumentError(
+        "--compare, --bench and --save-attenuation need --headless");
   }
   if (o.headless && o.screenshot_path.empty() && o.bench_frames == 0) {
     return absl::InvalidArgumentError("--headless needs --screenshot OUT.png (or --bench N)");

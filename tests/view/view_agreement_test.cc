@@ -118,6 +118,32 @@ TEST(ViewAgreement, DynamicSphereReceivesPdsmShadow) {
   EXPECT_GT(umbra, pixels / 4);
 }
 
+// The same with a mesh file (--object, Assimp) placed by --object-transform: a box under the
+// plate, its top in the umbra.
+TEST(ViewAgreement, DynamicMeshReceivesPdsmShadow) {
+  TempDir dir;
+  WriteText(dir.File("box.obj"),
+            "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\n"
+            "v -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
+            "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n"
+            "f 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n");
+  const FloatImage with = RenderAttenuation(
+      "pdsm",
+      "--object " + dir.File("box.obj") +
+          " --object-transform 0.5,0,0,-1.5,0,0.5,0,1.0,0,0,0.5,-1.0,0,0,0,1",
+      dir);
+  const std::vector<bool> box = SphereMask("pdsm", dir);
+  ASSERT_EQ(box.size(), with.values.size());
+  size_t pixels = 0, umbra = 0;
+  for (size_t i = 0; i < box.size(); ++i) {
+    if (!box[i]) continue;
+    ++pixels;
+    if (with.values[i] >= 0.95) ++umbra;
+  }
+  EXPECT_GT(pixels, 50u);
+  EXPECT_GT(umbra, pixels / 4);
+}
+
 // A sphere in the open: no baked shadow appears anywhere in the PDSM modes (it was not in
 // the bake), while in the shadow-map modes it casts (it is drawn into the maps).
 TEST(ViewAgreement, DynamicSphereCastsOnlyInShadowMapModes) {

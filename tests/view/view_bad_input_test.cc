@@ -84,6 +84,14 @@ TEST(ViewBadInput, MissingFilesAndBadFlags) {
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("--mode"), std::string::npos) << r.err;
 
+  WriteText(dir.File("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  r = Headless("plates", SmallBake("plates"),
+               "--object " + dir.File("tri.obj") +
+                   " --object-transform 1,0,0,0,0,0,0,0,0,0,1,0,0,0,0,1",
+               dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--object-transform[0]"), std::string::npos) << r.err;
+
   r = Headless("plates", SmallBake("plates"), "--object " + dir.File("no_mesh.ply"), dir);
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("--object[0]"), std::string::npos) << r.err;
