@@ -243,7 +243,7 @@ void FrameRenderer::DrawScene(const UniformSetter& u, bool casters_only) const {
 absl::Status FrameRenderer::EnsureShadowMaps(ViewMode mode) {
   Impl& im = *impl_;
   const bool single = UsesShadowMap(mode) && !single_valid_;
-  const bool layers = mode == ViewMode::kMultiSm && !shadow_maps_valid_;
+  const bool layers = mode == ViewMode::kMultiSm && !layers_valid_;
   if (!single && !layers) return absl::OkStatus();
   const auto start = Clock::now();
   const PdsmHeader& header = scene_->pdsm.header;
@@ -267,7 +267,7 @@ absl::Status FrameRenderer::EnsureShadowMaps(ViewMode mode) {
   if (layers) {
     absl::Status s = im.shadow_maps.RenderLayers(header, im.multi_layout, samples_, draw);
     if (!s.ok()) return s;
-    shadow_maps_valid_ = true;
+    layers_valid_ = true;
   }
   gl_.Finish();
   timings_.shadow_map_seconds = SecondsSince(start);

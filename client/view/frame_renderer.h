@@ -21,6 +21,8 @@
 
 namespace pdsm::view {
 
+class UniformSetter;  // gl_program.h
+
 struct RenderSettings {
   bool bilinear = true;     // PDSM: blend 4 pixels (thesis 4.2); off: nearest pixel
   int sm_size = 0;          // hard/pcf/pcss/vsm map, texels per side; 0: the bake's
@@ -66,7 +68,7 @@ class FrameRenderer {
   void BlitToScreen(int screen_width, int screen_height);
 
   // The dynamic objects moved: shadow maps are re-rendered on the next frame that needs them.
-  void InvalidateShadowMaps() { shadow_maps_valid_ = false; single_valid_ = false; }
+  void InvalidateShadowMaps() { layers_valid_ = false; single_valid_ = false; }
   RenderSettings& settings() { return settings_; }
   const PdsmGpu& pdsm_gpu() const;
   uint64_t shadow_map_bytes() const;
@@ -80,15 +82,15 @@ class FrameRenderer {
   absl::Status EnsureTarget(int width, int height);
   absl::Status EnsureShadowMaps(ViewMode mode);
   absl::Status RenderCpuAttenuation(const glm::mat4& clip_from_light);
-  void DrawScene(const class UniformSetter& u, bool casters_only) const;
-  void SetShadeUniforms(ViewMode mode, const Camera& camera, const class UniformSetter& u) const;
+  void DrawScene(const UniformSetter& u, bool casters_only) const;
+  void SetShadeUniforms(ViewMode mode, const Camera& camera, const UniformSetter& u) const;
 
   const gl::GlFunctions& gl_;
   const ViewScene* scene_;
   RenderSettings settings_;
   std::unique_ptr<Impl> impl_;
-  bool single_valid_ = false;
-  bool shadow_maps_valid_ = false;
+  bool single_valid_ = false;  // the centre shadow map (hard, pcf, pcss, vsm)
+  bool layers_valid_ = false;  // the multi-sm maps
   std::vector<glm::dvec2> samples_;
   FrameTimings timings_;
 };

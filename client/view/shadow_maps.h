@@ -42,8 +42,8 @@ ShadowMapLayout MakeShadowMapLayout(const PdsmHeader& header, int size, bool gro
 glm::mat4 ShadowClipFromLight(const PdsmHeader& header, const ShadowMapLayout& layout,
                               glm::dvec2 sample);
 
-// Owns the render targets. Draw callbacks set clip_from_light-independent uniforms (object
-// transforms) and issue the draws; the program in use is the shadow-depth one.
+// Owns the shadow maps' render targets and sets the pipeline state for them; the caller's
+// draw callback sets its clip matrix and issues the draws with the shadow-depth program.
 class ShadowMapTargets {
  public:
   explicit ShadowMapTargets(const gl::GlFunctions& gl) : gl_(&gl) {}

@@ -16,8 +16,8 @@ int RunViewer(int argc, char** argv);
 // Loads everything the options name into a ViewScene (no GL needed).
 absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options);
 
-// Renders the options' mode, or the --compare tiles, into one image; prints the tile order.
-// `attenuation`: the attenuation image (single mode only; else left empty).
+// Renders the options' mode, or the --compare tiles, into --screenshot (and the attenuation
+// into --save-attenuation, single mode only); prints the tile order.
 absl::Status RenderScreenshot(FrameRenderer& renderer, const ViewOptions& options,
                               const Camera& camera);
 
