@@ -139,9 +139,7 @@ absl::Status FrameRenderer::Init() {
   if (!depth.ok()) return depth.status();
   im.depth = *std::move(depth);
 
-  absl::StatusOr<PdsmGpu> pdsm = UploadPdsm(gl_, scene_->pdsm);
-  if (!pdsm.ok()) return pdsm.status();
-  im.pdsm = *std::move(pdsm);
+  if (absl::Status s = ReplacePdsm(); !s.ok()) return s;
   for (size_t m = 0; m < scene_->baked.size(); ++m) {
     im.baked.push_back(UploadMesh(gl_, scene_->baked[m], Casts(scene_->scene.meshes[m].role)));
   }
@@ -177,6 +175,13 @@ absl::Status FrameRenderer::Init() {
 }
 
 const PdsmGpu& FrameRenderer::pdsm_gpu() const { return impl_->pdsm; }
+
+absl::Status FrameRenderer::ReplacePdsm() {
+  absl::StatusOr<PdsmGpu> pdsm = UploadPdsm(gl_, scene_->pdsm, scene_->pending);
+  if (!pdsm.ok()) return pdsm.status();
+  impl_->pdsm = *std::move(pdsm);
+  return absl::OkStatus();
+}
 uint64_t FrameRenderer::shadow_map_bytes() const { return impl_->shadow_maps.bytes(); }
 
 absl::Status FrameRenderer::EnsureTarget(int width, int height) {

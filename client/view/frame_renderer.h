@@ -35,6 +35,7 @@ struct RenderSettings {
 // Attenuation read back per pixel: the value shaded with, or one of these.
 inline constexpr float kOutsidePdsm = -1.0f;  // pdsm/cpu: outside the PDSM frustum (lit)
 inline constexpr float kBackground = -2.0f;   // no surface
+inline constexpr float kPending = -3.0f;      // pdsm: its PDSM pixels are not baked yet
 
 struct Frame {
   int width = 0, height = 0;
@@ -66,6 +67,9 @@ class FrameRenderer {
   absl::StatusOr<Frame> ReadFrame();
   // Copies the last frame's colour to the default framebuffer (window mode).
   void BlitToScreen(int screen_width, int screen_height);
+
+  // The scene's PDSM (or its pending pixels) changed: uploads it again.
+  absl::Status ReplacePdsm();
 
   // The dynamic objects moved: shadow maps are re-rendered on the next frame that needs them.
   void InvalidateShadowMaps() { layers_valid_ = false; single_valid_ = false; }

@@ -9,7 +9,8 @@
 
 namespace pdsm::view {
 
-absl::StatusOr<PdsmGpu> UploadPdsm(const gl::GlFunctions& gl, const PdsmImage& pdsm) {
+absl::StatusOr<PdsmGpu> UploadPdsm(const gl::GlFunctions& gl, const PdsmImage& pdsm,
+                                   const std::vector<uint8_t>& pending) {
   const auto start = std::chrono::steady_clock::now();
   const int width = pdsm.header.geometry.width;
   const int height = pdsm.header.geometry.height;
@@ -34,6 +35,7 @@ absl::StatusOr<PdsmGpu> UploadPdsm(const gl::GlFunctions& gl, const PdsmImage& p
   for (size_t p = 0; p + 1 < pdsm.offsets.size() && 2 * p < index.size(); ++p) {
     index[2 * p] = static_cast<uint32_t>(pdsm.offsets[p]);
     index[2 * p + 1] = static_cast<uint32_t>(pdsm.offsets[p + 1] - pdsm.offsets[p]);
+    if (p < pending.size() && pending[p]) index[2 * p + 1] = kPendingPixel;
   }
   static_assert(sizeof(Vertex) == 2 * sizeof(float), "Vertex is (z, A) float32, std430 vec2");
 

@@ -10,6 +10,7 @@
 #define PDSM_CLIENT_VIEW_PDSM_GPU_H_
 
 #include <cstdint>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/pdsm/pdsm_image.h"
@@ -26,10 +27,15 @@ struct PdsmGpu {
   double upload_seconds = 0;  // CPU packing + GL upload, with glFinish
 };
 
-// REQUIRES: a current GL 4.3+ context made by the driver `gl` was loaded from.
+// Index count of a pixel whose tile is not baked yet (a job followed while it runs).
+inline constexpr uint32_t kPendingPixel = 0xFFFFFFFFu;
+
+// REQUIRES: a current GL 4.3+ context made by the driver `gl` was loaded from. `pending`
+// (empty, or one flag per pixel) marks pixels not baked yet.
 // RESOURCE_EXHAUSTED when the vertices exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE or 2^32, or the
 // image GL_MAX_TEXTURE_SIZE; INTERNAL when GL fails.
-absl::StatusOr<PdsmGpu> UploadPdsm(const gl::GlFunctions& gl, const PdsmImage& pdsm);
+absl::StatusOr<PdsmGpu> UploadPdsm(const gl::GlFunctions& gl, const PdsmImage& pdsm,
+                                   const std::vector<uint8_t>& pending = {});
 
 }  // namespace pdsm::view
 

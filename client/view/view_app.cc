@@ -7,7 +7,9 @@
 #include "absl/strings/str_join.h"
 #include "client/cli_common.h"
 #include "client/view/image_io.h"
+#include "client/view/job_follower.h"
 #include "client/view/pdsm_source.h"
+#include "core/bake/bake_plan.h"
 #include "core/scene/scene_loader.h"
 #include "spdlog/sinks/stdout_color_sinks.h"
 #include "spdlog/spdlog.h"
@@ -31,6 +33,30 @@ absl::StatusOr<DynamicObject> MakeDynamicObject(const DynamicObjectSpec& spec, s
   return object;
 }
 
+// --job shown while it runs: plans the scene (the coordinator's planner: same scene, same
+// plan) and, headless with --partial, takes the tiles finished now; a window starts with every
+// tile pending and follows the job (RunWindow).
+absl::Status StartFromPlan(const ViewOptions& options, ViewScene* view) {
+  absl::StatusOr<BakePlan> plan = PlanBake(view->scene);
+  if (!plan.ok()) return plan.status();
+  view->plan = std::make_shared<const BakePlan>(*std::move(plan));
+  PartialPdsm partial = EmptyPartialPdsm(*view->plan);
+  if (options.headless) {
+    absl::StatusOr<std::unique_ptr<JobFollower>> follower =
+        JobFollower::Create(options.service, options.job_id, view->plan.get());
+    if (!follower.ok()) return follower.status();
+    absl::StatusOr<JobSnapshot> snapshot = (*follower)->Poll();
+    if (!snapshot.ok()) return snapshot.status();
+    if (snapshot->pdsm) partial = *std::move(snapshot->pdsm);
+    std::fprintf(stderr, "pdsm-view: job %s %s: %d/%d tiles\n", options.job_id.c_str(),
+                 pdsm::v1::JobState_Name(snapshot->job.state()).c_str(),
+                 snapshot->job.tiles_done(), snapshot->job.tiles_total());
+  }
+  view->pdsm = std::move(partial.image);
+  view->pending = std::move(partial.pending);
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
@@ -38,11 +64,16 @@ absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
   absl::StatusOr<Scene> scene = LoadSceneFile(options.scene_path);
   if (!scene.ok()) return scene.status();
   view.scene = *std::move(scene);
-  absl::StatusOr<PdsmImage> pdsm = options.job_id.empty()
-                                       ? LoadPdsmFile(options.pdsm_path)
-                                       : FetchJobPdsm(options.service, options.job_id);
-  if (!pdsm.ok()) return pdsm.status();
-  view.pdsm = *std::move(pdsm);
+  if (!options.job_id.empty() && (!options.headless || options.partial)) {
+    // Shown while it runs: the geometry from the local plan, tiles as they finish.
+    if (absl::Status s = StartFromPlan(options, &view); !s.ok()) return s;
+  } else {
+    absl::StatusOr<PdsmImage> pdsm = options.job_id.empty()
+                                         ? LoadPdsmFile(options.pdsm_path)
+                                         : FetchJobPdsm(options.service, options.job_id);
+    if (!pdsm.ok()) return pdsm.status();
+    view.pdsm = *std::move(pdsm);
+  }
   const std::string pdsm_name =
       options.job_id.empty() ? options.pdsm_path : absl::StrCat("job ", options.job_id);
   if (absl::Status s = CheckPdsmMatchesScene(view.scene, view.pdsm.header, pdsm_name); !s.ok()) {

@@ -108,6 +108,8 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
                  "16 numbers, row-major world_from_object of the matching --object");
   app.add_option("--frames", o.frames, "Window: render N frames, write --screenshot, exit");
   app.add_option("--bench", o.bench_frames, "Headless: time N frames of each mode (--compare or all)");
+  app.add_flag("--partial", o.partial,
+               "--job, headless: render the tiles finished so far instead of waiting");
   app.add_flag("--allow-mismatch", o.allow_mismatch,
                "Warn instead of failing when the PDSM was baked from another scene/light");
   app.add_flag("-v,--verbose", o.verbose, "Debug logging");
@@ -147,6 +149,9 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
   }
   if (!o.job_id.empty() && o.service.server.empty()) {
     return absl::InvalidArgumentError("--job needs --server ADDR (or $PDSM_SERVER)");
+  }
+  if (o.partial && (o.job_id.empty() || !o.headless)) {
+    return absl::InvalidArgumentError("--partial needs --headless and --job (a window always shows tiles as they finish)");
   }
   if (!o.headless && (!o.compare.empty() || o.bench_frames > 0 || !o.attenuation_path.empty())) {
     return absl::InvalidArgumentError(

@@ -7,6 +7,7 @@
 #ifndef PDSM_CLIENT_VIEW_VIEW_SCENE_H_
 #define PDSM_CLIENT_VIEW_VIEW_SCENE_H_
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "core/bake/bake_plan.h"
 #include "core/pdsm/pdsm_image.h"
 #include "core/scene/scene.h"
 
@@ -36,6 +38,8 @@ struct DynamicObject {
 struct ViewScene {
   Scene scene;
   PdsmImage pdsm;
+  std::vector<uint8_t> pending;     // per PDSM pixel: not baked yet (--server, job running)
+  std::shared_ptr<const BakePlan> plan;  // the scene's plan, when following a running job
   std::vector<DrawMesh> baked;       // light space: the scene file's meshes
   std::vector<DynamicObject> dynamic_objects;
   glm::dvec3 bounds_min_world{0.0};  // of the baked meshes

@@ -10,6 +10,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "client/view/image_io.h"
+#include "client/view/job_follower.h"
 #include "client/view/view_app.h"
 #include "spdlog/spdlog.h"
 #include "worker/gl/gl_functions.h"
@@ -125,6 +126,18 @@ absl::StatusOr<WindowPtr> OpenWindow(const ViewOptions& options) {
       " (no display? use --headless)"));
 }
 
+// Shows a newer PDSM of the followed job; the final one is checked against the scene.
+absl::Status AdoptPdsm(const ViewOptions& options, PartialPdsm pdsm, ViewScene& scene,
+                       FrameRenderer& renderer) {
+  if (pdsm.complete()) {
+    absl::Status s = CheckPdsmMatchesScene(scene.scene, pdsm.image.header, "job " + options.job_id);
+    if (!s.ok() && !options.allow_mismatch) return s;
+  }
+  scene.pdsm = std::move(pdsm.image);
+  scene.pending = std::move(pdsm.pending);
+  return renderer.ReplacePdsm();
+}
+
 absl::Status SaveScreenshot(FrameRenderer& renderer, const std::string& path) {
   absl::StatusOr<Frame> frame = renderer.ReadFrame();
   if (!frame.ok()) return frame.status();
@@ -162,8 +175,33 @@ absl::Status RunWindow(const ViewOptions& options, ViewScene& scene) {
   glfwSetCursorPosCallback(window->get(), OnCursor);
   glfwSetScrollCallback(window->get(), OnScroll);
 
+  // --job: tiles appear as the service finishes them, then the final PDSM.
+  std::unique_ptr<JobFollower> follower;
+  pdsm::v1::Job job;
+  if (scene.plan != nullptr) {
+    absl::StatusOr<std::unique_ptr<JobFollower>> f =
+        JobFollower::Create(options.service, options.job_id, scene.plan.get());
+    if (!f.ok()) return f.status();
+    follower = *std::move(f);
+    follower->Start(/*interval_ms=*/300);
+  }
+  bool follow_error_reported = false;
+
   absl::Status status;
   for (int frame = 0; !glfwWindowShouldClose(window->get()); ++frame) {
+    if (follower != nullptr) {
+      if (std::optional<JobSnapshot> snapshot = follower->Take()) {
+        job = snapshot->job;
+        if (snapshot->pdsm) {
+          status = AdoptPdsm(options, *std::move(snapshot->pdsm), scene, **renderer);
+          if (!status.ok()) break;
+        }
+      }
+      if (absl::Status e = follower->error(); !e.ok() && !follow_error_reported) {
+        spdlog::error("{}", std::string(e.message()));  // keep showing what arrived
+        follow_error_reported = true;
+      }
+    }
     int width = 0, height = 0;
     glfwGetFramebufferSize(window->get(), &width, &height);
     if (width > 0 && height > 0) {
@@ -171,13 +209,19 @@ absl::Status RunWindow(const ViewOptions& options, ViewScene& scene) {
       if (!status.ok()) break;
       (*renderer)->BlitToScreen(width, height);
       const FrameTimings& t = (*renderer)->last_timings();
+      const std::string job_line =
+          follower == nullptr ? ""
+                              : absl::StrFormat("  job %s: %d/%d tiles", 
+                                                pdsm::v1::JobState_Name(job.state()),
+                                                job.tiles_done(), job.tiles_total());
       glfwSetWindowTitle(window->get(),
-                         absl::StrFormat("pdsm-view: %s%s  %.1f ms  [1-7 mode, B bilinear, "
+                         absl::StrFormat("pdsm-view: %s%s  %.1f ms%s  [1-7 mode, B bilinear, "
                                          "arrows/PgUp/PgDn move, P screenshot]",
                                          ModeName(state.mode),
                                          (*renderer)->settings().bilinear ? "" : " (nearest)",
                                          1e3 * (t.shade_seconds + t.cpu_seconds +
-                                                t.shadow_map_seconds))
+                                                t.shadow_map_seconds),
+                                         job_line)
                              .c_str());
     }
     if (state.screenshot_requested) {

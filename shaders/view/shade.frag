@@ -15,7 +15,7 @@ in vec3 position_light;
 in vec3 normal_light;
 
 layout(location = 0) out vec4 colour;
-layout(location = 1) out float attenuation_out;  // A; -1 where outside the PDSM frustum
+layout(location = 1) out float attenuation_out;  // A; -1 outside the PDSM frustum, -3 pending
 
 uniform int mode;
 uniform vec3 albedo;
@@ -30,6 +30,8 @@ uniform vec2 window_min;        // (s_min, t_min)
 uniform vec2 inv_pitch;         // pixels per window unit
 uniform ivec2 pdsm_size;
 uniform int bilinear;           // 1: blend the 4 nearest pixels' results; 0: nearest pixel
+const uint kPendingPixel = 0xFFFFFFFFu;  // count of a pixel not baked yet (job still running)
+const float kPending = -3.0;
 
 // ---- cpu mode: A per screen pixel, computed by the CPU.
 uniform sampler2D cpu_attenuation;  // R32F, NaN outside the PDSM frustum
@@ -50,6 +52,8 @@ uniform int filter_radius;    // texels, pcf and vsm
 // A(z) of one PDSM pixel: the last vertex with depth <= z and the next one, by binary search;
 // linear between them, 0 before the first, the last value after the last (right-continuous at
 // jumps) -- EvaluateAttenuation in core/pdsm/attenuation_function.cc.
+bool PendingPixel(ivec2 pixel) { return texelFetch(pdsm_index, pixel, 0).g == kPendingPixel; }
+
 float EvaluatePixel(ivec2 pixel, float z) {
   uvec2 entry = texelFetch(pdsm_index, pixel, 0).rg;
   uint offset = entry.x, count = entry.y;
@@ -79,12 +83,19 @@ float PdsmAttenuation(vec3 p) {
   vec2 pixel = (st - window_min) * inv_pitch;
   if (any(lessThan(pixel, vec2(0.0))) || any(greaterThan(pixel, vec2(pdsm_size)))) return -1.0;
   ivec2 last = pdsm_size - 1;
-  if (bilinear == 0) return EvaluatePixel(clamp(ivec2(floor(pixel)), ivec2(0), last), p.z);
+  if (bilinear == 0) {
+    ivec2 nearest = clamp(ivec2(floor(pixel)), ivec2(0), last);
+    return PendingPixel(nearest) ? kPending : EvaluatePixel(nearest, p.z);
+  }
   vec2 f = pixel - 0.5;
   vec2 base = floor(f);
   vec2 w = f - base;
   ivec2 p0 = clamp(ivec2(base), ivec2(0), last);
   ivec2 p1 = clamp(ivec2(base) + 1, ivec2(0), last);
+  if (PendingPixel(p0) || PendingPixel(p1) || PendingPixel(ivec2(p0.x, p1.y)) ||
+      PendingPixel(ivec2(p1.x, p0.y))) {
+    return kPending;
+  }
   float a00 = EvaluatePixel(ivec2(p0.x, p0.y), p.z);
   float a10 = EvaluatePixel(ivec2(p1.x, p0.y), p.z);
   float a01 = EvaluatePixel(ivec2(p0.x, p1.y), p.z);
@@ -226,5 +237,10 @@ void main() {
   attenuation_out = a;
   float visible = 1.0 - max(a, 0.0);  // outside the frustum: no information, lit
   vec3 linear = albedo * (ambient + (1.0 - ambient) * direct * visible);
+  // Not baked yet: lit, under a blue hatch that moves with the surface.
+  if (a == kPending) {
+    float hatch = step(0.5, fract((gl_FragCoord.x + gl_FragCoord.y) / 16.0));
+    linear = mix(linear, vec3(0.25, 0.45, 0.9), 0.25 + 0.2 * hatch);
+  }
   colour = vec4(pow(clamp(linear, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
 }
