@@ -119,8 +119,10 @@ absl::StatusOr<std::unique_ptr<FrameRenderer>> FrameRenderer::Create(
   }
   std::unique_ptr<FrameRenderer> renderer(new FrameRenderer(gl, scene, settings));
   if (absl::Status s = renderer->Init(); !s.ok()) return s;
-  spdlog::info("GL {}.{} ({})", major, minor,
-               reinterpret_cast<const char*>(gl.GetString(GL_RENDERER)));
+  GLint max_block = 0;
+  gl.GetIntegerv(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
+  spdlog::info("GL {}.{} ({}), largest PDSM vertex buffer {} bytes", major, minor,
+               reinterpret_cast<const char*>(gl.GetString(GL_RENDERER)), max_block);
   return renderer;
 }
 

@@ -138,7 +138,7 @@ int RunViewer(int argc, char** argv) {
   }
   // Logs (warnings, GL details) go to stderr: stdout carries the tile order and file names.
   spdlog::set_default_logger(spdlog::stderr_color_mt("pdsm-view"));
-  spdlog::set_level(options->verbose ? spdlog::level::debug : spdlog::level::warn);
+  spdlog::set_level(options->verbose ? spdlog::level::debug : spdlog::level::warn);  // -v: GL details
   absl::StatusOr<ViewScene> scene = LoadViewScene(*options);
   absl::Status status = scene.status();
   if (status.ok()) {
