@@ -608,6 +608,39 @@ absl::StatusOr<std::string> Coordinator::PdsmPath(const std::string& job_id) {
   return (std::filesystem::path(JobDir(job_id)) / "pdsm.exr").string();
 }
 
+absl::StatusOr<std::vector<int>> Coordinator::FinishedTiles(const std::string& job_id) {
+  std::shared_ptr<ActiveJob> job;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (auto it = active_.find(job_id); it != active_.end()) job = it->second;
+  }
+  if (!job || job->ended) {
+    absl::StatusOr<JobRecord> record = store_->GetJob(job_id);
+    if (!record.ok()) return record.status();
+    return absl::FailedPreconditionError(absl::StrCat(
+        "job ", job_id, " is ", pdsm::v1::JobState_Name(record->state),
+        ": its tiles are only served while it runs"));
+  }
+  // A tile file exists once it is complete (written under a temporary name, then renamed).
+  std::vector<int> done;
+  std::error_code ec;
+  for (const TileRect& rect : job->plan.tiles) {
+    if (std::filesystem::exists(TilePath(job_id, rect.index), ec)) done.push_back(rect.index);
+  }
+  return done;
+}
+
+absl::StatusOr<std::string> Coordinator::FinishedTilePath(const std::string& job_id,
+                                                          int tile_index) {
+  absl::StatusOr<std::vector<int>> done = FinishedTiles(job_id);
+  if (!done.ok()) return done.status();
+  if (!std::binary_search(done->begin(), done->end(), tile_index)) {
+    return absl::NotFoundError(
+        absl::StrCat("job ", job_id, ": tile ", tile_index, " is not assembled (yet)"));
+  }
+  return TilePath(job_id, tile_index);
+}
+
 absl::StatusOr<std::vector<double>> Coordinator::Query(
     const std::string& job_id, const std::vector<glm::dvec3>& points_world) {
   absl::StatusOr<std::string> path = PdsmPath(job_id);

@@ -67,6 +67,11 @@ class Coordinator {
   absl::StatusOr<pdsm::v1::Job> CancelJob(const std::string& job_id);
   // The finished file. FAILED_PRECONDITION unless the job SUCCEEDED.
   absl::StatusOr<std::string> PdsmPath(const std::string& job_id);
+  // A running (or queued) job's assembled tiles so far, ascending, and one tile's file.
+  // FAILED_PRECONDITION once the job has ended; NOT_FOUND for an unknown job, or a tile index
+  // out of the grid or not assembled yet.
+  absl::StatusOr<std::vector<int>> FinishedTiles(const std::string& job_id);
+  absl::StatusOr<std::string> FinishedTilePath(const std::string& job_id, int tile_index);
   absl::StatusOr<std::vector<double>> Query(const std::string& job_id,
                                             const std::vector<glm::dvec3>& points_world);
   pdsm::v1::Stats GetStats();

@@ -235,6 +235,27 @@ grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>* JobsService::FetchPdsm(
   return new FetchReactor(coordinator_->PdsmPath(request->job_id()));
 }
 
+grpc::ServerUnaryReactor* JobsService::ListFinishedTiles(grpc::CallbackServerContext* context,
+                                                         const pdsm::v1::GetJobRequest* request,
+                                                         pdsm::v1::FinishedTiles* response) {
+  if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
+    return Answer(context, s);
+  }
+  absl::StatusOr<std::vector<int>> tiles = coordinator_->FinishedTiles(request->job_id());
+  if (!tiles.ok()) return Answer(context, tiles.status());
+  response->mutable_tile_indices()->Assign(tiles->begin(), tiles->end());
+  return Answer(context, grpc::Status::OK);
+}
+
+grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>* JobsService::FetchTile(
+    grpc::CallbackServerContext* context, const pdsm::v1::FetchTileRequest* request) {
+  if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
+    return new RefusedStream<grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>>(s);
+  }
+  return new FetchReactor(
+      coordinator_->FinishedTilePath(request->job_id(), request->tile_index()));
+}
+
 grpc::ServerUnaryReactor* JobsService::QueryAttenuation(
     grpc::CallbackServerContext* context, const pdsm::v1::QueryAttenuationRequest* request,
     pdsm::v1::QueryAttenuationResponse* response) {

@@ -44,6 +44,11 @@ class JobsService final : public pdsm::v1::PdsmJobs::CallbackService {
                                       pdsm::v1::Job* response) override;
   grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>* FetchPdsm(
       grpc::CallbackServerContext* context, const pdsm::v1::GetJobRequest* request) override;
+  grpc::ServerUnaryReactor* ListFinishedTiles(grpc::CallbackServerContext* context,
+                                              const pdsm::v1::GetJobRequest* request,
+                                              pdsm::v1::FinishedTiles* response) override;
+  grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>* FetchTile(
+      grpc::CallbackServerContext* context, const pdsm::v1::FetchTileRequest* request) override;
   grpc::ServerUnaryReactor* QueryAttenuation(
       grpc::CallbackServerContext* context, const pdsm::v1::QueryAttenuationRequest* request,
       pdsm::v1::QueryAttenuationResponse* response) override;

@@ -274,4 +274,8 @@ absl::StatusOr<PdsmTile> ReadTileFile(const std::string& path) {
   return Decode(*bytes, path);
 }
 
+absl::StatusOr<PdsmTile> DecodeTileFile(const std::string& bytes, const std::string& label) {
+  return Decode(bytes, label);
+}
+
 }  // namespace pdsm

@@ -42,6 +42,10 @@ absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile);
 // version newer than this build reads.
 absl::StatusOr<PdsmTile> ReadTileFile(const std::string& path);
 
+// The same from the file's bytes (received over the network: FetchTile); `label` names them
+// in errors.
+absl::StatusOr<PdsmTile> DecodeTileFile(const std::string& bytes, const std::string& label);
+
 }  // namespace pdsm
 
 #endif  // PDSM_SERVER_TILE_FILE_H_

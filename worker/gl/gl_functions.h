@@ -69,7 +69,22 @@ using GetProcAddressFn = GlProc (*)(const char* name);
   X(PFNGLGETUNIFORMLOCATIONPROC, GetUniformLocation)           \
   X(PFNGLUNIFORM1FPROC, Uniform1f)                             \
   X(PFNGLUNIFORM1IPROC, Uniform1i)                             \
-  X(PFNGLUNIFORMMATRIX4FVPROC, UniformMatrix4fv)
+  X(PFNGLUNIFORMMATRIX4FVPROC, UniformMatrix4fv)               \
+  /* Used by the viewer (client/view): */                      \
+  X(PFNGLUNIFORM2FPROC, Uniform2f)                             \
+  X(PFNGLUNIFORM3FPROC, Uniform3f)                             \
+  X(PFNGLUNIFORM4FPROC, Uniform4f)                             \
+  X(PFNGLUNIFORM2IPROC, Uniform2i)                             \
+  X(PFNGLUNIFORMMATRIX3FVPROC, UniformMatrix3fv)               \
+  X(PFNGLACTIVETEXTUREPROC, ActiveTexture)                     \
+  X(PFNGLBINDBUFFERBASEPROC, BindBufferBase)                   \
+  X(PFNGLTEXIMAGE3DPROC, TexImage3D)                           \
+  X(PFNGLTEXSUBIMAGE2DPROC, TexSubImage2D)                     \
+  X(PFNGLFRAMEBUFFERTEXTURELAYERPROC, FramebufferTextureLayer) \
+  X(PFNGLBLITFRAMEBUFFERPROC, BlitFramebuffer)                 \
+  X(PFNGLDRAWARRAYSPROC, DrawArrays)                           \
+  X(PFNGLFINISHPROC, Finish)                                   \
+  X(PFNGLCULLFACEPROC, CullFace)
 
 // Plain table of function pointers; copyable, and valid only while a context made by the same
 // driver is current (GL entry points dispatch on the current context). Thread-compatible.

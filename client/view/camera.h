@@ -1,0 +1,44 @@
+// The viewer's camera: a world-space eye, target and vertical field of view, turned into a
+// light-space clip matrix in double (the GPU draws in light space, view_scene.h). The
+// window's orbit controls move the eye on a sphere around the target.
+#ifndef PDSM_CLIENT_VIEW_CAMERA_H_
+#define PDSM_CLIENT_VIEW_CAMERA_H_
+
+#include <string>
+
+#include <glm/glm.hpp>
+
+#include "absl/status/statusor.h"
+#include "client/view/view_scene.h"
+
+namespace pdsm::view {
+
+struct Camera {
+  glm::dvec3 eye_world{0, 5, 10};
+  glm::dvec3 target_world{0.0};
+  double fov_y_degrees = 45;
+};
+
+// Looks down at the casters' bounds from above, turned away from the light's side so that
+// shadows fall beside their casters, far enough to hold 1.5x their bounding sphere.
+Camera DefaultCamera(const ViewScene& scene);
+
+// "EX,EY,EZ,TX,TY,TZ[,FOV_DEG]" (world). INVALID_ARGUMENT naming `flag`.
+absl::StatusOr<Camera> ParseCamera(const std::string& text, const std::string& flag);
+std::string FormatCamera(const Camera& camera);
+
+// World "up" used by the view and the orbit: +Y, unless the view looks along it.
+glm::dvec3 CameraUp(const Camera& camera);
+
+// clip_from_light for the given aspect (width / height); near and far planes hold the scene
+// and its dynamic objects.
+glm::mat4 ClipFromLight(const Camera& camera, const ViewScene& scene, double aspect);
+
+// Orbit about the target: yaw about world up, pitch toward it (radians); zoom scales the
+// distance.
+void Orbit(Camera* camera, double yaw, double pitch);
+void Zoom(Camera* camera, double factor);
+
+}  // namespace pdsm::view
+
+#endif  // PDSM_CLIENT_VIEW_CAMERA_H_

@@ -1,0 +1,40 @@
+#include "client/view/cpu_attenuation.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <thread>
+
+#include "core/pdsm/pdsm_query.h"
+
+namespace pdsm::view {
+
+std::vector<float> EvaluateAttenuationImage(const PdsmImage& pdsm,
+                                            const std::vector<float>& gbuffer, int width,
+                                            int height) {
+  std::vector<float> out(static_cast<size_t>(width) * height,
+                         std::numeric_limits<float>::quiet_NaN());
+  const LightFrame& frame = pdsm.header.geometry.frame;
+  std::atomic<int> next_row{0};
+  const auto work = [&] {
+    for (int y = next_row++; y < height; y = next_row++) {
+      for (int x = 0; x < width; ++x) {
+        const size_t p = static_cast<size_t>(y) * width + x;
+        const float* g = &gbuffer[4 * p];
+        if (g[3] != 1.0f) continue;
+        // Back to world in double, then exactly what `pdsm query` does with a world point.
+        const glm::dvec3 p_world = frame.WorldFromLight(glm::dvec3(g[0], g[1], g[2]));
+        out[p] = static_cast<float>(QueryAttenuation(pdsm, p_world));
+      }
+    }
+  };
+  const int threads = std::max(1u, std::thread::hardware_concurrency());
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (std::thread& t : pool) t.join();
+  return out;
+}
+
+}  // namespace pdsm::view

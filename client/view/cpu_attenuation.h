@@ -1,0 +1,22 @@
+// `cpu` mode: the PDSM evaluated per screen pixel by the CPU code of `pdsm query`
+// (QueryAttenuation), on the light-space positions of a G-buffer read back from the GPU. It is
+// the reference the GPU path (shade.frag) is tested against.
+#ifndef PDSM_CLIENT_VIEW_CPU_ATTENUATION_H_
+#define PDSM_CLIENT_VIEW_CPU_ATTENUATION_H_
+
+#include <vector>
+
+#include "core/pdsm/pdsm_image.h"
+
+namespace pdsm::view {
+
+// `gbuffer`: width * height RGBA float32, (x, y, z) light space of the PDSM's frame and alpha
+// 1 where a surface was drawn. Returns width * height attenuations in the same order: NaN for
+// the background and outside the PDSM frustum. Uses every core (rows are independent).
+std::vector<float> EvaluateAttenuationImage(const PdsmImage& pdsm,
+                                            const std::vector<float>& gbuffer, int width,
+                                            int height);
+
+}  // namespace pdsm::view
+
+#endif  // PDSM_CLIENT_VIEW_CPU_ATTENUATION_H_

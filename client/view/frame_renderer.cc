@@ -1,0 +1,418 @@
+#include "client/view/frame_renderer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include <glm/gtc/matrix_inverse.hpp>
+
+#include "absl/strings/str_cat.h"
+#include "client/view/cpu_attenuation.h"
+#include "client/view/gl_program.h"
+#include "client/view/view_shaders.h"  // generated: the embedded GLSL sources
+#include "core/sampling/light_samples.h"
+#include "spdlog/spdlog.h"
+
+namespace pdsm::view {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// Texture units of shade.frag's samplers, and its SSBO bindings.
+constexpr int kUnitPdsmIndex = 0, kUnitCpuAttenuation = 1, kUnitShadowMap = 2,
+              kUnitShadowMaps = 3;
+constexpr int kBindingPdsmVertices = 0, kBindingLightSamples = 1;
+constexpr float kBackgroundColour[4] = {0.11f, 0.12f, 0.14f, 1.0f};
+
+struct MeshGpu {
+  gl::VertexArray vertex_array;
+  gl::Buffer buffer;
+  GLsizei vertex_count = 0;
+  glm::vec3 albedo{0.8f};
+  bool casts = true;
+};
+
+MeshGpu UploadMesh(const gl::GlFunctions& gl, const DrawMesh& mesh, bool casts) {
+  std::vector<glm::vec3> interleaved;
+  interleaved.reserve(2 * mesh.positions.size());
+  for (size_t i = 0; i < mesh.positions.size(); ++i) {
+    interleaved.push_back(mesh.positions[i]);
+    interleaved.push_back(mesh.normals[i]);
+  }
+  MeshGpu gpu;
+  gpu.vertex_array = gl::MakeVertexArray(gl);
+  gpu.buffer = gl::MakeBuffer(gl);
+  gpu.vertex_count = static_cast<GLsizei>(mesh.positions.size());
+  gpu.albedo = mesh.albedo;
+  gpu.casts = casts;
+  gl.BindVertexArray(gpu.vertex_array.name());
+  gl.BindBuffer(GL_ARRAY_BUFFER, gpu.buffer.name());
+  gl.BufferData(GL_ARRAY_BUFFER, interleaved.size() * sizeof(glm::vec3), interleaved.data(),
+                GL_STATIC_DRAW);
+  const GLsizei stride = 2 * sizeof(glm::vec3);
+  gl.EnableVertexAttribArray(0);
+  gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, nullptr);
+  gl.EnableVertexAttribArray(1);
+  gl.VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride,
+                         reinterpret_cast<const void*>(sizeof(glm::vec3)));
+  gl.BindVertexArray(0);
+  return gpu;
+}
+
+gl::Texture MakeTarget(const gl::GlFunctions& gl, GLint internal_format, GLenum format,
+                       GLenum type, int width, int height) {
+  gl::Texture texture = gl::MakeTexture(gl);
+  gl.BindTexture(GL_TEXTURE_2D, texture.name());
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  gl.TexImage2D(GL_TEXTURE_2D, 0, internal_format, width, height, 0, format, type, nullptr);
+  return texture;
+}
+
+// The bake's light, for GenerateLightSamples: the header holds everything it reads.
+LightSpec LightFromHeader(const PdsmHeader& h) {
+  LightSpec light;
+  light.shape = h.light_shape;
+  light.frame = h.geometry.frame;
+  light.half_width = h.light_half_width;
+  light.half_height = h.light_half_height;
+  light.radius = h.light_radius;
+  light.tan_half_angle = h.tan_half_angle;
+  return light;
+}
+
+}  // namespace
+
+struct FrameRenderer::Impl {
+  explicit Impl(const gl::GlFunctions& gl) : shadow_maps(gl) {}
+  gl::Program shade, gbuffer, depth;
+  PdsmGpu pdsm;
+  std::vector<MeshGpu> baked;
+  std::vector<MeshGpu> dynamic;  // parallel to ViewScene::dynamic_objects
+  gl::Buffer samples;            // SSBO of vec2, multi-sm
+  ShadowMapTargets shadow_maps;
+  ShadowMapLayout single_layout, multi_layout;
+  gl::Framebuffer target, gbuffer_target;
+  gl::Texture colour, attenuation, depth_buffer, positions, cpu_attenuation;
+  int width = 0, height = 0;
+};
+
+FrameRenderer::FrameRenderer(const gl::GlFunctions& gl, const ViewScene* scene,
+                             const RenderSettings& settings)
+    : gl_(gl), scene_(scene), settings_(settings), impl_(std::make_unique<Impl>(gl)) {}
+
+FrameRenderer::~FrameRenderer() = default;
+
+absl::StatusOr<std::unique_ptr<FrameRenderer>> FrameRenderer::Create(
+    const gl::GlFunctions& gl, const ViewScene* scene, const RenderSettings& settings) {
+  GLint major = 0, minor = 0;
+  gl.GetIntegerv(GL_MAJOR_VERSION, &major);
+  gl.GetIntegerv(GL_MINOR_VERSION, &minor);
+  if (major < 4 || (major == 4 && minor < 3)) {
+    return absl::FailedPreconditionError(absl::StrCat(
+        "pdsm-view needs OpenGL 4.3 (shader storage buffers); this context is ", major, ".",
+        minor));
+  }
+  std::unique_ptr<FrameRenderer> renderer(new FrameRenderer(gl, scene, settings));
+  if (absl::Status s = renderer->Init(); !s.ok()) return s;
+  GLint max_block = 0;
+  gl.GetIntegerv(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
+  spdlog::info("GL {}.{} ({}), largest PDSM vertex buffer {} bytes", major, minor,
+               reinterpret_cast<const char*>(gl.GetString(GL_RENDERER)), max_block);
+  return renderer;
+}
+
+absl::Status FrameRenderer::Init() {
+  Impl& im = *impl_;
+  absl::StatusOr<gl::Program> shade =
+      BuildProgram(gl_, kSceneVertexShader, kShadeFragmentShader, "shade");
+  if (!shade.ok()) return shade.status();
+  im.shade = *std::move(shade);
+  absl::StatusOr<gl::Program> gbuffer =
+      BuildProgram(gl_, kSceneVertexShader, kGbufferFragmentShader, "gbuffer");
+  if (!gbuffer.ok()) return gbuffer.status();
+  im.gbuffer = *std::move(gbuffer);
+  absl::StatusOr<gl::Program> depth =
+      BuildProgram(gl_, kSceneVertexShader, kShadowDepthFragmentShader, "shadow_depth");
+  if (!depth.ok()) return depth.status();
+  im.depth = *std::move(depth);
+
+  if (absl::Status s = ReplacePdsm(); !s.ok()) return s;
+  for (size_t m = 0; m < scene_->baked.size(); ++m) {
+    im.baked.push_back(UploadMesh(gl_, scene_->baked[m], Casts(scene_->scene.meshes[m].role)));
+  }
+  for (const DynamicObject& object : scene_->dynamic_objects) {
+    im.dynamic.push_back(UploadMesh(gl_, object.mesh, true));
+  }
+
+  const PdsmHeader& header = scene_->pdsm.header;
+  const int sm_size = settings_.sm_size > 0 ? settings_.sm_size : header.shadow_map_resolution;
+  const int multi_size = settings_.multi_sm_size > 0
+                             ? settings_.multi_sm_size
+                             : std::min(header.shadow_map_resolution, 1024);
+  im.single_layout = MakeShadowMapLayout(header, sm_size, /*grow_for_samples=*/false);
+  im.multi_layout = MakeShadowMapLayout(header, multi_size, /*grow_for_samples=*/true);
+  const int count = settings_.sm_count > 0 ? settings_.sm_count : header.samples;
+  samples_ = GenerateLightSamples(LightFromHeader(header), count, header.sampling, header.seed);
+  std::vector<glm::vec2> samples_f(samples_.begin(), samples_.end());
+  if (samples_f.empty()) samples_f.emplace_back(0.0f);
+  im.samples = gl::MakeBuffer(gl_);
+  gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, im.samples.name());
+  gl_.BufferData(GL_SHADER_STORAGE_BUFFER, samples_f.size() * sizeof(glm::vec2),
+                 samples_f.data(), GL_STATIC_DRAW);
+  gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+
+  gl_.UseProgram(im.shade.name());
+  const UniformSetter u(gl_, im.shade.name());
+  u.Int("pdsm_index", kUnitPdsmIndex);
+  u.Int("cpu_attenuation", kUnitCpuAttenuation);
+  u.Int("shadow_map", kUnitShadowMap);
+  u.Int("shadow_maps", kUnitShadowMaps);
+  gl_.UseProgram(0);
+  return CheckGlError(gl_, "uploading the scene");
+}
+
+const PdsmGpu& FrameRenderer::pdsm_gpu() const { return impl_->pdsm; }
+
+absl::Status FrameRenderer::ReplacePdsm() {
+  absl::StatusOr<PdsmGpu> pdsm = UploadPdsm(gl_, scene_->pdsm, scene_->pending);
+  if (!pdsm.ok()) return pdsm.status();
+  impl_->pdsm = *std::move(pdsm);
+  return absl::OkStatus();
+}
+uint64_t FrameRenderer::shadow_map_bytes() const { return impl_->shadow_maps.bytes(); }
+
+absl::Status FrameRenderer::EnsureTarget(int width, int height) {
+  Impl& im = *impl_;
+  if (width == im.width && height == im.height) return absl::OkStatus();
+  im.colour = MakeTarget(gl_, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, width, height);
+  im.attenuation = MakeTarget(gl_, GL_R32F, GL_RED, GL_FLOAT, width, height);
+  im.depth_buffer =
+      MakeTarget(gl_, GL_DEPTH_COMPONENT32F, GL_DEPTH_COMPONENT, GL_FLOAT, width, height);
+  im.positions = MakeTarget(gl_, GL_RGBA32F, GL_RGBA, GL_FLOAT, width, height);
+  im.cpu_attenuation = MakeTarget(gl_, GL_R32F, GL_RED, GL_FLOAT, width, height);
+  if (!im.target) im.target = gl::MakeFramebuffer(gl_);
+  if (!im.gbuffer_target) im.gbuffer_target = gl::MakeFramebuffer(gl_);
+  const auto check = [&](const char* what) -> absl::Status {
+    const GLenum status = gl_.CheckFramebufferStatus(GL_FRAMEBUFFER);
+    if (status != GL_FRAMEBUFFER_COMPLETE) {
+      return absl::InternalError(absl::StrCat(what, " framebuffer incomplete: ", status));
+    }
+    return absl::OkStatus();
+  };
+  gl_.BindFramebuffer(GL_FRAMEBUFFER, im.target.name());
+  gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, im.colour.name(),
+                           0);
+  gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D,
+                           im.attenuation.name(), 0);
+  gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D,
+                           im.depth_buffer.name(), 0);
+  const GLenum buffers[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+  gl_.DrawBuffers(2, buffers);
+  if (absl::Status s = check("frame"); !s.ok()) return s;
+  gl_.BindFramebuffer(GL_FRAMEBUFFER, im.gbuffer_target.name());
+  gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
+                           im.positions.name(), 0);
+  gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D,
+                           im.depth_buffer.name(), 0);
+  gl_.DrawBuffers(1, buffers);
+  if (absl::Status s = check("G-buffer"); !s.ok()) return s;
+  im.width = width;
+  im.height = height;
+  return CheckGlError(gl_, absl::StrCat("allocating a ", width, "x", height, " frame"));
+}
+
+void FrameRenderer::DrawScene(const UniformSetter& u, bool casters_only) const {
+  const Impl& im = *impl_;
+  const auto draw = [&](const MeshGpu& mesh, const glm::dmat4& light_from_object) {
+    u.Mat4("light_from_object", glm::mat4(light_from_object));
+    u.Mat3("normal_from_object", glm::mat3(glm::inverseTranspose(glm::dmat3(light_from_object))));
+    u.Vec3("albedo", mesh.albedo);
+    gl_.BindVertexArray(mesh.vertex_array.name());
+    gl_.DrawArrays(GL_TRIANGLES, 0, mesh.vertex_count);
+  };
+  for (const MeshGpu& mesh : im.baked) {
+    if (!casters_only || mesh.casts) draw(mesh, glm::dmat4(1.0));
+  }
+  // Dynamic objects were not in the bake: they receive the PDSM's shadow and, in the
+  // shadow-map modes, also cast (drawn into the maps).
+  const glm::dmat4 light_from_world = scene_->LightFromWorld();
+  for (size_t i = 0; i < im.dynamic.size(); ++i) {
+    draw(im.dynamic[i], light_from_world * scene_->dynamic_objects[i].world_from_object);
+  }
+  gl_.BindVertexArray(0);
+}
+
+absl::Status FrameRenderer::EnsureShadowMaps(ViewMode mode) {
+  Impl& im = *impl_;
+  const bool single = UsesShadowMap(mode) && !single_valid_;
+  const bool layers = mode == ViewMode::kMultiSm && !layers_valid_;
+  if (!single && !layers) return absl::OkStatus();
+  const auto start = Clock::now();
+  const PdsmHeader& header = scene_->pdsm.header;
+  gl_.UseProgram(im.depth.name());
+  const UniformSetter u(gl_, im.depth.name());
+  u.Float("depth_bias", static_cast<float>(header.depth_bias));
+  u.Float("slope_bias", static_cast<float>(header.slope_bias));
+  u.Float("z_near", static_cast<float>(header.geometry.z_near));
+  u.Float("z_far", static_cast<float>(header.geometry.z_far));
+  u.Int("orthographic", header.geometry.projection == Projection::kOrthographic);
+  const auto draw = [&](const glm::mat4& clip_from_light) {
+    u.Mat4("clip_from_light", clip_from_light);
+    DrawScene(u, /*casters_only=*/true);
+  };
+  if (single) {
+    if (absl::Status s = im.shadow_maps.RenderSingle(header, im.single_layout, draw); !s.ok()) {
+      return s;
+    }
+    single_valid_ = true;
+  }
+  if (layers) {
+    absl::Status s = im.shadow_maps.RenderLayers(header, im.multi_layout, samples_, draw);
+    if (!s.ok()) return s;
+    layers_valid_ = true;
+  }
+  gl_.Finish();
+  timings_.shadow_map_seconds = SecondsSince(start);
+  return absl::OkStatus();
+}
+
+absl::Status FrameRenderer::RenderCpuAttenuation(const glm::mat4& clip_from_light) {
+  Impl& im = *impl_;
+  const auto start = Clock::now();
+  gl_.BindFramebuffer(GL_FRAMEBUFFER, im.gbuffer_target.name());
+  const float no_surface[4] = {0, 0, 0, 0};
+  const float far_depth = 1.0f;
+  gl_.ClearBufferfv(GL_COLOR, 0, no_surface);
+  gl_.ClearBufferfv(GL_DEPTH, 0, &far_depth);
+  gl_.UseProgram(im.gbuffer.name());
+  const UniformSetter u(gl_, im.gbuffer.name());
+  u.Mat4("clip_from_light", clip_from_light);
+  DrawScene(u, false);
+  std::vector<float> gbuffer(static_cast<size_t>(im.width) * im.height * 4);
+  gl_.ReadBuffer(GL_COLOR_ATTACHMENT0);
+  gl_.PixelStorei(GL_PACK_ALIGNMENT, 4);
+  gl_.ReadPixels(0, 0, im.width, im.height, GL_RGBA, GL_FLOAT, gbuffer.data());
+  const std::vector<float> attenuation =
+      EvaluateAttenuationImage(scene_->pdsm, gbuffer, im.width, im.height);
+  gl_.BindTexture(GL_TEXTURE_2D, im.cpu_attenuation.name());
+  gl_.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  gl_.TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, im.width, im.height, GL_RED, GL_FLOAT,
+                    attenuation.data());
+  timings_.cpu_seconds = SecondsSince(start);
+  return CheckGlError(gl_, "evaluating the PDSM on the CPU");
+}
+
+void FrameRenderer::SetShadeUniforms(ViewMode mode, const Camera& camera,
+                                     const UniformSetter& u) const {
+  const Impl& im = *impl_;
+  const PdsmHeader& header = scene_->pdsm.header;
+  const PdsmGeometry& g = header.geometry;
+  u.Int("mode", static_cast<int>(mode));
+  u.Vec3("eye_light", glm::vec3(g.frame.LightFromWorld(camera.eye_world)));
+  u.Int("orthographic", g.projection == Projection::kOrthographic);
+  u.Float("ambient", settings_.ambient);
+  u.Vec2("window_min", glm::vec2(g.s_min, g.t_min));
+  u.Vec2("inv_pitch", glm::vec2(1.0 / g.PixelPitchS(), 1.0 / g.PixelPitchT()));
+  u.Int2("pdsm_size", glm::ivec2(g.width, g.height));
+  u.Int("bilinear", settings_.bilinear ? 1 : 0);
+  const ShadowMapLayout& layout = mode == ViewMode::kMultiSm ? im.multi_layout : im.single_layout;
+  u.Vec2("sm_window_min", glm::vec2(layout.window_min));
+  u.Vec2("sm_window_size", glm::vec2(layout.window_size));
+  u.Int2("sm_size", glm::ivec2(layout.size));
+  u.Int("sample_count", static_cast<int>(samples_.size()));
+  u.Vec2("light_half_extent", glm::vec2(LightHalfExtent(header)));
+  u.Float("z_near", static_cast<float>(g.z_near));
+  u.Float("z_far", static_cast<float>(g.z_far));
+  u.Int("filter_radius", settings_.filter_radius);
+}
+
+absl::Status FrameRenderer::Render(ViewMode mode, const Camera& camera, int width, int height) {
+  Impl& im = *impl_;
+  timings_ = FrameTimings{};
+  if (absl::Status s = EnsureTarget(width, height); !s.ok()) return s;
+  if (absl::Status s = EnsureShadowMaps(mode); !s.ok()) return s;
+  const glm::mat4 clip_from_light =
+      ClipFromLight(camera, *scene_, static_cast<double>(width) / height);
+  gl_.Viewport(0, 0, width, height);
+  gl_.ClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);  // glm::perspective's convention
+  gl_.Enable(GL_DEPTH_TEST);
+  gl_.DepthFunc(GL_LESS);
+  gl_.DepthMask(GL_TRUE);
+  gl_.Disable(GL_CULL_FACE);
+  gl_.Disable(GL_SCISSOR_TEST);
+  if (mode == ViewMode::kCpu) {
+    if (absl::Status s = RenderCpuAttenuation(clip_from_light); !s.ok()) return s;
+  }
+  const auto start = Clock::now();
+  gl_.BindFramebuffer(GL_FRAMEBUFFER, im.target.name());
+  const float no_attenuation[4] = {kBackground, 0, 0, 0};
+  const float far_depth = 1.0f;
+  gl_.ClearBufferfv(GL_COLOR, 0, kBackgroundColour);
+  gl_.ClearBufferfv(GL_COLOR, 1, no_attenuation);
+  gl_.ClearBufferfv(GL_DEPTH, 0, &far_depth);
+  gl_.UseProgram(im.shade.name());
+  const UniformSetter u(gl_, im.shade.name());
+  u.Mat4("clip_from_light", clip_from_light);
+  SetShadeUniforms(mode, camera, u);
+  gl_.ActiveTexture(GL_TEXTURE0 + kUnitPdsmIndex);
+  gl_.BindTexture(GL_TEXTURE_2D, im.pdsm.index.name());
+  gl_.ActiveTexture(GL_TEXTURE0 + kUnitCpuAttenuation);
+  gl_.BindTexture(GL_TEXTURE_2D, im.cpu_attenuation.name());
+  gl_.ActiveTexture(GL_TEXTURE0 + kUnitShadowMap);
+  gl_.BindTexture(GL_TEXTURE_2D, im.shadow_maps.single());
+  gl_.ActiveTexture(GL_TEXTURE0 + kUnitShadowMaps);
+  gl_.BindTexture(GL_TEXTURE_2D_ARRAY, im.shadow_maps.layers());
+  gl_.ActiveTexture(GL_TEXTURE0);
+  gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, kBindingPdsmVertices, im.pdsm.vertices.name());
+  gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, kBindingLightSamples, im.samples.name());
+  DrawScene(u, false);
+  gl_.Finish();
+  timings_.shade_seconds = SecondsSince(start);
+  return CheckGlError(gl_, absl::StrCat("rendering mode ", ModeName(mode)));
+}
+
+absl::StatusOr<Frame> FrameRenderer::ReadFrame() {
+  Impl& im = *impl_;
+  Frame frame;
+  frame.width = im.width;
+  frame.height = im.height;
+  const size_t pixels = static_cast<size_t>(im.width) * im.height;
+  std::vector<uint8_t> rgba(pixels * 4);
+  std::vector<float> attenuation(pixels);
+  gl_.BindFramebuffer(GL_FRAMEBUFFER, im.target.name());
+  gl_.PixelStorei(GL_PACK_ALIGNMENT, 1);
+  gl_.ReadBuffer(GL_COLOR_ATTACHMENT0);
+  gl_.ReadPixels(0, 0, im.width, im.height, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  gl_.ReadBuffer(GL_COLOR_ATTACHMENT1);
+  gl_.ReadPixels(0, 0, im.width, im.height, GL_RED, GL_FLOAT, attenuation.data());
+  if (absl::Status s = CheckGlError(gl_, "reading the frame back"); !s.ok()) return s;
+  // GL's row 0 is the bottom; images start at the top.
+  frame.rgb.resize(pixels * 3);
+  frame.attenuation.resize(pixels);
+  for (int y = 0; y < im.height; ++y) {
+    const size_t src_row = static_cast<size_t>(im.height - 1 - y) * im.width;
+    const size_t dst_row = static_cast<size_t>(y) * im.width;
+    for (int x = 0; x < im.width; ++x) {
+      for (int c = 0; c < 3; ++c) frame.rgb[3 * (dst_row + x) + c] = rgba[4 * (src_row + x) + c];
+      frame.attenuation[dst_row + x] = attenuation[src_row + x];
+    }
+  }
+  return frame;
+}
+
+void FrameRenderer::BlitToScreen(int screen_width, int screen_height) {
+  Impl& im = *impl_;
+  gl_.BindFramebuffer(GL_READ_FRAMEBUFFER, im.target.name());
+  gl_.ReadBuffer(GL_COLOR_ATTACHMENT0);
+  gl_.BindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+  gl_.BlitFramebuffer(0, 0, im.width, im.height, 0, 0, screen_width, screen_height,
+                      GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  gl_.BindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+}  // namespace pdsm::view

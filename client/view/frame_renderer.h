@@ -1,0 +1,104 @@
+// Draws one frame of a ViewScene in one mode into an offscreen target: colour (RGBA8) and the
+// attenuation each pixel was shaded with (R32F), both readable back; a window blits the colour
+// to the screen. The GL context is the caller's (OSMesa headless, GLFW in a window); it must
+// be current on this thread for every call and outlive the renderer.
+#ifndef PDSM_CLIENT_VIEW_FRAME_RENDERER_H_
+#define PDSM_CLIENT_VIEW_FRAME_RENDERER_H_
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "client/view/camera.h"
+#include "client/view/pdsm_gpu.h"
+#include "client/view/shadow_maps.h"
+#include "client/view/view_mode.h"
+#include "client/view/view_scene.h"
+#include "worker/gl/gl_functions.h"
+#include "worker/gl/gl_objects.h"
+
+namespace pdsm::view {
+
+class UniformSetter;  // gl_program.h
+
+struct RenderSettings {
+  bool bilinear = true;     // PDSM: blend 4 pixels (thesis 4.2); off: nearest pixel
+  int sm_size = 0;          // hard/pcf/pcss/vsm map, texels per side; 0: the bake's
+  int sm_count = 0;         // multi-sm maps; 0: the bake's sample count
+  int multi_sm_size = 0;    // multi-sm texels per side; 0: the bake's, at most 1024
+  int filter_radius = 2;    // pcf and vsm kernel half-width, texels
+  float ambient = 0.15f;
+};
+
+// Attenuation read back per pixel: the value shaded with, or one of these.
+inline constexpr float kOutsidePdsm = -1.0f;  // pdsm/cpu: outside the PDSM frustum (lit)
+inline constexpr float kBackground = -2.0f;   // no surface
+inline constexpr float kPending = -3.0f;      // pdsm: its PDSM pixels are not baked yet
+
+struct Frame {
+  int width = 0, height = 0;
+  std::vector<uint8_t> rgb;         // row 0 at the top
+  std::vector<float> attenuation;   // row 0 at the top
+};
+
+struct FrameTimings {
+  double shadow_map_seconds = 0;  // shadow maps rendered for this frame (0 when cached)
+  double shade_seconds = 0;       // camera passes, with glFinish
+  double cpu_seconds = 0;         // cpu mode: read-back + QueryAttenuation + upload
+};
+
+class FrameRenderer {
+ public:
+  // REQUIRES: a current GL 4.3+ core context from the driver `gl` was loaded from; `gl` and
+  // `scene` outlive the renderer. Uploads the scene and the PDSM. FAILED_PRECONDITION for an
+  // older GL; RESOURCE_EXHAUSTED for a PDSM too large for this GL; INTERNAL for GL failures.
+  static absl::StatusOr<std::unique_ptr<FrameRenderer>> Create(const gl::GlFunctions& gl,
+                                                               const ViewScene* scene,
+                                                               const RenderSettings& settings);
+  ~FrameRenderer();
+  FrameRenderer(const FrameRenderer&) = delete;
+  FrameRenderer& operator=(const FrameRenderer&) = delete;
+
+  // Renders into the offscreen target (resized to width x height).
+  absl::Status Render(ViewMode mode, const Camera& camera, int width, int height);
+  // The last rendered frame.
+  absl::StatusOr<Frame> ReadFrame();
+  // Copies the last frame's colour to the default framebuffer (window mode).
+  void BlitToScreen(int screen_width, int screen_height);
+
+  // The scene's PDSM (or its pending pixels) changed: uploads it again.
+  absl::Status ReplacePdsm();
+
+  // The dynamic objects moved: shadow maps are re-rendered on the next frame that needs them.
+  void InvalidateShadowMaps() { layers_valid_ = false; single_valid_ = false; }
+  RenderSettings& settings() { return settings_; }
+  const PdsmGpu& pdsm_gpu() const;
+  uint64_t shadow_map_bytes() const;
+  const FrameTimings& last_timings() const { return timings_; }
+  const std::vector<glm::dvec2>& multi_sm_samples() const { return samples_; }
+
+ private:
+  struct Impl;
+  FrameRenderer(const gl::GlFunctions& gl, const ViewScene* scene, const RenderSettings& s);
+  absl::Status Init();
+  absl::Status EnsureTarget(int width, int height);
+  absl::Status EnsureShadowMaps(ViewMode mode);
+  absl::Status RenderCpuAttenuation(const glm::mat4& clip_from_light);
+  void DrawScene(const UniformSetter& u, bool casters_only) const;
+  void SetShadeUniforms(ViewMode mode, const Camera& camera, const UniformSetter& u) const;
+
+  const gl::GlFunctions& gl_;
+  const ViewScene* scene_;
+  RenderSettings settings_;
+  std::unique_ptr<Impl> impl_;
+  bool single_valid_ = false;  // the centre shadow map (hard, pcf, pcss, vsm)
+  bool layers_valid_ = false;  // the multi-sm maps
+  std::vector<glm::dvec2> samples_;
+  FrameTimings timings_;
+};
+
+}  // namespace pdsm::view
+
+#endif  // PDSM_CLIENT_VIEW_FRAME_RENDERER_H_

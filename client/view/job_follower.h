@@ -1,0 +1,87 @@
+// Follows a bake job on the service for pdsm-view --server: while the job runs, the tiles
+// finished so far (ListFinishedTiles, FetchTile), assembled into a PDSM whose unfinished
+// pixels are marked pending; once it has succeeded, the whole file (FetchPdsm).
+//
+// The PDSM's geometry comes from planning the scene file locally (PlanBake, the coordinator's
+// own planner: the same scene gives the same plan), checked against the job's size and
+// sample count.
+#ifndef PDSM_CLIENT_VIEW_JOB_FOLLOWER_H_
+#define PDSM_CLIENT_VIEW_JOB_FOLLOWER_H_
+
+#include <atomic>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "client/service_connection.h"
+#include "core/bake/bake_plan.h"
+#include "core/pdsm/pdsm_image.h"
+
+namespace pdsm::view {
+
+// A PDSM as far as it is known: pixels of unfinished tiles are empty functions and flagged.
+struct PartialPdsm {
+  PdsmImage image;
+  std::vector<uint8_t> pending;  // per pixel, row-major; empty when the PDSM is complete
+  bool complete() const { return pending.empty(); }
+};
+
+// The plan's header with every tile pending.
+PartialPdsm EmptyPartialPdsm(const BakePlan& plan);
+// Builds the image from the finished tiles (any subset of the plan's grid).
+PartialPdsm AssemblePartialPdsm(const BakePlan& plan, const std::map<int, PdsmTile>& tiles);
+
+struct JobSnapshot {
+  pdsm::v1::Job job;
+  std::optional<PartialPdsm> pdsm;  // set when it changed since the last snapshot
+};
+
+class JobFollower {
+ public:
+  // REQUIRES: `plan` is the plan of the job's scene (see above). Connects; INVALID_ARGUMENT
+  // when the job's size or samples differ from the plan's.
+  static absl::StatusOr<std::unique_ptr<JobFollower>> Create(const ServiceFlags& service,
+                                                             const std::string& job_id,
+                                                             const BakePlan* plan);
+
+  // One step: the job's state, and the PDSM if it gained tiles or finished. The final PDSM
+  // is fetched once the job SUCCEEDED. FAILED_PRECONDITION when the job failed or was
+  // cancelled; errors of the calls otherwise.
+  absl::StatusOr<JobSnapshot> Poll();
+
+  // Polls every `interval_ms` on a thread of its own until the job ends; Take() hands over
+  // the newest snapshot (nullopt when nothing changed), and the error that stopped it.
+  void Start(int interval_ms);
+  std::optional<JobSnapshot> Take();
+  absl::Status error();
+  ~JobFollower();
+
+ private:
+  JobFollower(const ServiceFlags& service, const std::string& job_id, const BakePlan* plan,
+              ServiceConnection connection)
+      : service_(service), job_id_(job_id), plan_(plan), connection_(std::move(connection)) {}
+  absl::StatusOr<std::string> FetchStream(bool whole_pdsm, int tile_index);
+
+  const ServiceFlags service_;
+  const std::string job_id_;
+  const BakePlan* plan_;
+  ServiceConnection connection_;
+  std::map<int, PdsmTile> tiles_;  // Poll's own state (one caller at a time)
+  bool finished_ = false;
+
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  std::mutex mu_;
+  std::optional<JobSnapshot> latest_;  // guarded by mu_
+  absl::Status error_;                 // guarded by mu_
+};
+
+}  // namespace pdsm::view
+
+#endif  // PDSM_CLIENT_VIEW_JOB_FOLLOWER_H_

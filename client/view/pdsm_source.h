@@ -1,0 +1,25 @@
+// Where the viewer's PDSM comes from: a file (--pdsm) or a job on a coordinator (--server
+// --job), fetched over gRPC once the job has finished.
+#ifndef PDSM_CLIENT_VIEW_PDSM_SOURCE_H_
+#define PDSM_CLIENT_VIEW_PDSM_SOURCE_H_
+
+#include <string>
+
+#include "absl/status/statusor.h"
+#include "client/service_connection.h"
+#include "core/pdsm/pdsm_image.h"
+
+namespace pdsm::view {
+
+// Reads a PDSM file. Errors name the file: NOT_FOUND, DATA_LOSS (corrupt or not a PDSM),
+// FAILED_PRECONDITION (a format version this build does not read).
+absl::StatusOr<PdsmImage> LoadPdsmFile(const std::string& path);
+
+// Waits for `job_id` with WatchJob, printing a progress line on stderr, then downloads its
+// PDSM (FetchPdsm) into a temporary file and reads it. FAILED_PRECONDITION when the job
+// failed or was cancelled; the coordinator's errors as `pdsm fetch` reports them.
+absl::StatusOr<PdsmImage> FetchJobPdsm(const ServiceFlags& service, const std::string& job_id);
+
+}  // namespace pdsm::view
+
+#endif  // PDSM_CLIENT_VIEW_PDSM_SOURCE_H_

@@ -1,0 +1,154 @@
+#include "client/view/view_app.h"
+
+#include <cstdio>
+#include <string>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
+#include "client/cli_common.h"
+#include "client/view/image_io.h"
+#include "client/view/job_follower.h"
+#include "client/view/pdsm_source.h"
+#include "core/bake/bake_plan.h"
+#include "core/scene/scene_loader.h"
+#include "spdlog/sinks/stdout_color_sinks.h"
+#include "spdlog/spdlog.h"
+
+namespace pdsm::view {
+namespace {
+
+absl::StatusOr<DynamicObject> MakeDynamicObject(const DynamicObjectSpec& spec, size_t i) {
+  DynamicObject object;
+  if (spec.sphere) {
+    object.mesh = MakeUnitSphere();
+    const glm::dvec4& s = *spec.sphere;
+    object.world_from_object = glm::dmat4(s.w);
+    object.world_from_object[3] = glm::dvec4(s.x, s.y, s.z, 1.0);
+    return object;
+  }
+  absl::StatusOr<DrawMesh> mesh = LoadObjectMesh(spec.mesh_path, absl::StrCat("--object[", i, "]"));
+  if (!mesh.ok()) return mesh.status();
+  object.mesh = *std::move(mesh);
+  object.world_from_object = spec.world_from_object;
+  return object;
+}
+
+// --job shown while it runs: plans the scene (the coordinator's planner: same scene, same
+// plan) and, headless with --partial, takes the tiles finished now; a window starts with every
+// tile pending and follows the job (RunWindow).
+absl::Status StartFromPlan(const ViewOptions& options, ViewScene* view) {
+  absl::StatusOr<BakePlan> plan = PlanBake(view->scene);
+  if (!plan.ok()) return plan.status();
+  view->plan = std::make_shared<const BakePlan>(*std::move(plan));
+  PartialPdsm partial = EmptyPartialPdsm(*view->plan);
+  if (options.headless) {
+    absl::StatusOr<std::unique_ptr<JobFollower>> follower =
+        JobFollower::Create(options.service, options.job_id, view->plan.get());
+    if (!follower.ok()) return follower.status();
+    absl::StatusOr<JobSnapshot> snapshot = (*follower)->Poll();
+    if (!snapshot.ok()) return snapshot.status();
+    if (snapshot->pdsm) partial = *std::move(snapshot->pdsm);
+    std::fprintf(stderr, "pdsm-view: job %s %s: %d/%d tiles\n", options.job_id.c_str(),
+                 pdsm::v1::JobState_Name(snapshot->job.state()).c_str(),
+                 snapshot->job.tiles_done(), snapshot->job.tiles_total());
+  }
+  view->pdsm = std::move(partial.image);
+  view->pending = std::move(partial.pending);
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
+  ViewScene view;
+  absl::StatusOr<Scene> scene = LoadSceneFile(options.scene_path);
+  if (!scene.ok()) return scene.status();
+  view.scene = *std::move(scene);
+  if (!options.job_id.empty() && (!options.headless || options.partial)) {
+    // Shown while it runs: the geometry from the local plan, tiles as they finish.
+    if (absl::Status s = StartFromPlan(options, &view); !s.ok()) return s;
+  } else {
+    absl::StatusOr<PdsmImage> pdsm = options.job_id.empty()
+                                         ? LoadPdsmFile(options.pdsm_path)
+                                         : FetchJobPdsm(options.service, options.job_id);
+    if (!pdsm.ok()) return pdsm.status();
+    view.pdsm = *std::move(pdsm);
+  }
+  const std::string pdsm_name =
+      options.job_id.empty() ? options.pdsm_path : absl::StrCat("job ", options.job_id);
+  if (absl::Status s = CheckPdsmMatchesScene(view.scene, view.pdsm.header, pdsm_name); !s.ok()) {
+    if (!options.allow_mismatch) return s;
+    spdlog::warn("{}", std::string(s.message()));
+  }
+  view.baked = BuildBakedMeshes(view.scene, view.frame());
+  SceneBounds(view.scene, false, &view.bounds_min_world, &view.bounds_max_world);
+  SceneBounds(view.scene, true, &view.casters_min_world, &view.casters_max_world);
+  for (size_t i = 0; i < options.objects.size(); ++i) {
+    absl::StatusOr<DynamicObject> object = MakeDynamicObject(options.objects[i], i);
+    if (!object.ok()) return object.status();
+    view.dynamic_objects.push_back(*std::move(object));
+  }
+  return view;
+}
+
+absl::Status RenderScreenshot(FrameRenderer& renderer, const ViewOptions& options,
+                              const Camera& camera) {
+  const std::vector<ViewMode> modes =
+      options.compare.empty() ? std::vector<ViewMode>{options.mode} : options.compare;
+  std::vector<RgbImage> tiles;
+  std::vector<std::string> names;
+  FloatImage attenuation;
+  for (ViewMode mode : modes) {
+    if (absl::Status s = renderer.Render(mode, camera, options.width, options.height); !s.ok()) {
+      return s;
+    }
+    absl::StatusOr<Frame> frame = renderer.ReadFrame();
+    if (!frame.ok()) return frame.status();
+    tiles.push_back({frame->width, frame->height, std::move(frame->rgb)});
+    attenuation = {frame->width, frame->height, std::move(frame->attenuation)};
+    names.push_back(ModeName(mode));
+  }
+  const int columns =
+      options.compare_columns > 0 ? options.compare_columns : std::min<int>(modes.size(), 4);
+  const RgbImage image = tiles.size() == 1 ? tiles.front() : Composite(tiles, columns, 4);
+  if (absl::Status s = WritePng(options.screenshot_path, image); !s.ok()) return s;
+  if (!options.compare.empty()) {
+    std::printf("compare (left to right, top to bottom, %d per row): %s\n", columns,
+                absl::StrJoin(names, ",").c_str());
+  }
+  std::printf("wrote %s (%dx%d)\n", options.screenshot_path.c_str(), image.width, image.height);
+  if (!options.attenuation_path.empty()) {
+    if (modes.size() != 1) {
+      return absl::InvalidArgumentError("--save-attenuation: needs one mode, not --compare");
+    }
+    if (absl::Status s = WritePfm(options.attenuation_path, attenuation); !s.ok()) return s;
+  }
+  return absl::OkStatus();
+}
+
+int RunViewer(int argc, char** argv) {
+  absl::StatusOr<ViewOptions> options = ParseViewOptions(argc, argv);
+  if (!options.ok()) {
+    if (options.status().code() == absl::StatusCode::kCancelled) {
+      std::printf("%s", std::string(options.status().message()).c_str());
+      return kExitOk;
+    }
+    std::fprintf(stderr, "pdsm-view: %s\n", std::string(options.status().message()).c_str());
+    return kExitBadInput;
+  }
+  // Logs (warnings, GL details) go to stderr: stdout carries the tile order and file names.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("pdsm-view"));
+  spdlog::set_level(options->verbose ? spdlog::level::debug : spdlog::level::warn);  // -v: GL details
+  absl::StatusOr<ViewScene> scene = LoadViewScene(*options);
+  absl::Status status = scene.status();
+  if (status.ok()) {
+    status = options->headless ? RunHeadless(*options, *scene) : RunWindow(*options, *scene);
+  }
+  if (!status.ok()) {
+    std::fprintf(stderr, "pdsm-view: %s\n", std::string(status.message()).c_str());
+    return ExitCodeFor(status);
+  }
+  return kExitOk;
+}
+
+}  // namespace pdsm::view

@@ -1,0 +1,29 @@
+// pdsm-view's program: loads the scene and the PDSM, then runs headless (OSMesa) or in a
+// window (GLFW). Exit codes as the `pdsm` CLI: 0 success, 2 bad input (message naming the
+// file and field), 1 other failures.
+#ifndef PDSM_CLIENT_VIEW_VIEW_APP_H_
+#define PDSM_CLIENT_VIEW_VIEW_APP_H_
+
+#include "absl/status/status.h"
+#include "client/view/frame_renderer.h"
+#include "client/view/view_options.h"
+#include "client/view/view_scene.h"
+
+namespace pdsm::view {
+
+int RunViewer(int argc, char** argv);
+
+// Loads everything the options name into a ViewScene (no GL needed).
+absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options);
+
+// Renders the options' mode, or the --compare tiles, into --screenshot (and the attenuation
+// into --save-attenuation, single mode only); prints the tile order.
+absl::Status RenderScreenshot(FrameRenderer& renderer, const ViewOptions& options,
+                              const Camera& camera);
+
+absl::Status RunHeadless(const ViewOptions& options, const ViewScene& scene);
+absl::Status RunWindow(const ViewOptions& options, ViewScene& scene);
+
+}  // namespace pdsm::view
+
+#endif  // PDSM_CLIENT_VIEW_VIEW_APP_H_

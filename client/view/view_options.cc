@@ -1,0 +1,174 @@
+#include "client/view/view_options.h"
+
+#include <cmath>
+
+#include <CLI/CLI.hpp>
+
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_split.h"
+
+namespace pdsm::view {
+namespace {
+
+absl::StatusOr<std::vector<double>> ParseNumbers(const std::string& text, size_t count,
+                                                 const std::string& flag) {
+  std::vector<double> numbers;
+  for (absl::string_view part : absl::StrSplit(text, ',')) {
+    double value = 0;
+    if (!absl::SimpleAtod(part, &value) || !std::isfinite(value)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(flag, ": \"", part, "\" is not a finite number"));
+    }
+    numbers.push_back(value);
+  }
+  if (numbers.size() != count) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(flag, ": expected ", count, " comma-separated numbers, got ",
+                     numbers.size()));
+  }
+  return numbers;
+}
+
+absl::StatusOr<std::vector<DynamicObjectSpec>> ParseObjects(
+    const std::vector<std::string>& spheres, const std::vector<std::string>& meshes,
+    const std::vector<std::string>& transforms) {
+  std::vector<DynamicObjectSpec> objects;
+  for (size_t i = 0; i < spheres.size(); ++i) {
+    const std::string flag = absl::StrCat("--sphere[", i, "]");
+    absl::StatusOr<std::vector<double>> n = ParseNumbers(spheres[i], 4, flag);
+    if (!n.ok()) return n.status();
+    if (!((*n)[3] > 0)) return absl::InvalidArgumentError(flag + ": radius must be > 0");
+    DynamicObjectSpec spec;
+    spec.sphere = glm::dvec4((*n)[0], (*n)[1], (*n)[2], (*n)[3]);
+    objects.push_back(spec);
+  }
+  if (transforms.size() > meshes.size()) {
+    return absl::InvalidArgumentError("--object-transform: more transforms than --object meshes");
+  }
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    DynamicObjectSpec spec;
+    spec.mesh_path = meshes[i];
+    if (i < transforms.size()) {
+      absl::StatusOr<std::vector<double>> n =
+          ParseNumbers(transforms[i], 16, absl::StrCat("--object-transform[", i, "]"));
+      if (!n.ok()) return n.status();
+      // Row-major, column vectors, as the scene file's `transform`.
+      for (int row = 0; row < 4; ++row) {
+        for (int col = 0; col < 4; ++col) spec.world_from_object[col][row] = (*n)[row * 4 + col];
+      }
+      // Normals need the inverse; a flat or affine-broken transform has none.
+      const double det = glm::determinant(glm::dmat3(spec.world_from_object));
+      if (!(std::abs(det) > 1e-12) || spec.world_from_object[0][3] != 0 ||
+          spec.world_from_object[1][3] != 0 || spec.world_from_object[2][3] != 0 ||
+          spec.world_from_object[3][3] != 1) {
+        return absl::InvalidArgumentError(absl::StrCat(
+            "--object-transform[", i, "]: must be affine (last row 0,0,0,1) and invertible"));
+      }
+    }
+    objects.push_back(spec);
+  }
+  return objects;
+}
+
+}  // namespace
+
+absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
+  ViewOptions o;
+  std::string size = "1280x720", mode = "pdsm", compare, camera;
+  std::vector<std::string> spheres, meshes, transforms;
+  bool no_bilinear = false;
+  CLI::App app{"pdsm-view: look at a penumbra deep shadow map on the GPU (docs/viewer.md)",
+               "pdsm-view"};
+  app.add_option("scene", o.scene_path, "Scene file (JSON) the PDSM was baked from")->required();
+  app.add_option("--pdsm", o.pdsm_path, "PDSM file (.exr)");
+  AddServiceFlags(&app, &o.service, /*required=*/false);
+  app.add_option("--job", o.job_id, "Job id on --server: fetch its PDSM (waits until done)");
+  app.add_flag("--headless", o.headless, "Render with OSMesa, no window (needs --screenshot)");
+  app.add_option("--size", size, "Image size WxH")->default_val(size);
+  app.add_option("--screenshot", o.screenshot_path, "Write the image (PNG) and exit");
+  app.add_option("--save-attenuation", o.attenuation_path,
+                 "Also write the attenuation per pixel (PFM float32; -1 outside the PDSM, "
+                 "-2 background)");
+  app.add_option("--mode", mode, "pdsm | cpu | hard | pcf | pcss | vsm | multi-sm")
+      ->default_val(mode);
+  app.add_option("--compare", compare, "Comma-separated modes tiled side by side");
+  app.add_option("--compare-columns", o.compare_columns, "Tiles per row in --compare");
+  app.add_option("--camera", camera, "EX,EY,EZ,TX,TY,TZ[,FOV_DEG] (world); default frames the scene");
+  app.add_flag("--no-bilinear", no_bilinear, "PDSM: nearest pixel instead of 4-pixel blend");
+  app.add_option("--sm-size", o.render.sm_size, "hard/pcf/pcss/vsm map size (default: bake's)");
+  app.add_option("--sm-count", o.render.sm_count, "multi-sm maps (default: bake's samples)");
+  app.add_option("--multi-sm-size", o.render.multi_sm_size,
+                 "multi-sm map size (default: bake's, at most 1024)");
+  app.add_option("--filter-radius", o.render.filter_radius, "pcf/vsm kernel half-width, texels")
+      ->default_val(o.render.filter_radius);
+  app.add_option("--sphere", spheres, "Dynamic sphere X,Y,Z,R (world), repeatable");
+  app.add_option("--object", meshes, "Dynamic mesh file, repeatable");
+  app.add_option("--object-transform", transforms,
+                 "16 numbers, row-major world_from_object of the matching --object");
+  app.add_option("--frames", o.frames, "Window: render N frames, write --screenshot, exit");
+  app.add_option("--bench", o.bench_frames, "Headless: time N frames of each mode (--compare or all)");
+  app.add_flag("--partial", o.partial,
+               "--job, headless: render the tiles finished so far instead of waiting");
+  app.add_flag("--allow-mismatch", o.allow_mismatch,
+               "Warn instead of failing when the PDSM was baked from another scene/light");
+  app.add_flag("-v,--verbose", o.verbose, "Debug logging");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return absl::CancelledError(app.help());
+  } catch (const CLI::ParseError& e) {
+    return absl::InvalidArgumentError(e.what());
+  }
+  o.render.bilinear = !no_bilinear;
+  const std::vector<std::string> wh = absl::StrSplit(size, 'x');
+  if (wh.size() != 2 || !absl::SimpleAtoi(wh[0], &o.width) || !absl::SimpleAtoi(wh[1], &o.height) ||
+      o.width < 1 || o.height < 1 || o.width > 16384 || o.height > 16384) {
+    return absl::InvalidArgumentError(absl::StrCat("--size: expected WxH (1..16384), got \"",
+                                                   size, "\""));
+  }
+  absl::StatusOr<std::vector<ViewMode>> modes = ParseModeList(mode, "--mode");
+  if (!modes.ok()) return modes.status();
+  if (modes->size() != 1) return absl::InvalidArgumentError("--mode: give one mode");
+  o.mode = modes->front();
+  if (!compare.empty()) {
+    absl::StatusOr<std::vector<ViewMode>> list = ParseModeList(compare, "--compare");
+    if (!list.ok()) return list.status();
+    o.compare = *list;
+  }
+  if (!camera.empty()) {
+    absl::StatusOr<Camera> c = ParseCamera(camera, "--camera");
+    if (!c.ok()) return c.status();
+    o.camera = *c;
+  }
+  absl::StatusOr<std::vector<DynamicObjectSpec>> objects = ParseObjects(spheres, meshes, transforms);
+  if (!objects.ok()) return objects.status();
+  o.objects = *objects;
+  if (o.pdsm_path.empty() == o.job_id.empty()) {
+    return absl::InvalidArgumentError("give either --pdsm PDSM.exr or --server ADDR --job JOB");
+  }
+  if (!o.job_id.empty() && o.service.server.empty()) {
+    return absl::InvalidArgumentError("--job needs --server ADDR (or $PDSM_SERVER)");
+  }
+  if (o.partial && (o.job_id.empty() || !o.headless)) {
+    return absl::InvalidArgumentError("--partial needs --headless and --job (a window always shows tiles as they finish)");
+  }
+  if (!o.headless && (!o.compare.empty() || o.bench_frames > 0 || !o.attenuation_path.empty())) {
+    return absl::InvalidArgumentError(
+        "--compare, --bench and --save-attenuation need --headless");
+  }
+  if (o.headless && o.screenshot_path.empty() && o.bench_frames == 0) {
+    return absl::InvalidArgumentError("--headless needs --screenshot OUT.png (or --bench N)");
+  }
+  if (o.render.sm_size < 0 || o.render.sm_size > 16384 || o.render.multi_sm_size < 0 ||
+      o.render.multi_sm_size > 16384 || o.render.sm_count < 0 || o.render.sm_count > 65536 ||
+      o.render.filter_radius < 0 || o.render.filter_radius > 16 || o.frames < 0 ||
+      o.bench_frames < 0) {
+    return absl::InvalidArgumentError(
+        "--sm-size/--multi-sm-size in 0..16384, --sm-count in 0..65536, --filter-radius in "
+        "0..16, --frames and --bench >= 0");
+  }
+  return o;
+}
+
+}  // namespace pdsm::view

@@ -1,0 +1,78 @@
+// What the viewer draws: the scene file's meshes and the PDSM, both in the PDSM's light
+// space, plus dynamic objects that were not in the bake (thesis 4.3).
+//
+// Every position goes to the GPU relative to the light centre in the light's axes, computed
+// in double on the CPU and rounded once to float, so a world 1e6 units from its origin keeps
+// its precision (DESIGN.md "Numerical notes").
+#ifndef PDSM_CLIENT_VIEW_VIEW_SCENE_H_
+#define PDSM_CLIENT_VIEW_VIEW_SCENE_H_
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "core/bake/bake_plan.h"
+#include "core/pdsm/pdsm_image.h"
+#include "core/scene/scene.h"
+
+namespace pdsm::view {
+
+// Non-indexed triangles with flat normals (3 vertices per triangle).
+struct DrawMesh {
+  std::string label;
+  std::vector<glm::vec3> positions;
+  std::vector<glm::vec3> normals;
+  glm::vec3 albedo{0.8f};
+};
+
+// A mesh placed by a transform the viewer may change every frame (arrow keys).
+struct DynamicObject {
+  DrawMesh mesh;                     // object space
+  glm::dmat4 world_from_object{1.0};
+};
+
+struct ViewScene {
+  Scene scene;
+  PdsmImage pdsm;
+  std::vector<uint8_t> pending;     // per PDSM pixel: not baked yet (--server, job running)
+  std::shared_ptr<const BakePlan> plan;  // the scene's plan, when following a running job
+  std::vector<DrawMesh> baked;       // light space: the scene file's meshes
+  std::vector<DynamicObject> dynamic_objects;
+  glm::dvec3 bounds_min_world{0.0};  // of the baked meshes
+  glm::dvec3 bounds_max_world{0.0};
+  glm::dvec3 casters_min_world{0.0};  // of the casting meshes: what the default camera frames
+  glm::dvec3 casters_max_world{0.0};
+
+  const LightFrame& frame() const { return pdsm.header.geometry.frame; }
+  // light_from_world as a matrix, and light_from_object for a dynamic object (double).
+  glm::dmat4 LightFromWorld() const;
+};
+
+// Checks that `header` was baked from `scene`: the same scene name, light shape, light
+// orientation, and (rect, disk) centre and size. INVALID_ARGUMENT naming `pdsm_path` and the
+// header field that differs. (A PDSM of another scene shades garbage, so it is an error;
+// --allow-mismatch in the viewer turns it into a warning.)
+absl::Status CheckPdsmMatchesScene(const Scene& scene, const PdsmHeader& header,
+                                   const std::string& pdsm_path);
+
+// The scene's meshes in the PDSM's light space, flat-shaded, one colour each.
+std::vector<DrawMesh> BuildBakedMeshes(const Scene& scene, const LightFrame& frame);
+
+// A UV sphere of radius 1 at the origin.
+DrawMesh MakeUnitSphere(int segments = 48, int rings = 24);
+
+// A mesh file (Assimp) as an object-space DrawMesh; `context` names the flag for errors.
+absl::StatusOr<DrawMesh> LoadObjectMesh(const std::string& path, const std::string& context);
+
+// Axis-aligned bounds of the scene's meshes (world); only of casters with `casters_only`
+// (all meshes when none casts).
+void SceneBounds(const Scene& scene, bool casters_only, glm::dvec3* min_world,
+                 glm::dvec3* max_world);
+
+}  // namespace pdsm::view
+
+#endif  // PDSM_CLIENT_VIEW_VIEW_SCENE_H_

@@ -1,0 +1,246 @@
+#version 430 core
+// Shading of every viewer mode: the same lighting, only the attenuation A (fraction of the
+// light hidden) differs. Direct light is scaled by (1 - A); the ambient term is not.
+// Mode numbers match client/view/view_mode.h.
+
+const int kModePdsm = 0;
+const int kModeCpu = 1;
+const int kModeHard = 2;
+const int kModePcf = 3;
+const int kModePcss = 4;
+const int kModeVsm = 5;
+const int kModeMultiSm = 6;
+
+in vec3 position_light;
+in vec3 normal_light;
+
+layout(location = 0) out vec4 colour;
+layout(location = 1) out float attenuation_out;  // A; -1 outside the PDSM frustum, -3 pending
+
+uniform int mode;
+uniform vec3 albedo;
+uniform vec3 eye_light;
+uniform int orthographic;   // the PDSM's (and every shadow map's) projection: 1 for the sun
+uniform float ambient;
+
+// ---- PDSM, two levels (thesis 4.2.4): per pixel (offset, count) into one vertex buffer.
+uniform usampler2D pdsm_index;  // RG32UI
+layout(std430, binding = 0) readonly buffer PdsmVertices { vec2 pdsm_vertices[]; };  // (z, A)
+uniform vec2 window_min;        // (s_min, t_min)
+uniform vec2 inv_pitch;         // pixels per window unit
+uniform ivec2 pdsm_size;
+uniform int bilinear;           // 1: blend the 4 nearest pixels' results; 0: nearest pixel
+const uint kPendingPixel = 0xFFFFFFFFu;  // count of a pixel not baked yet (job still running)
+const float kPending = -3.0;
+
+// ---- cpu mode: A per screen pixel, computed by the CPU.
+uniform sampler2D cpu_attenuation;  // R32F, NaN outside the PDSM frustum
+
+// ---- shadow-map modes.
+uniform sampler2D shadow_map;        // RG32F: biased z, normalised second moment
+uniform sampler2DArray shadow_maps;  // R32F (in .r), one layer per light sample
+layout(std430, binding = 1) readonly buffer LightSamples { vec2 light_samples[]; };
+uniform int sample_count;
+uniform vec2 sm_window_min;   // window (s, t) of the shadow maps
+uniform vec2 sm_window_size;
+uniform ivec2 sm_size;        // texels
+uniform vec2 light_half_extent;  // light-space units (rect, disk); tan(half angle) (sun)
+uniform float z_near;
+uniform float z_far;
+uniform int filter_radius;    // texels, pcf and vsm
+
+// A(z) of one PDSM pixel: the last vertex with depth <= z and the next one, by binary search;
+// linear between them, 0 before the first, the last value after the last (right-continuous at
+// jumps) -- EvaluateAttenuation in core/pdsm/attenuation_function.cc.
+bool PendingPixel(ivec2 pixel) { return texelFetch(pdsm_index, pixel, 0).g == kPendingPixel; }
+
+float EvaluatePixel(ivec2 pixel, float z) {
+  uvec2 entry = texelFetch(pdsm_index, pixel, 0).rg;
+  uint offset = entry.x, count = entry.y;
+  if (count == 0u || z < pdsm_vertices[offset].x) return 0.0;
+  uint lo = 1u, hi = count;  // first index in [lo, hi) with depth > z; index 0 is <= z
+  while (lo < hi) {
+    uint mid = (lo + hi) >> 1;
+    if (pdsm_vertices[offset + mid].x <= z) lo = mid + 1u; else hi = mid;
+  }
+  vec2 a = pdsm_vertices[offset + lo - 1u];
+  if (lo == count) return clamp(a.y, 0.0, 1.0);
+  vec2 b = pdsm_vertices[offset + lo];
+  float f = (z - a.x) / (b.x - a.x);
+  return clamp(a.y + f * (b.y - a.y), 0.0, 1.0);
+}
+
+vec2 WindowFromLight(vec3 p, vec2 sample_offset) {
+  if (orthographic != 0) return p.xy - sample_offset * p.z;
+  return (p.xy - sample_offset) / p.z;
+}
+
+// Thesis ch. 4: project, evaluate the 4 neighbours at z, blend the results (never depths).
+// -1 outside the frustum (QueryAttenuation's NaN).
+float PdsmAttenuation(vec3 p) {
+  if (orthographic == 0 && !(p.z > 0.0)) return -1.0;
+  vec2 st = WindowFromLight(p, vec2(0.0));
+  vec2 pixel = (st - window_min) * inv_pitch;
+  if (any(lessThan(pixel, vec2(0.0))) || any(greaterThan(pixel, vec2(pdsm_size)))) return -1.0;
+  ivec2 last = pdsm_size - 1;
+  if (bilinear == 0) {
+    ivec2 nearest = clamp(ivec2(floor(pixel)), ivec2(0), last);
+    return PendingPixel(nearest) ? kPending : EvaluatePixel(nearest, p.z);
+  }
+  vec2 f = pixel - 0.5;
+  vec2 base = floor(f);
+  vec2 w = f - base;
+  ivec2 p0 = clamp(ivec2(base), ivec2(0), last);
+  ivec2 p1 = clamp(ivec2(base) + 1, ivec2(0), last);
+  if (PendingPixel(p0) || PendingPixel(p1) || PendingPixel(ivec2(p0.x, p1.y)) ||
+      PendingPixel(ivec2(p1.x, p0.y))) {
+    return kPending;
+  }
+  float a00 = EvaluatePixel(ivec2(p0.x, p0.y), p.z);
+  float a10 = EvaluatePixel(ivec2(p1.x, p0.y), p.z);
+  float a01 = EvaluatePixel(ivec2(p0.x, p1.y), p.z);
+  float a11 = EvaluatePixel(ivec2(p1.x, p1.y), p.z);
+  return (1.0 - w.y) * ((1.0 - w.x) * a00 + w.x * a10) + w.y * ((1.0 - w.x) * a01 + w.x * a11);
+}
+
+// Texel coordinates (continuous) of p in the shadow map of the sample at sample_offset.
+vec2 ShadowMapTexel(vec3 p, vec2 sample_offset) {
+  return (WindowFromLight(p, sample_offset) - sm_window_min) / sm_window_size * vec2(sm_size);
+}
+
+// 1 where the texel's caster is nearer than p (the bias is in the stored depth); outside the
+// map, lit.
+float ShadowTest(ivec2 texel, float z) {
+  if (any(lessThan(texel, ivec2(0))) || any(greaterThanEqual(texel, sm_size))) return 0.0;
+  return z > texelFetch(shadow_map, texel, 0).r ? 1.0 : 0.0;
+}
+
+float HardShadow(vec3 p) { return ShadowTest(ivec2(floor(ShadowMapTexel(p, vec2(0.0)))), p.z); }
+
+float Pcf(vec3 p) {
+  ivec2 centre = ivec2(floor(ShadowMapTexel(p, vec2(0.0))));
+  float sum = 0.0;
+  for (int y = -filter_radius; y <= filter_radius; ++y) {
+    for (int x = -filter_radius; x <= filter_radius; ++x) sum += ShadowTest(centre + ivec2(x, y), p.z);
+  }
+  float side = float(2 * filter_radius + 1);
+  return sum / (side * side);
+}
+
+// Vogel (golden-angle spiral) disk: evenly spread taps without a table, turned by `rotation`.
+vec2 VogelDisk(int i, int n, float rotation) {
+  float r = sqrt((float(i) + 0.5) / float(n));
+  float theta = float(i) * 2.39996323 + rotation;
+  return r * vec2(cos(theta), sin(theta));
+}
+
+// Interleaved gradient noise (Jimenez 2014): a per-pixel disk rotation turns the banding of
+// a few fixed taps into fine, deterministic noise.
+float PixelRotation() {
+  return 6.2831853 * fract(52.9829189 * fract(dot(gl_FragCoord.xy, vec2(0.06711056, 0.00583715))));
+}
+
+// Window units covered by the light seen from depth z_receiver through depth z_between
+// (perspective: w (1/z_between - 1/z_receiver); sun: tan (z_receiver - z_between)).
+vec2 LightFootprint(float z_between, float z_receiver) {
+  if (orthographic != 0) return light_half_extent * max(z_receiver - z_between, 0.0);
+  return light_half_extent * max(1.0 / z_between - 1.0 / z_receiver, 0.0);
+}
+
+// PCSS (Fernando 2005) with the real light size: blocker search over the light's footprint
+// from the nearest caster depth, penumbra from the average blocker depth, then PCF; both over
+// a 32-tap disk rotated per pixel.
+float Pcss(vec3 p) {
+  const int kTaps = 32;
+  const float kMaxRadiusTexels = 48.0;
+  vec2 centre = ShadowMapTexel(p, vec2(0.0));
+  float rotation = PixelRotation();
+  vec2 texels_per_unit = vec2(sm_size) / sm_window_size;
+  vec2 search = min(LightFootprint(z_near, p.z) * texels_per_unit, vec2(kMaxRadiusTexels));
+  float blocker_sum = 0.0;
+  int blockers = 0;
+  for (int i = 0; i < kTaps; ++i) {
+    ivec2 texel = ivec2(floor(centre + VogelDisk(i, kTaps, rotation) * search));
+    if (any(lessThan(texel, ivec2(0))) || any(greaterThanEqual(texel, sm_size))) continue;
+    float z_caster = texelFetch(shadow_map, texel, 0).r;
+    if (z_caster < p.z) { blocker_sum += z_caster; ++blockers; }
+  }
+  if (blockers == 0) return 0.0;
+  float z_blocker = blocker_sum / float(blockers);
+  vec2 radius = max(min(LightFootprint(z_blocker, p.z) * texels_per_unit,
+                        vec2(kMaxRadiusTexels)), vec2(0.5));
+  float sum = 0.0;
+  for (int i = 0; i < kTaps; ++i) {
+    sum += ShadowTest(ivec2(floor(centre + VogelDisk(i, kTaps, rotation) * radius)), p.z);
+  }
+  return sum / float(kTaps);
+}
+
+// Variance shadow maps (Donnelly & Lauritzen 2006): box-filtered moments, Chebyshev's bound,
+// with light-bleeding reduction (bound below 0.2 counts as shadow).
+float Vsm(vec3 p) {
+  ivec2 centre = ivec2(floor(ShadowMapTexel(p, vec2(0.0))));
+  vec2 moments = vec2(0.0);
+  float range = z_far - z_near;
+  int n = 0;
+  for (int y = -filter_radius; y <= filter_radius; ++y) {
+    for (int x = -filter_radius; x <= filter_radius; ++x) {
+      ivec2 texel = clamp(centre + ivec2(x, y), ivec2(0), sm_size - 1);
+      vec2 m = texelFetch(shadow_map, texel, 0).rg;
+      moments += vec2((m.r - z_near) / range, m.g);
+      ++n;
+    }
+  }
+  moments /= float(n);
+  float d = (p.z - z_near) / range;
+  if (d <= moments.x) return 0.0;
+  float variance = max(moments.y - moments.x * moments.x, 1e-7);
+  float delta = d - moments.x;
+  float p_max = variance / (variance + delta * delta);
+  return 1.0 - clamp((p_max - 0.2) / 0.8, 0.0, 1.0);
+}
+
+// The brute force a PDSM replaces: one shadow map per light sample, averaged.
+float MultiShadowMap(vec3 p) {
+  float hidden = 0.0;
+  for (int k = 0; k < sample_count; ++k) {
+    ivec2 texel = ivec2(floor(ShadowMapTexel(p, light_samples[k])));
+    if (any(lessThan(texel, ivec2(0))) || any(greaterThanEqual(texel, sm_size))) continue;
+    if (p.z > texelFetch(shadow_maps, ivec3(texel, k), 0).r) hidden += 1.0;
+  }
+  return hidden / float(max(sample_count, 1));
+}
+
+float Attenuation(vec3 p) {
+  if (mode == kModePdsm) return PdsmAttenuation(p);
+  if (mode == kModeCpu) {
+    float a = texelFetch(cpu_attenuation, ivec2(gl_FragCoord.xy), 0).r;
+    return isnan(a) ? -1.0 : a;
+  }
+  if (mode == kModeHard) return HardShadow(p);
+  if (mode == kModePcf) return Pcf(p);
+  if (mode == kModePcss) return Pcss(p);
+  if (mode == kModeVsm) return Vsm(p);
+  return MultiShadowMap(p);
+}
+
+void main() {
+  vec3 p = position_light;
+  vec3 n = normalize(normal_light);
+  if (dot(n, eye_light - p) < 0.0) n = -n;  // two-sided: thin plates are seen from both sides
+  // Direct light from the light centre: Lambert at the receiver, and the emitter's cosine
+  // for a planar light (1 for the sun).
+  vec3 to_light = orthographic != 0 ? vec3(0.0, 0.0, -1.0) : normalize(-p);
+  float emitter_cos = orthographic != 0 ? 1.0 : max(-to_light.z, 0.0);
+  float direct = max(dot(n, to_light), 0.0) * emitter_cos;
+  float a = Attenuation(p);
+  attenuation_out = a;
+  float visible = 1.0 - max(a, 0.0);  // outside the frustum: no information, lit
+  vec3 linear = albedo * (ambient + (1.0 - ambient) * direct * visible);
+  // Not baked yet: lit, under a blue hatch that moves with the surface.
+  if (a == kPending) {
+    float hatch = step(0.5, fract((gl_FragCoord.x + gl_FragCoord.y) / 16.0));
+    linear = mix(linear, vec3(0.25, 0.45, 0.9), 0.25 + 0.2 * hatch);
+  }
+  colour = vec4(pow(clamp(linear, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
+}

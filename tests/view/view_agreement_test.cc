@@ -1,0 +1,170 @@
+// The GPU PDSM (shaders/view/shade.frag) against the CPU code of `pdsm query`
+// (QueryAttenuation, the viewer's `cpu` mode), on the same PDSM, camera and pixels, with a
+// dynamic sphere that was not in the bake (thesis 4.3). docs/viewer.md states the tolerance.
+#include <algorithm>
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "client/view/frame_renderer.h"
+#include "client/view/image_io.h"
+#include "tests/view/view_test_support.h"
+
+namespace pdsm::testing {
+namespace {
+
+using view::FloatImage;
+
+// Tolerance (docs/viewer.md): |A_gpu - A_cpu| <= 1e-4 at every pixel but at most 0.1% of
+// them. The GPU evaluates in float32 what the CPU does in double; only a fragment whose depth
+// lies within float rounding of a jump of A(z) may land on the other side of it.
+constexpr double kAttenuationTolerance = 1e-4;
+constexpr double kMaxOutlierFraction = 1e-3;
+
+// A sphere in the umbra of the pink plate of `plates` (above the ground, below the plate).
+constexpr char kSphere[] = "--sphere -1.5,1.0,-1.0,0.6";
+constexpr char kCamera[] = "--camera 4,7,6,0,1,0,40";
+
+FloatImage RenderAttenuation(const std::string& mode, const std::string& extra,
+                             const TempDir& dir) {
+  const std::string pfm = dir.File(mode + ".pfm");
+  CommandResult r = RunView("plates",
+                            "--pdsm " + SmallBake("plates") + " --headless --size 160x120 " +
+                                kCamera + " --mode " + mode + " --screenshot " +
+                                dir.File(mode + ".png") + " --save-attenuation " + pfm + " " +
+                                extra,
+                            dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  absl::StatusOr<FloatImage> image = view::ReadPfm(pfm);
+  EXPECT_TRUE(image.ok()) << image.status();
+  return image.ok() ? *image : FloatImage{};
+}
+
+// Red where the two differ by more than the tolerance, grey elsewhere.
+void WriteDiffImage(const FloatImage& a, const FloatImage& b, const std::string& path) {
+  view::RgbImage diff{a.width, a.height, std::vector<uint8_t>(a.values.size() * 3)};
+  for (size_t i = 0; i < a.values.size(); ++i) {
+    const bool bad = !(std::abs(a.values[i] - b.values[i]) <= kAttenuationTolerance);
+    const uint8_t grey = static_cast<uint8_t>(std::clamp(a.values[i], 0.0f, 1.0f) * 120 + 60);
+    diff.rgb[3 * i] = bad ? 255 : grey;
+    diff.rgb[3 * i + 1] = bad ? 0 : grey;
+    diff.rgb[3 * i + 2] = bad ? 0 : grey;
+  }
+  ASSERT_TRUE(view::WritePng(path, diff).ok());
+}
+
+TEST(ViewAgreement, GpuPdsmMatchesCpuQueryPerPixel) {
+  TempDir dir;
+  const FloatImage gpu = RenderAttenuation("pdsm", kSphere, dir);
+  const FloatImage cpu = RenderAttenuation("cpu", kSphere, dir);
+  ASSERT_EQ(gpu.values.size(), cpu.values.size());
+  ASSERT_FALSE(gpu.values.empty());
+  size_t surface = 0, outliers = 0, penumbra = 0, umbra = 0;
+  double max_difference = 0;
+  for (size_t i = 0; i < gpu.values.size(); ++i) {
+    // The same pixels are background, outside the PDSM, or shaded in both.
+    ASSERT_EQ(gpu.values[i] == view::kBackground, cpu.values[i] == view::kBackground) << i;
+    ASSERT_EQ(gpu.values[i] == view::kOutsidePdsm, cpu.values[i] == view::kOutsidePdsm) << i;
+    if (gpu.values[i] < 0) continue;
+    ++surface;
+    const double d = std::abs(gpu.values[i] - cpu.values[i]);
+    max_difference = std::max(max_difference, d);
+    if (!(d <= kAttenuationTolerance)) ++outliers;
+    if (cpu.values[i] > 0.05 && cpu.values[i] < 0.95) ++penumbra;
+    if (cpu.values[i] >= 0.95) ++umbra;
+  }
+  std::printf("GPU vs CPU: %zu surface pixels, max |dA| %.3g, %zu above %.0e\n", surface,
+              max_difference, outliers, kAttenuationTolerance);
+  // Not vacuous: the image holds lit, penumbra and umbra pixels.
+  EXPECT_GT(surface, gpu.values.size() / 4);
+  EXPECT_GT(penumbra, surface / 100);
+  EXPECT_GT(umbra, surface / 100);
+  const bool ok = outliers <= kMaxOutlierFraction * surface;
+  if (!ok) {
+    const std::string diff = ViewTestOutputDir() + "/agreement_diff.png";
+    WriteDiffImage(gpu, cpu, diff);
+    ADD_FAILURE() << outliers << " of " << surface << " pixels differ by more than "
+                  << kAttenuationTolerance << "; diff image: " << diff;
+  }
+}
+
+// Pixels showing the dynamic sphere, told by its colour (pink: red and blue above green,
+// unlike every baked mesh of `plates`), in the PNG RenderAttenuation wrote for `mode`.
+std::vector<bool> SphereMask(const std::string& mode, const TempDir& dir) {
+  absl::StatusOr<view::RgbImage> image = view::ReadPng(dir.File(mode + ".png"));
+  EXPECT_TRUE(image.ok()) << image.status();
+  std::vector<bool> mask;
+  if (!image.ok()) return mask;
+  for (size_t i = 0; i < image->rgb.size(); i += 3) {
+    const int r = image->rgb[i], g = image->rgb[i + 1], b = image->rgb[i + 2];
+    mask.push_back(r > g + 20 && b > g + 8);
+  }
+  return mask;
+}
+
+// The sphere under the pink plate was not in the bake, yet its top is in the plate's umbra.
+TEST(ViewAgreement, DynamicSphereReceivesPdsmShadow) {
+  TempDir dir;
+  const FloatImage with = RenderAttenuation("pdsm", kSphere, dir);
+  const std::vector<bool> sphere = SphereMask("pdsm", dir);
+  ASSERT_EQ(sphere.size(), with.values.size());
+  size_t pixels = 0, umbra = 0;
+  for (size_t i = 0; i < sphere.size(); ++i) {
+    if (!sphere[i]) continue;
+    ++pixels;
+    if (with.values[i] >= 0.95) ++umbra;
+  }
+  EXPECT_GT(pixels, 50u);
+  EXPECT_GT(umbra, pixels / 4);
+}
+
+// The same with a mesh file (--object, Assimp) placed by --object-transform: a box under the
+// plate, its top in the umbra.
+TEST(ViewAgreement, DynamicMeshReceivesPdsmShadow) {
+  TempDir dir;
+  WriteText(dir.File("box.obj"),
+            "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\n"
+            "v -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
+            "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n"
+            "f 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n");
+  const FloatImage with = RenderAttenuation(
+      "pdsm",
+      "--object " + dir.File("box.obj") +
+          " --object-transform 0.5,0,0,-1.5,0,0.5,0,1.0,0,0,0.5,-1.0,0,0,0,1",
+      dir);
+  const std::vector<bool> box = SphereMask("pdsm", dir);
+  ASSERT_EQ(box.size(), with.values.size());
+  size_t pixels = 0, umbra = 0;
+  for (size_t i = 0; i < box.size(); ++i) {
+    if (!box[i]) continue;
+    ++pixels;
+    if (with.values[i] >= 0.95) ++umbra;
+  }
+  EXPECT_GT(pixels, 50u);
+  EXPECT_GT(umbra, pixels / 4);
+}
+
+// A sphere in the open: no baked shadow appears anywhere in the PDSM modes (it was not in
+// the bake), while in the shadow-map modes it casts (it is drawn into the maps).
+TEST(ViewAgreement, DynamicSphereCastsOnlyInShadowMapModes) {
+  TempDir dir;
+  const std::string sphere = "--sphere -3,1.5,1.5,0.6";
+  const FloatImage pdsm_without = RenderAttenuation("pdsm", "", dir);
+  const FloatImage pdsm_with = RenderAttenuation("pdsm", sphere, dir);
+  const FloatImage hard_without = RenderAttenuation("hard", "", dir);
+  const FloatImage hard_with = RenderAttenuation("hard", sphere, dir);
+  const std::vector<bool> mask = SphereMask("hard", dir);
+  ASSERT_EQ(mask.size(), hard_with.values.size());
+  size_t darker_in_pdsm = 0, shadowed_ground_in_hard = 0;
+  for (size_t i = 0; i < pdsm_with.values.size(); ++i) {
+    if (pdsm_with.values[i] > std::max(pdsm_without.values[i], 0.0f) + 0.01f) ++darker_in_pdsm;
+    if (!mask[i] && hard_without.values[i] == 0.0f && hard_with.values[i] == 1.0f) {
+      ++shadowed_ground_in_hard;
+    }
+  }
+  EXPECT_EQ(darker_in_pdsm, 0u);
+  EXPECT_GT(shadowed_ground_in_hard, 20u);
+}
+
+}  // namespace
+}  // namespace pdsm::testing

@@ -1,0 +1,135 @@
+// pdsm-view --server --job: waits for a job on a real coordinator and worker, fetches its PDSM
+// and shows the same image as the local bake of the same scene.
+#include <csignal>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "client/view/frame_renderer.h"
+#include "client/view/image_io.h"
+#include "tests/service/service_cluster.h"
+#include "tests/view/view_test_support.h"
+
+namespace pdsm::testing {
+namespace {
+
+// examples/plates with a bake small enough for a test (48x48 pixels, 8 samples).
+std::string WriteSmallPlates(const TempDir& dir) {
+  std::string scene = ReadBytes(ExamplePath("plates"));
+  const std::string from = "\"resolution\": [256,256], \"samples\": 64";
+  EXPECT_NE(scene.find(from), std::string::npos);
+  scene.replace(scene.find(from), from.size(), "\"resolution\": [48,48], \"samples\": 8");
+  WriteText(dir.File("plates.json"), scene);
+  return dir.File("plates.json");
+}
+
+TEST(ViewServer, JobOnTheServiceLooksLikeTheLocalBake) {
+  ClusterOptions options;
+  options.client_token = "client-secret";
+  options.worker_token = "worker-secret";
+  ServiceCluster cluster(options);
+  ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
+  cluster.AddWorker();
+  const std::string scene = WriteSmallPlates(cluster.dir());
+  const std::string job_id = cluster.Submit(scene);
+  ASSERT_EQ(job_id.size(), 16u);
+
+  // Started at once: the viewer waits for the job to finish (WatchJob), then fetches.
+  const std::string view_args = " --headless --size 96x72 --screenshot ";
+  CommandResult remote = RunCommand(
+      std::string(PDSM_VIEW) + " " + scene + " --server " + cluster.address() + " --job " +
+          job_id + " --token-file " + cluster.dir().File("client_token") + view_args +
+          cluster.dir().File("remote.png") + " --save-attenuation " +
+          cluster.dir().File("remote.pfm"),
+      cluster.dir());
+  ASSERT_EQ(remote.exit_code, 0) << remote.err << cluster.Log("coordinator.log");
+  EXPECT_NE(remote.err.find("SUCCEEDED"), std::string::npos) << remote.err;
+
+  CommandResult bake = RunCommand(std::string(PDSM_CLI) + " bake " + scene + " -o " +
+                                      cluster.dir().File("local.exr") + " --no-preview",
+                                  cluster.dir());
+  ASSERT_EQ(bake.exit_code, 0) << bake.err;
+  CommandResult local = RunCommand(std::string(PDSM_VIEW) + " " + scene + " --pdsm " +
+                                       cluster.dir().File("local.exr") + view_args +
+                                       cluster.dir().File("local.png") + " --save-attenuation " +
+                                       cluster.dir().File("local.pfm"),
+                                   cluster.dir());
+  ASSERT_EQ(local.exit_code, 0) << local.err;
+  // The service's PDSM has the local bake's bytes, so the renders are identical.
+  EXPECT_TRUE(ReadBytes(cluster.dir().File("remote.pfm")) ==
+              ReadBytes(cluster.dir().File("local.pfm")));
+
+  // A wrong token is refused before anything is drawn.
+  WriteText(cluster.dir().File("bad_token"), "nope\n");
+  CommandResult refused = RunCommand(
+      std::string(PDSM_VIEW) + " " + scene + " --server " + cluster.address() + " --job " +
+          job_id + " --token-file " + cluster.dir().File("bad_token") + view_args +
+          cluster.dir().File("refused.png"),
+      cluster.dir());
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_FALSE(std::filesystem::exists(cluster.dir().File("refused.png")));
+}
+
+// --partial: a running job's finished tiles are shown (the rest flagged pending) and they are
+// already the final PDSM's pixels.
+TEST(ViewServer, RunningJobShowsItsFinishedTilesAsTheyWillBe) {
+  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "4"}));
+  ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
+  cluster.AddWorker();
+  // 96x96 pixels in tiles of 32: 9 tiles of 8 tasks each.
+  std::string text = ReadBytes(WriteSmallPlates(cluster.dir()));
+  const std::string from = "\"resolution\": [48,48], \"samples\": 8";
+  ASSERT_NE(text.find(from), std::string::npos);
+  text.replace(text.find(from), from.size(),
+               "\"resolution\": [96,96], \"samples\": 32, \"tileSize\": 32");
+  const std::string scene = cluster.dir().File("tiled.json");
+  WriteText(scene, text);
+  const std::string job_id = cluster.Submit(scene);
+  ASSERT_EQ(job_id.size(), 16u);
+  pdsm::v1::Job job = cluster.WaitUntil(job_id, std::chrono::seconds(60), [](const pdsm::v1::Job& j) {
+    return j.tiles_done() >= 1 || j.state() == pdsm::v1::SUCCEEDED;
+  });
+  cluster.worker(0).Signal(SIGSTOP);  // the job stays RUNNING with some tiles done
+  ASSERT_TRUE(cluster.GetJob(job_id, &job).ok());
+  if (job.state() == pdsm::v1::SUCCEEDED) {
+    cluster.worker(0).Signal(SIGCONT);
+    GTEST_SKIP() << "the job finished before the worker could be stopped";
+  }
+  const std::string view = std::string(PDSM_VIEW) + " " + scene + " --server " +
+                           cluster.address() + " --job " + job_id +
+                           " --headless --size 128x96 --camera 4,7,6,0,1,0,40 --screenshot ";
+  CommandResult partial = RunCommand(view + cluster.dir().File("partial.png") +
+                                         " --partial --save-attenuation " +
+                                         cluster.dir().File("partial.pfm"),
+                                     cluster.dir());
+  cluster.worker(0).Signal(SIGCONT);
+  ASSERT_EQ(partial.exit_code, 0) << partial.err;
+  EXPECT_NE(partial.err.find("RUNNING"), std::string::npos) << partial.err;
+  ASSERT_EQ(cluster.WaitForEnd(job_id).state(), pdsm::v1::SUCCEEDED);
+  CommandResult final_run = RunCommand(view + cluster.dir().File("final.png") +
+                                           " --save-attenuation " + cluster.dir().File("final.pfm"),
+                                       cluster.dir());
+  ASSERT_EQ(final_run.exit_code, 0) << final_run.err;
+
+  absl::StatusOr<view::FloatImage> a = view::ReadPfm(cluster.dir().File("partial.pfm"));
+  absl::StatusOr<view::FloatImage> b = view::ReadPfm(cluster.dir().File("final.pfm"));
+  ASSERT_TRUE(a.ok() && b.ok());
+  ASSERT_EQ(a->values.size(), b->values.size());
+  size_t pending = 0, shown = 0;
+  for (size_t i = 0; i < a->values.size(); ++i) {
+    if (a->values[i] == view::kPending) {
+      ++pending;
+      EXPECT_GE(b->values[i], -1.0f) << i;  // the final PDSM covers it
+      continue;
+    }
+    if (a->values[i] >= 0) ++shown;
+    ASSERT_EQ(a->values[i], b->values[i]) << "pixel " << i;
+  }
+  std::printf("partial: %d/%d tiles, %zu pixels pending, %zu shown (equal to the final)\n",
+              job.tiles_done(), job.tiles_total(), pending, shown);
+  EXPECT_GT(pending, 0u);
+  EXPECT_GT(shown, 0u);
+}
+
+}  // namespace
+}  // namespace pdsm::testing

@@ -1,0 +1,57 @@
+// Shared by the pdsm-view tests: small bakes of the examples (made once per test process) and
+// running the pdsm-view binary.
+#ifndef PDSM_TESTS_VIEW_VIEW_TEST_SUPPORT_H_
+#define PDSM_TESTS_VIEW_VIEW_TEST_SUPPORT_H_
+
+#include <map>
+#include <string>
+
+#include "client/local_bake.h"
+#include "core/scene/scene_loader.h"
+#include "tests/test_support.h"
+
+namespace pdsm::testing {
+
+// The folder of the bakes; lives as long as the test process.
+inline const TempDir& ViewBakeDir() {
+  static const TempDir* dir = new TempDir();
+  return *dir;
+}
+
+// `example` baked at 64x64 PDSM pixels, 16 samples, 256-texel shadow maps: a few tenths of a
+// second, and enough penumbra to compare modes on. Same bytes every time (determinism).
+inline std::string SmallBake(const std::string& example) {
+  static std::map<std::string, std::string>* baked = new std::map<std::string, std::string>();
+  if (auto it = baked->find(example); it != baked->end()) return it->second;
+  pdsm::v1::BakeParams overrides;
+  overrides.add_resolution(64);
+  overrides.add_resolution(64);
+  overrides.set_samples(16);
+  overrides.set_shadow_map_resolution(256);
+  overrides.set_tile_size(32);
+  absl::StatusOr<Scene> scene = LoadSceneFile(ExamplePath(example), overrides);
+  EXPECT_TRUE(scene.ok()) << scene.status();
+  LocalBakeOptions options;
+  options.output_path = ViewBakeDir().File(example + ".exr");
+  absl::StatusOr<BakeSummary> summary = RunLocalBake(*scene, options);
+  EXPECT_TRUE(summary.ok()) << summary.status();
+  (*baked)[example] = options.output_path;
+  return options.output_path;
+}
+
+// pdsm-view with `args` appended after the scene of `example`.
+inline CommandResult RunView(const std::string& example, const std::string& args,
+                             const TempDir& dir) {
+  return RunCommand(std::string(PDSM_VIEW) + " " + ExamplePath(example) + " " + args, dir);
+}
+
+// Where failing image tests leave their actual and diff images (kept after the test).
+inline std::string ViewTestOutputDir() {
+  const std::string dir = std::string(PDSM_BINARY_DIR) + "/test-output/view";
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+}  // namespace pdsm::testing
+
+#endif  // PDSM_TESTS_VIEW_VIEW_TEST_SUPPORT_H_

@@ -1,0 +1,129 @@
+// The viewer's pure pieces: flags, camera, the scene/PDSM match check, the shadow-map
+// projections (against DESIGN.md's formulas, on random points).
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "client/view/camera.h"
+#include "client/view/shadow_maps.h"
+#include "client/view/view_mode.h"
+#include "client/view/view_scene.h"
+#include "core/scene/scene_loader.h"
+#include "tests/test_support.h"
+
+namespace pdsm::testing {
+namespace {
+
+TEST(ViewUnits, ModeListsRoundTripAndNameTheBadEntry) {
+  absl::StatusOr<std::vector<view::ViewMode>> all =
+      view::ParseModeList("pdsm,cpu,hard,pcf,pcss,vsm,multi-sm", "--compare");
+  ASSERT_TRUE(all.ok()) << all.status();
+  ASSERT_EQ(all->size(), std::size(view::kAllModes));
+  for (size_t i = 0; i < all->size(); ++i) EXPECT_EQ((*all)[i], view::kAllModes[i]);
+  absl::StatusOr<std::vector<view::ViewMode>> bad = view::ParseModeList("pdsm,soft", "--compare");
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.status().message().find("--compare"), std::string::npos);
+  EXPECT_NE(bad.status().message().find("soft"), std::string::npos);
+}
+
+TEST(ViewUnits, CameraParsesAndRefusesNonsense) {
+  absl::StatusOr<view::Camera> c = view::ParseCamera("1,2,3,4,5,6,30", "--camera");
+  ASSERT_TRUE(c.ok()) << c.status();
+  EXPECT_EQ(c->eye_world, glm::dvec3(1, 2, 3));
+  EXPECT_EQ(c->target_world, glm::dvec3(4, 5, 6));
+  EXPECT_EQ(c->fov_y_degrees, 30);
+  absl::StatusOr<view::Camera> again = view::ParseCamera(view::FormatCamera(*c), "--camera");
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ(again->eye_world, c->eye_world);
+  for (const char* bad : {"1,2,3", "1,2,3,1,2,3", "1,2,3,4,5,nan", "1,2,3,4,5,6,179", "a,b"}) {
+    EXPECT_FALSE(view::ParseCamera(bad, "--camera").ok()) << bad;
+  }
+}
+
+// A camera orbited in any direction keeps its distance and never flips over the pole.
+TEST(ViewUnits, OrbitKeepsDistanceAndStaysOffThePole) {
+  view::Camera c;
+  c.eye_world = {3, 4, 5};
+  c.target_world = {1, 1, 1};
+  const double distance = glm::length(c.eye_world - c.target_world);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> angle(-1.0, 1.0);
+  for (int i = 0; i < 200; ++i) {
+    view::Orbit(&c, angle(rng), angle(rng));
+    EXPECT_NEAR(glm::length(c.eye_world - c.target_world), distance, 1e-9);
+    const glm::dvec3 dir = glm::normalize(c.eye_world - c.target_world);
+    EXPECT_LT(std::abs(dir.y), 0.9951);
+  }
+}
+
+// ShadowClipFromLight maps a light-space point to the window position DESIGN.md gives for the
+// sample ((x - a) / z perspective, x - a z sun), and keeps depth order (reversed: nearer is
+// larger) over the bake's depth range.
+TEST(ViewUnits, ShadowMapProjectionFollowsTheBakeGeometry) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (Projection projection : {Projection::kPerspective, Projection::kOrthographic}) {
+    PdsmHeader header;
+    header.geometry.projection = projection;
+    header.geometry.s_min = -0.7, header.geometry.s_max = 0.5;
+    header.geometry.t_min = -0.4, header.geometry.t_max = 0.9;
+    header.geometry.z_near = 2, header.geometry.z_far = 20;
+    header.light_half_width = 1.5, header.light_half_height = 0.5;
+    header.tan_half_angle = 0.02;
+    header.light_shape = projection == Projection::kPerspective ? LightShape::kRect : LightShape::kSun;
+    const view::ShadowMapLayout layout = view::MakeShadowMapLayout(header, 256, true);
+    for (int i = 0; i < 500; ++i) {
+      const glm::dvec2 sample(unit(rng) * 0.02, unit(rng) * 0.02);
+      const glm::dvec3 p(unit(rng) * 3, unit(rng) * 3, 2 + 18 * (0.5 + 0.5 * unit(rng)));
+      const glm::dvec2 st = projection == Projection::kPerspective
+                                ? (glm::dvec2(p) - sample) / p.z
+                                : glm::dvec2(p) - sample * p.z;
+      const glm::dvec2 expected_ndc = 2.0 * (st - layout.window_min) / layout.window_size - 1.0;
+      const glm::vec4 clip = view::ShadowClipFromLight(header, layout, sample) * glm::vec4(p, 1);
+      EXPECT_NEAR(clip.x / clip.w, expected_ndc.x, 1e-4);
+      EXPECT_NEAR(clip.y / clip.w, expected_ndc.y, 1e-4);
+      const float depth = clip.z / clip.w;
+      EXPECT_GT(depth, 0.0f);
+      EXPECT_LT(depth, 1.0f);
+      const glm::vec4 farther =
+          view::ShadowClipFromLight(header, layout, sample) * glm::vec4(p + glm::dvec3(0, 0, 1), 1);
+      EXPECT_LT(farther.z / farther.w, depth);
+    }
+  }
+}
+
+TEST(ViewUnits, MatchCheckNamesTheDifferingHeaderField) {
+  absl::StatusOr<Scene> scene = LoadSceneFile(ExamplePath("plates"));
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  PdsmHeader header;
+  header.scene_name = scene->name;
+  header.light_shape = scene->light.shape;
+  header.geometry.frame = scene->light.frame;
+  header.light_half_width = scene->light.half_width;
+  header.light_half_height = scene->light.half_height;
+  EXPECT_TRUE(view::CheckPdsmMatchesScene(*scene, header, "p.exr").ok());
+  const auto expect_field = [&](PdsmHeader h, const std::string& field) {
+    absl::Status s = view::CheckPdsmMatchesScene(*scene, h, "p.exr");
+    EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << field;
+    EXPECT_NE(s.message().find(field), std::string::npos) << s.message();
+    EXPECT_NE(s.message().find("p.exr"), std::string::npos) << s.message();
+  };
+  PdsmHeader h = header;
+  h.scene_name = "other";
+  expect_field(h, "scene_name");
+  h = header;
+  h.geometry.frame.center.x += 0.5;
+  expect_field(h, "light centre");
+  h = header;
+  h.geometry.frame.n = -h.geometry.frame.n;
+  expect_field(h, "light normal");
+  h = header;
+  h.light_half_height *= 1.1;
+  expect_field(h, "light size");
+  h = header;
+  h.light_shape = LightShape::kDisk;
+  expect_field(h, "light_shape");
+}
+
+}  // namespace
+}  // namespace pdsm::testing
