@@ -1,8 +1,10 @@
 #include "client/bake_overrides.h"
 
 #include <regex>
+#include <vector>
 
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
 
 namespace pdsm {
 
@@ -12,6 +14,21 @@ void AddOverrideFlags(CLI::App* cmd, OverrideFlags* flags) {
   cmd->add_option("--sm-resolution", flags->sm_resolution, "Shadow-map texels across the window");
   cmd->add_option("--epsilon", flags->epsilon, "Compression tolerance in [0, 1]");
   cmd->add_option("--tile-size", flags->tile_size, "PDSM pixels per tile side");
+  cmd->add_option("--depth-bias", flags->depth_bias, "Constant depth bias, world units");
+  cmd->add_option("--sampling", flags->sampling, "Light sampling pattern (bake.sampling name)");
+}
+
+absl::StatusOr<pdsm::v1::Sampling> ParseSamplingName(const std::string& name,
+                                                     const std::string& flag) {
+  pdsm::v1::Sampling value;
+  if (pdsm::v1::Sampling_Parse(name, &value)) return value;
+  std::vector<std::string> names;
+  const google::protobuf::EnumDescriptor* e = pdsm::v1::Sampling_descriptor();
+  for (int i = 0; i < e->value_count(); ++i) {
+    if (e->value(i)->number() != 0) names.push_back(e->value(i)->name());
+  }
+  return absl::InvalidArgumentError(absl::StrFormat(
+      "%s: unknown sampling pattern \"%s\" (one of %s)", flag, name, absl::StrJoin(names, ", ")));
 }
 
 absl::StatusOr<pdsm::v1::BakeParams> ToBakeParams(const OverrideFlags& flags) {
@@ -48,6 +65,12 @@ absl::StatusOr<pdsm::v1::BakeParams> ToBakeParams(const OverrideFlags& flags) {
   }
   if (!s.ok()) return s;
   if (flags.epsilon) params.set_epsilon(*flags.epsilon);
+  if (flags.depth_bias) params.set_depth_bias(*flags.depth_bias);
+  if (!flags.sampling.empty()) {
+    absl::StatusOr<pdsm::v1::Sampling> sampling = ParseSamplingName(flags.sampling, "--sampling");
+    if (!sampling.ok()) return sampling.status();
+    params.set_sampling(*sampling);
+  }
   return params;
 }
 

@@ -1,0 +1,237 @@
+#include "client/target_error.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iterator>
+#include <limits>
+#include <optional>
+#include <vector>
+
+#include "absl/strings/str_format.h"
+#include "client/child_bake.h"
+#include "core/scene/scene_loader.h"
+
+namespace pdsm {
+namespace {
+
+constexpr int kPilotSamples = 8;
+constexpr int kPilotResolution = 64;
+constexpr double kMargin = 1.25;
+constexpr uint64_t kPointsSeed = 1;
+constexpr int kSampleCounts[] = {1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024, 2048, 4096, 8192};
+constexpr int kResolutions[] = {32, 48, 64, 96, 128, 192, 256, 384, 512, 768, 1024, 1536, 2048};
+
+// e(N, R) = a N^-k + b / R;  t(N, R) = f + g N (R / R0)^beta.
+struct Model {
+  double a = 0, k = 0.75, b = 0;
+  double f = 0, g = 0, beta = 1;
+
+  double Error(int n, int r) const { return a * std::pow(n, -k) + b / r; }
+  double Cost(int n, int r) const {
+    return f + g * n * std::pow(static_cast<double>(r) / kPilotResolution, beta);
+  }
+};
+
+struct Measurement {
+  BakeKnobs knobs;
+  double seconds = 0;
+  BakeErrors errors;
+};
+
+class TargetErrorSearch {
+ public:
+  TargetErrorSearch(const TargetErrorOptions& options, const Scene& scene, BakeKnobs base,
+                    const AccuracyProbe& probe)
+      : options_(options), scene_(scene), base_(std::move(base)), probe_(probe) {}
+
+  BakeKnobs KnobsFor(int n, int r) const {
+    BakeKnobs k = base_;
+    k.samples = options_.samples.value_or(n);
+    if (options_.resolution) {
+      k.width = options_.resolution->first;
+      k.height = options_.resolution->second;
+    } else {
+      k.width = r;
+      k.height = std::max(1, static_cast<int>(std::lround(static_cast<double>(r) *
+                                                          scene_.bake.height / scene_.bake.width)));
+    }
+    k.sm_resolution =
+        options_.sm_resolution.value_or(std::min(2 * k.width, kMaxShadowMapResolution));
+    k.epsilon = options_.epsilon.value_or(options_.target / 4);
+    if (options_.depth_bias) k.depth_bias = options_.depth_bias;
+    return k;
+  }
+
+  absl::StatusOr<Measurement> Bake(const BakeKnobs& knobs, const std::string& path) {
+    std::vector<std::string> args = knobs.BakeArgs();
+    if (options_.threads > 0)
+      args.insert(args.end(), {"--threads", std::to_string(options_.threads)});
+    absl::StatusOr<ChildBakeResult> bake =
+        RunChildBake(options_.scene_path, path, args, path + ".log");
+    if (!bake.ok()) return bake.status();
+    absl::StatusOr<BakeErrors> errors = probe_.Measure(path);
+    if (!errors.ok()) return errors.status();
+    ++bakes_;
+    std::fprintf(stderr, "  %-40s %7.2fs  mean error %.5f\n", knobs.Label().c_str(), bake->seconds,
+                 errors->all.mean);
+    return Measurement{knobs, bake->seconds, *errors};
+  }
+
+  // The pilots, then the fit. Pilots that a fixed knob makes identical are baked once.
+  absl::StatusOr<Model> FitModel(const std::filesystem::path& dir) {
+    const int n0 = kPilotSamples, r0 = kPilotResolution;
+    std::vector<std::pair<int, int>> pilots = {{n0, r0}};
+    if (!options_.samples) pilots.push_back({4 * n0, r0});
+    if (!options_.resolution) pilots.push_back({n0, 2 * r0});
+    std::vector<Measurement> m;
+    for (const auto& [n, r] : pilots) {
+      absl::StatusOr<Measurement> pilot =
+          Bake(KnobsFor(n, r), (dir / absl::StrFormat("pilot_%d_%d.exr", n, r)).string());
+      if (!pilot.ok()) return pilot.status();
+      m.push_back(*pilot);
+    }
+    Model model;
+    const double e1 = m[0].errors.all.mean, t1 = m[0].seconds;
+    size_t next = 1;
+    double e2 = e1, t2 = t1;
+    if (!options_.samples) e2 = m[next].errors.all.mean, t2 = m[next].seconds, ++next;
+    if (!options_.resolution) {
+      const double e3 = m[next].errors.all.mean, t3 = m[next].seconds;
+      model.b = std::max(0.0, 2.0 * r0 * (e1 - e3));
+      model.g = options_.samples ? 0 : std::max(1e-9, (t2 - t1) / (3.0 * n0));
+      model.f = std::max(0.0, t1 - model.g * n0);
+      if (model.g > 0 && t3 > model.f) {
+        model.beta = std::clamp(std::log2((t3 - model.f) / (model.g * n0)), 0.0, 2.0);
+      }
+      if (options_.samples) {  // cost from the resolution pair alone
+        model.g = std::max(1e-9, (t3 - t1) / n0);
+        model.f = std::max(0.0, t1 - model.g * n0);
+      }
+    } else {
+      model.g = std::max(1e-9, (t2 - t1) / (3.0 * n0));
+      model.f = std::max(0.0, t1 - model.g * n0);
+    }
+    // The sampling part at N0 and 4 N0 once the resolution part is taken out.
+    const double s1 = e1 - model.b / r0, s2 = e2 - model.b / r0;
+    if (options_.samples) {
+      model.a = std::max(0.0, s1);  // constant: N is not chosen
+      model.k = 0.0;
+    } else if (s1 > 0) {
+      model.k = std::clamp(std::log(s1 / std::max(s2, s1 / 64)) / std::log(4.0), 0.25, 1.5);
+      model.a = s1 * std::pow(n0, model.k);
+    }
+    std::fprintf(stderr,
+                 "target-error: model e(N,R) = %.4g N^-%.2f + %.4g / R, "
+                 "t(N,R) = %.2f + %.4g N (R/%d)^%.2f s\n",
+                 model.a, model.k, model.b, model.f, model.g, kPilotResolution, model.beta);
+    return model;
+  }
+
+  // The cheapest (N, R) predicted to meet target / demand and costing more than `above`; nullopt
+  // when none is. *predicted: the most accurate prediction seen (for messages).
+  std::optional<std::pair<int, int>> Choose(const Model& model, double demand, double above,
+                                            double* predicted, double* cost) const {
+    std::vector<int> ns, rs;
+    if (options_.samples)
+      ns = {*options_.samples};
+    else
+      ns.assign(std::begin(kSampleCounts), std::end(kSampleCounts));
+    if (options_.resolution)
+      rs = {options_.resolution->first};
+    else
+      rs.assign(std::begin(kResolutions), std::end(kResolutions));
+    std::optional<std::pair<int, int>> best;
+    *cost = std::numeric_limits<double>::infinity();
+    *predicted = std::numeric_limits<double>::infinity();
+    double lowest = std::numeric_limits<double>::infinity();
+    for (int n : ns) {
+      for (int r : rs) {
+        const double e = model.Error(n, r), t = model.Cost(n, r);
+        if (t <= above) continue;
+        lowest = std::min(lowest, e);
+        if (e * demand <= options_.target / kMargin && t < *cost) {
+          best = std::make_pair(n, r), *cost = t, *predicted = e;
+        }
+      }
+    }
+    if (!best) *predicted = lowest;
+    return best;
+  }
+
+  int bakes() const { return bakes_; }
+
+ private:
+  const TargetErrorOptions& options_;
+  const Scene& scene_;
+  const BakeKnobs base_;
+  const AccuracyProbe& probe_;
+  int bakes_ = 0;
+};
+
+}  // namespace
+
+absl::StatusOr<TargetErrorResult> BakeToTargetError(const TargetErrorOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  absl::StatusOr<Scene> scene = LoadSceneFile(options.scene_path);
+  if (!scene.ok()) return scene.status();
+  absl::StatusOr<std::string> sampling = SceneSamplingName(options.scene_path);
+  if (!sampling.ok()) return sampling.status();
+  BakeKnobs base = KnobsFromScene(*scene, options.sampling.empty() ? *sampling : options.sampling);
+  absl::StatusOr<AccuracyProbe> probe = AccuracyProbe::Create(
+      *scene, options.surface_points, options.free_space_points, kPointsSeed, ReferenceOptions{});
+  if (!probe.ok()) return probe.status();
+  std::fprintf(stderr, "target-error %g: reference (%s) on %zu + %zu points in %.1fs; pilots:\n",
+               options.target, ReferenceMethodName(probe->method()), probe->points().surface.size(),
+               probe->points().free_space.size(), probe->reference_seconds());
+
+  const std::filesystem::path pilots = options.output_path + ".pilots";
+  std::error_code ec;
+  std::filesystem::create_directories(pilots, ec);
+  if (ec) return absl::InternalError(absl::StrFormat("%s: %s", pilots.string(), ec.message()));
+  TargetErrorSearch search(options, *scene, base, *probe);
+  absl::StatusOr<Model> model = search.FitModel(pilots);
+  std::filesystem::remove_all(pilots, ec);
+  if (!model.ok()) return model.status();
+
+  TargetErrorResult result;
+  double demand = 1.0, above = -1.0;
+  for (int attempt = 0; attempt <= kMaxRebakes; ++attempt) {
+    double predicted = 0, cost = 0;
+    const std::optional<std::pair<int, int>> choice =
+        search.Choose(*model, demand, above, &predicted, &cost);
+    if (!choice) {
+      if (attempt > 0) break;  // output_path holds the last (missed) bake
+      return absl::InvalidArgumentError(
+          absl::StrFormat("--target-error %g: no configuration within the limits (%d samples, "
+                          "PDSM %d pixels wide) "
+                          "is predicted to reach it (best predicted %.5f); ask for a larger "
+                          "error",
+                          options.target, kSampleCounts[std::size(kSampleCounts) - 1],
+                          kResolutions[std::size(kResolutions) - 1], predicted));
+    }
+    const BakeKnobs knobs = search.KnobsFor(choice->first, choice->second);
+    std::fprintf(stderr, "target-error: bake %s (predicted error %.5f, %.1fs)\n",
+                 knobs.Label().c_str(), predicted, cost);
+    absl::StatusOr<Measurement> m = search.Bake(knobs, options.output_path);
+    if (!m.ok()) return m.status();
+    result.knobs = knobs;
+    result.predicted = predicted;
+    result.measured = m->errors;
+    result.seconds = m->seconds;
+    result.met = m->errors.all.mean <= options.target;
+    if (result.met) break;
+    // Missed: the model was optimistic by this much; ask for that much more, and costlier.
+    demand *= 1.1 * m->errors.all.mean / options.target;
+    above = cost;
+  }
+  std::filesystem::remove(options.output_path + ".log", ec);
+  result.bakes = search.bakes();
+  result.total_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace pdsm
