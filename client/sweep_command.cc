@@ -50,22 +50,23 @@ absl::StatusOr<std::vector<BakeKnobs>> MakeGrid(const SweepFlags& flags, const B
       return s.status();
     }
   }
-  auto or_base = [](auto list, auto value) {
-    if (list.empty()) list.push_back(value);
-    return list;
-  };
-  std::vector<std::optional<double>> biases;
-  for (double b : flags.depth_bias) biases.push_back(b);
+  std::vector<std::optional<double>> biases(flags.depth_bias.begin(), flags.depth_bias.end());
+  std::vector<std::string> samplings = flags.sampling;
+  std::vector<int> sms = flags.sm_resolution, counts = flags.samples;
+  std::vector<double> epsilons = flags.epsilon;
+  if (samplings.empty()) samplings.push_back(base.sampling);
+  if (resolutions.empty()) resolutions.emplace_back(base.width, base.height);
+  if (sms.empty()) sms.push_back(base.sm_resolution);
+  if (epsilons.empty()) epsilons.push_back(base.epsilon);
+  if (biases.empty()) biases.push_back(base.depth_bias);
+  if (counts.empty()) counts.push_back(base.samples);
   std::vector<BakeKnobs> grid;
-  for (const std::string& sampling : or_base(flags.sampling, base.sampling)) {
-    for (const auto& [w, h] : or_base(resolutions, std::make_pair(base.width, base.height))) {
-      for (int sm : or_base(flags.sm_resolution, base.sm_resolution)) {
-        for (double eps : or_base(flags.epsilon, base.epsilon)) {
-          for (const std::optional<double>& bias : or_base(biases, base.depth_bias)) {
-            for (int n : or_base(flags.samples, base.samples)) {
-              BakeKnobs k{n, w, h, sm, eps, sampling, bias};
-              grid.push_back(k);
-            }
+  for (const std::string& sampling : samplings) {
+    for (const auto& [w, h] : resolutions) {
+      for (int sm : sms) {
+        for (double eps : epsilons) {
+          for (const std::optional<double>& bias : biases) {
+            for (int n : counts) grid.push_back(BakeKnobs{n, w, h, sm, eps, sampling, bias});
           }
         }
       }
@@ -171,8 +172,9 @@ int RunSweep(const SweepFlags& flags) {
   }
   PrintRows(rows);
   std::printf("sweep: %s\n", (dir / "sweep.csv").c_str());
-  const absl::Status plot = PlotSweep(rows, (dir / "sweep.csv").string(),
-                                      (dir / "sweep.png").string(), scene->name + " sweep");
+  const absl::Status plot =
+      PlotSweep(rows, (dir / "sweep.csv").string(), (dir / "sweep.png").string(),
+                scene->name + " sweep (point labels: light samples)");
   if (plot.ok()) {
     std::printf("plot: %s\n", (dir / "sweep.png").c_str());
   } else {

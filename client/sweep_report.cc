@@ -111,7 +111,7 @@ absl::Status PlotSweep(const std::vector<SweepRow>& rows, const std::string& csv
     std::ofstream script(script_path, std::ios::trunc);
     script << "$front << EOD\n";
     for (const SweepRow* row : front) {
-      script << absl::StrFormat("%.6g %.6g\n", row->bake.seconds, row->errors.all.mean);
+      script << absl::StrFormat("%.6g,%.6g\n", row->bake.seconds, row->errors.all.mean);
     }
     script << "EOD\n"
            << "set terminal png size 900,600\n"
@@ -124,13 +124,10 @@ absl::Status PlotSweep(const std::vector<SweepRow>& rows, const std::string& csv
            << "set xlabel 'bake time (s)'\n"
            << "set ylabel 'mean |attenuation error| (surface + free space)'\n"
            << "plot " << GnuplotQuote(csv_path)
-           << " skip 1 using 8:11 with points pt 7 ps 1.2 title "
-              "'configurations', \\\n"
-           << "     $front using 1:2 with linespoints lw 2 pt 6 ps 2 title "
-              "'Pareto front' "
-              "noenhanced, \\\n"
-           << "     '' skip 1 using 8:11:(sprintf('%d', $2)) with labels "
-              "offset 0,1 font ',8' "
+           << " skip 1 using 8:11 with points pt 7 ps 1.2 title 'configurations', \\\n"
+           << "     $front using 1:2 with linespoints lw 2 pt 6 ps 2 title 'Pareto front', \\\n"
+           << "     " << GnuplotQuote(csv_path)
+           << " skip 1 using 8:11:(sprintf('%d', $2)) with labels offset 0,1 font ',8' "
               "notitle\n";
   }
   const std::string command = absl::StrCat("gnuplot ", ShellQuote(script_path), " 1>&2");

@@ -26,12 +26,15 @@ constexpr int kResolutions[] = {32, 48, 64, 96, 128, 192, 256, 384, 512, 768, 10
 
 // e(N, R) = a N^-k + b / R;  t(N, R) = f + g N (R / R0)^beta.
 struct Model {
-  double a = 0, k = 0.75, b = 0;
+  double a = 0, k = 0.5, b = 0, m = 1;
   double f = 0, g = 0, beta = 1;
+  int r0 = kPilotResolution;  // the resolution b and g were measured at
 
-  double Error(int n, int r) const { return a * std::pow(n, -k) + b / r; }
+  double Error(int n, int r) const {
+    return a * std::pow(n, -k) + b * std::pow(static_cast<double>(r) / r0, -m);
+  }
   double Cost(int n, int r) const {
-    return f + g * n * std::pow(static_cast<double>(r) / kPilotResolution, beta);
+    return f + g * n * std::pow(static_cast<double>(r) / r0, beta);
   }
 };
 
@@ -82,9 +85,13 @@ class TargetErrorSearch {
 
   // The pilots, then the fit. Pilots that a fixed knob makes identical are baked once.
   absl::StatusOr<Model> FitModel(const std::filesystem::path& dir) {
-    const int n0 = kPilotSamples, r0 = kPilotResolution;
+    // A knob the user fixed is piloted at its value.
+    const int n0 = options_.samples.value_or(kPilotSamples);
+    const int r0 = options_.resolution ? options_.resolution->first : kPilotResolution;
+    // Samples N0, 4 N0, 16 N0 at R0 (the sampling term and its order), N0 at 2 R0 (the order
+    // of the rest).
     std::vector<std::pair<int, int>> pilots = {{n0, r0}};
-    if (!options_.samples) pilots.push_back({4 * n0, r0});
+    if (!options_.samples) pilots.insert(pilots.end(), {{4 * n0, r0}, {16 * n0, r0}});
     if (!options_.resolution) pilots.push_back({n0, 2 * r0});
     std::vector<Measurement> m;
     for (const auto& [n, r] : pilots) {
@@ -94,39 +101,45 @@ class TargetErrorSearch {
       m.push_back(*pilot);
     }
     Model model;
-    const double e1 = m[0].errors.all.mean, t1 = m[0].seconds;
-    size_t next = 1;
-    double e2 = e1, t2 = t1;
-    if (!options_.samples) e2 = m[next].errors.all.mean, t2 = m[next].seconds, ++next;
-    if (!options_.resolution) {
-      const double e3 = m[next].errors.all.mean, t3 = m[next].seconds;
-      model.b = std::max(0.0, 2.0 * r0 * (e1 - e3));
-      model.g = options_.samples ? 0 : std::max(1e-9, (t2 - t1) / (3.0 * n0));
-      model.f = std::max(0.0, t1 - model.g * n0);
-      if (model.g > 0 && t3 > model.f) {
-        model.beta = std::clamp(std::log2((t3 - model.f) / (model.g * n0)), 0.0, 2.0);
+    model.r0 = r0;
+    const double t1 = m[0].seconds;
+    // Time per sample at R0: a floor of 5 % of the first pilot keeps timing noise on tiny
+    // scenes from making samples look free.
+    model.g = 0.05 * t1 / n0;
+    if (!options_.samples) model.g = std::max(model.g, (m[2].seconds - t1) / (15.0 * n0));
+    model.f = std::max(0.0, t1 - model.g * n0);
+    model.beta = 2.0;  // pixels x samples, unless the pilots say otherwise
+    // Sampling: the differences between N0, 4 N0 and 16 N0 give k and a whatever else is
+    // constant in them.
+    const double e1 = m[0].errors.all.mean;
+    if (!options_.samples) {
+      const double d1 = e1 - m[1].errors.all.mean, d2 = m[1].errors.all.mean - m[2].errors.all.mean;
+      if (d1 > 0 && d2 > 0 && d2 < d1) {
+        model.k = std::clamp(-std::log(d2 / d1) / std::log(4.0), 0.25, 1.5);
       }
-      if (options_.samples) {  // cost from the resolution pair alone
-        model.g = std::max(1e-9, (t3 - t1) / n0);
-        model.f = std::max(0.0, t1 - model.g * n0);
+      if (d1 > 0) model.a = d1 / (std::pow(n0, -model.k) * (1.0 - std::pow(4.0, -model.k)));
+    }
+    // Everything else is put on the resolution (the shadow map follows it): b at R0, and its
+    // order m from R0 to 2 R0. No floor, so the prediction is checked by measuring.
+    const double sampling_at_n0 = model.a * std::pow(n0, -model.k);
+    model.b = std::max(0.0, e1 - sampling_at_n0);
+    if (!options_.resolution) {
+      const Measurement& doubled = m.back();
+      const double rest = doubled.errors.all.mean - sampling_at_n0;
+      model.m =
+          rest > 0 && model.b > rest ? std::clamp(std::log2(model.b / rest), 0.25, 2.0) : 0.25;
+      // Tiles without casters cost nothing, so time grows slower than R^2; at least like R.
+      if (doubled.seconds > model.f) {
+        model.beta = std::clamp(std::log2((doubled.seconds - model.f) / (model.g * n0)), 1.0, 2.0);
       }
     } else {
-      model.g = std::max(1e-9, (t2 - t1) / (3.0 * n0));
-      model.f = std::max(0.0, t1 - model.g * n0);
-    }
-    // The sampling part at N0 and 4 N0 once the resolution part is taken out.
-    const double s1 = e1 - model.b / r0, s2 = e2 - model.b / r0;
-    if (options_.samples) {
-      model.a = std::max(0.0, s1);  // constant: N is not chosen
-      model.k = 0.0;
-    } else if (s1 > 0) {
-      model.k = std::clamp(std::log(s1 / std::max(s2, s1 / 64)) / std::log(4.0), 0.25, 1.5);
-      model.a = s1 * std::pow(n0, model.k);
+      model.m = 0;  // R is not chosen
     }
     std::fprintf(stderr,
-                 "target-error: model e(N,R) = %.4g N^-%.2f + %.4g / R, "
+                 "target-error: model e(N,R) = %.4g N^-%.2f + %.4g (R/%d)^-%.2f, "
                  "t(N,R) = %.2f + %.4g N (R/%d)^%.2f s\n",
-                 model.a, model.k, model.b, model.f, model.g, kPilotResolution, model.beta);
+                 model.a, model.k, model.b, model.r0, model.m, model.f, model.g, model.r0,
+                 model.beta);
     return model;
   }
 
