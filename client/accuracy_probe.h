@@ -30,6 +30,10 @@ class AccuracyProbe {
   // Errors: those of ReadPdsm.
   absl::StatusOr<BakeErrors> Measure(const std::string& pdsm_path) const;
 
+  // Writes "kind,x,y,z,attenuation" lines (kind: surface or free) with the reference values,
+  // under a temporary name then renamed.
+  absl::Status WriteReferenceCsv(const std::string& path) const;
+
   const AccuracyPoints& points() const { return points_; }
   double reference_seconds() const { return reference_seconds_; }
   ReferenceMethod method() const { return method_; }

@@ -153,6 +153,7 @@ int RunSweep(const SweepFlags& flags) {
     return ReportError(absl::InvalidArgumentError(
         absl::StrFormat("--out %s: cannot create the folder: %s", flags.out_dir, ec.message())));
   }
+  const std::filesystem::path dir(flags.out_dir);
   absl::StatusOr<AccuracyProbe> probe = AccuracyProbe::Create(
       *scene, flags.surface_points, flags.free_space_points, flags.points_seed,
       ReferenceOptions{*method, flags.reference_samples, 1});
@@ -163,10 +164,12 @@ int RunSweep(const SweepFlags& flags) {
                grid->size(), ReferenceMethodName(probe->method()), probe->points().surface.size(),
                probe->points().free_space.size(), probe->reference_seconds());
 
+  if (absl::Status s = probe->WriteReferenceCsv((dir / "reference.csv").string()); !s.ok()) {
+    return ReportError(s);
+  }
   std::vector<SweepRow> rows;
   if (absl::Status s = RunGrid(flags, *grid, *probe, &rows); !s.ok()) return ReportError(s);
   MarkParetoFront(&rows);
-  const std::filesystem::path dir(flags.out_dir);
   if (absl::Status s = WriteSweepCsv((dir / "sweep.csv").string(), rows); !s.ok()) {
     return ReportError(s);
   }

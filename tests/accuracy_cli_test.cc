@@ -155,6 +155,10 @@ TEST(SweepCli, TinyGridWritesCsvAndPlotWithErrorFallingWithSamples) {
   EXPECT_LT(Number(rows[1], "free_mean"), Number(rows[0], "free_mean"));
   EXPECT_EQ(Number(rows[1], "pareto") + Number(rows[0], "pareto") >= 1, true);
   EXPECT_FALSE(std::filesystem::exists(out + "/sweep.csv.tmp"));
+  // The reference, computed once: a header and one line per point.
+  const std::vector<std::string> reference = Lines(ReadBytes(out + "/reference.csv"));
+  ASSERT_EQ(reference.size(), 801u);
+  EXPECT_EQ(reference[0], "kind,x,y,z,attenuation");
   if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
     EXPECT_GT(std::filesystem::file_size(out + "/sweep.png"), 1000u);
   }
