@@ -15,6 +15,7 @@
 #include "client/cli_common.h"
 #include "client/commands.h"
 #include "client/progress_reporter.h"
+#include "client/sweep_plot.h"
 #include "client/sweep_report.h"
 #include "client/target_error.h"
 #include "core/scene/scene_loader.h"
@@ -34,6 +35,7 @@ struct SweepFlags {
   int reference_samples = kDefaultReferenceSamples;
   int threads = 0;
   bool keep_bakes = false;
+  bool replot = false;
   std::optional<double> target_error;
 };
 
@@ -115,7 +117,8 @@ void PrintRows(const std::vector<SweepRow>& rows) {
 
 // --target-error E: the chooser of `pdsm bake --target-error` on the same scene, its result
 // measured on the sweep's (larger) point set. Exit 1 when that bake misses E.
-int CheckTargetError(const SweepFlags& flags, const AccuracyProbe& probe) {
+int CheckTargetError(const SweepFlags& flags, const AccuracyProbe& probe,
+                     const std::vector<SweepRow>& rows) {
   TargetErrorOptions options;
   options.scene_path = flags.scene_path;
   options.output_path =
@@ -132,8 +135,35 @@ int CheckTargetError(const SweepFlags& flags, const AccuracyProbe& probe) {
       "points %.5f: %s\n",
       *flags.target_error, chosen->knobs.Label().c_str(), chosen->seconds, errors->all.mean,
       met ? "met" : "NOT met");
+  // Against the sweep: the cheapest configuration it found that meets E.
+  const SweepRow* cheapest = nullptr;
+  for (const SweepRow& row : rows) {
+    if (row.errors.all.mean <= *flags.target_error &&
+        (cheapest == nullptr || row.bake.seconds < cheapest->bake.seconds)) {
+      cheapest = &row;
+    }
+  }
+  if (cheapest != nullptr) {
+    std::printf(
+        "target-error %g: the sweep's cheapest configuration meeting it: %s (%.2fs, %.5f)\n",
+        *flags.target_error, cheapest->knobs.Label().c_str(), cheapest->bake.seconds,
+        cheapest->errors.all.mean);
+  } else {
+    std::printf("target-error %g: no configuration of the sweep meets it\n", *flags.target_error);
+  }
   if (!flags.keep_bakes) std::filesystem::remove(options.output_path);
   return met ? kExitOk : kExitFailure;
+}
+
+// A missing gnuplot is a warning: the CSV is the result, the plot a convenience.
+void Plot(const std::filesystem::path& dir, const std::string& scene_name) {
+  const absl::Status plot =
+      PlotSweep((dir / "sweep.csv").string(), (dir / "sweep.png").string(), scene_name);
+  if (plot.ok()) {
+    std::printf("plot: %s\n", (dir / "sweep.png").c_str());
+  } else {
+    std::fprintf(stderr, "pdsm: warning: no plot: %s\n", std::string(plot.message()).c_str());
+  }
 }
 
 int RunSweep(const SweepFlags& flags) {
@@ -142,6 +172,15 @@ int RunSweep(const SweepFlags& flags) {
   if (!method.ok()) return ReportError(method.status());
   absl::StatusOr<Scene> scene = LoadSceneFile(flags.scene_path);
   if (!scene.ok()) return ReportError(scene.status());
+  if (flags.replot) {
+    const std::filesystem::path csv = std::filesystem::path(flags.out_dir) / "sweep.csv";
+    if (!std::filesystem::exists(csv)) {
+      return ReportError(
+          absl::InvalidArgumentError(absl::StrFormat("--replot: %s does not exist", csv.string())));
+    }
+    Plot(flags.out_dir, scene->name);
+    return kExitOk;
+  }
   absl::StatusOr<std::string> sampling = SceneSamplingName(flags.scene_path);
   if (!sampling.ok()) return ReportError(sampling.status());
   absl::StatusOr<std::vector<BakeKnobs>> grid = MakeGrid(flags, KnobsFromScene(*scene, *sampling));
@@ -175,15 +214,8 @@ int RunSweep(const SweepFlags& flags) {
   }
   PrintRows(rows);
   std::printf("sweep: %s\n", (dir / "sweep.csv").c_str());
-  const absl::Status plot =
-      PlotSweep(rows, (dir / "sweep.csv").string(), (dir / "sweep.png").string(),
-                scene->name + " sweep (point labels: light samples)");
-  if (plot.ok()) {
-    std::printf("plot: %s\n", (dir / "sweep.png").c_str());
-  } else {
-    std::fprintf(stderr, "pdsm: warning: no plot: %s\n", std::string(plot.message()).c_str());
-  }
-  if (flags.target_error) return CheckTargetError(flags, *probe);
+  Plot(dir, scene->name);
+  if (flags.target_error) return CheckTargetError(flags, *probe, rows);
   return kExitOk;
 }
 
@@ -225,6 +257,7 @@ void RegisterSweepCommand(CLI::App& app, int* exit_code) {
       ->capture_default_str();
   cmd->add_option("--threads", flags->threads, "Threads of each bake (default: one per core)")
       ->check(CLI::Range(1, 1024));
+  cmd->add_flag("--replot", flags->replot, "Only redraw DIR/sweep.png from DIR/sweep.csv");
   cmd->add_flag("--keep-bakes", flags->keep_bakes, "Keep each configuration's PDSM in DIR/bakes");
   cmd->add_option("--target-error", flags->target_error,
                   "Also run `pdsm bake --target-error E` and check it on the "

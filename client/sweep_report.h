@@ -1,5 +1,4 @@
-// The sweep's outputs: DIR/sweep.csv (one row per configuration) and DIR/sweep.png (error against
-// time, the Pareto front joined), drawn by gnuplot.
+// The sweep's table: DIR/sweep.csv, one row per configuration, its Pareto front marked.
 #ifndef PDSM_CLIENT_SWEEP_REPORT_H_
 #define PDSM_CLIENT_SWEEP_REPORT_H_
 
@@ -28,11 +27,6 @@ void MarkParetoFront(std::vector<SweepRow>* rows);
 
 // Writes the CSV under a temporary name and renames it: never half-written.
 absl::Status WriteSweepCsv(const std::string& path, const std::vector<SweepRow>& rows);
-
-// Runs gnuplot on `csv_path` (the file WriteSweepCsv wrote from `rows`) to make `png_path` (written
-// under a temporary name first). NOT_FOUND when gnuplot is not installed, INTERNAL when it fails.
-absl::Status PlotSweep(const std::vector<SweepRow>& rows, const std::string& csv_path,
-                       const std::string& png_path, const std::string& title);
 
 }  // namespace pdsm
 

@@ -161,6 +161,12 @@ TEST(SweepCli, TinyGridWritesCsvAndPlotWithErrorFallingWithSamples) {
   EXPECT_EQ(reference[0], "kind,x,y,z,attenuation");
   if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
     EXPECT_GT(std::filesystem::file_size(out + "/sweep.png"), 1000u);
+    // --replot redraws it from the CSV alone.
+    std::filesystem::remove(out + "/sweep.png");
+    const CommandResult replot =
+        RunCommand(kPdsm + " sweep " + ExamplePath("plates") + " --out " + out + " --replot", dir);
+    EXPECT_EQ(replot.exit_code, 0) << replot.err;
+    EXPECT_GT(std::filesystem::file_size(out + "/sweep.png"), 1000u);
   }
 }
 
