@@ -170,6 +170,21 @@ TEST(SweepCli, TinyGridWritesCsvAndPlotWithErrorFallingWithSamples) {
   }
 }
 
+TEST(SweepCli, WithoutGnuplotWritesTheCsvAndWarns) {
+  TempDir dir;
+  const std::string out = dir.File("sweep");
+  const CommandResult r = RunCommand(
+      "env PATH=" + dir.File("empty") + " " + kPdsm + " sweep " + ExamplePath("plates") +
+          " --out " + out + " --samples 4 --resolution 48 --sm-resolution 96 --surface-points 50 "
+          "--free-points 50",
+      dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: no plot"), std::string::npos) << r.err;
+  std::string header;
+  EXPECT_EQ(ReadCsv(out + "/sweep.csv", &header).size(), 1u);
+  EXPECT_FALSE(std::filesystem::exists(out + "/sweep.png"));
+}
+
 TEST(SweepCli, BadKnobExits2) {
   TempDir dir;
   CommandResult r = RunCommand(kPdsm + " sweep " + ExamplePath("plates") + " --out " +
