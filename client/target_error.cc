@@ -217,13 +217,11 @@ absl::StatusOr<TargetErrorResult> BakeToTargetError(const TargetErrorOptions& op
         search.Choose(*model, demand, above, &predicted, &cost);
     if (!choice) {
       if (attempt > 0) break;  // output_path holds the last (missed) bake
-      return absl::InvalidArgumentError(
-          absl::StrFormat("--target-error %g: no configuration within the limits (%d samples, "
-                          "PDSM %d pixels wide) "
-                          "is predicted to reach it (best predicted %.5f); ask for a larger "
-                          "error",
-                          options.target, kSampleCounts[std::size(kSampleCounts) - 1],
-                          kResolutions[std::size(kResolutions) - 1], predicted));
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "--target-error %g: no configuration up to %d samples and %d pixels across is "
+          "predicted to reach it (best predicted %.5f); ask for a larger error",
+          options.target, kSampleCounts[std::size(kSampleCounts) - 1],
+          kResolutions[std::size(kResolutions) - 1], predicted));
     }
     const BakeKnobs knobs = search.KnobsFor(choice->first, choice->second);
     std::fprintf(stderr, "target-error: bake %s (predicted error %.5f, %.1fs)\n",
