@@ -24,15 +24,16 @@ constexpr uint64_t kPointsSeed = 1;
 constexpr int kSampleCounts[] = {1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024, 2048, 4096, 8192};
 constexpr int kResolutions[] = {32, 48, 64, 96, 128, 192, 256, 384, 512, 768, 1024, 1536, 2048};
 
-// e(N, R) = a N^-k + b / R;  t(N, R) = f + g N (R / R0)^beta.
+// e(N, R) = sqrt((a N^-k)^2 + (b (R/R0)^-m)^2): sampling and resolution errors are independent,
+// so they add in quadrature, not linearly. t(N, R) = f + g N (R / R0)^beta.
 struct Model {
   double a = 0, k = 0.5, b = 0, m = 1;
-  double f = 0, g = 0, beta = 1;
+  double f = 0, g = 0, beta = 2;
   int r0 = kPilotResolution;  // the resolution b and g were measured at
 
-  double Error(int n, int r) const {
-    return a * std::pow(n, -k) + b * std::pow(static_cast<double>(r) / r0, -m);
-  }
+  double Sampling(int n) const { return a * std::pow(n, -k); }
+  double Resolution(int r) const { return b * std::pow(static_cast<double>(r) / r0, -m); }
+  double Error(int n, int r) const { return std::hypot(Sampling(n), Resolution(r)); }
   double Cost(int n, int r) const {
     return f + g * n * std::pow(static_cast<double>(r) / r0, beta);
   }
@@ -83,16 +84,16 @@ class TargetErrorSearch {
     return Measurement{knobs, bake->seconds, *errors};
   }
 
-  // The pilots, then the fit. Pilots that a fixed knob makes identical are baked once.
+  // The pilots, then the fit. A knob the user fixed is piloted at its value only.
   absl::StatusOr<Model> FitModel(const std::filesystem::path& dir) {
-    // A knob the user fixed is piloted at its value.
     const int n0 = options_.samples.value_or(kPilotSamples);
     const int r0 = options_.resolution ? options_.resolution->first : kPilotResolution;
-    // Samples N0, 4 N0, 16 N0 at R0 (the sampling term and its order), N0 at 2 R0 (the order
-    // of the rest).
+    // N0, 4 N0, 16 N0 at R0: the sampling term. Then 4 N0 at 2 R0: the resolution term, where
+    // sampling noise hides it less than at N0 and the pilot still costs little.
+    const int nq = options_.samples ? n0 : 4 * n0;
     std::vector<std::pair<int, int>> pilots = {{n0, r0}};
-    if (!options_.samples) pilots.insert(pilots.end(), {{4 * n0, r0}, {16 * n0, r0}});
-    if (!options_.resolution) pilots.push_back({n0, 2 * r0});
+    if (!options_.samples) pilots.insert(pilots.end(), {{nq, r0}, {16 * n0, r0}});
+    if (!options_.resolution) pilots.push_back({nq, 2 * r0});
     std::vector<Measurement> m;
     for (const auto& [n, r] : pilots) {
       absl::StatusOr<Measurement> pilot =
@@ -100,47 +101,56 @@ class TargetErrorSearch {
       if (!pilot.ok()) return pilot.status();
       m.push_back(*pilot);
     }
+    auto e2 = [&](size_t i) { return m[i].errors.all.mean * m[i].errors.all.mean; };
     Model model;
     model.r0 = r0;
-    const double t1 = m[0].seconds;
-    // Time per sample at R0: a floor of 5 % of the first pilot keeps timing noise on tiny
-    // scenes from making samples look free.
-    model.g = 0.05 * t1 / n0;
-    if (!options_.samples) model.g = std::max(model.g, (m[2].seconds - t1) / (15.0 * n0));
-    model.f = std::max(0.0, t1 - model.g * n0);
-    model.beta = 2.0;  // pixels x samples, unless the pilots say otherwise
-    // Sampling: the differences between N0, 4 N0 and 16 N0 give k and a whatever else is
-    // constant in them.
-    const double e1 = m[0].errors.all.mean;
+    // Sampling: squared errors along N differ only by the sampling term.
+    const size_t at_nq = options_.samples ? 0 : 1;  // the pilot at (nq, R0)
     if (!options_.samples) {
-      const double d1 = e1 - m[1].errors.all.mean, d2 = m[1].errors.all.mean - m[2].errors.all.mean;
+      const double d1 = e2(0) - e2(1), d2 = e2(1) - e2(2);
       if (d1 > 0 && d2 > 0 && d2 < d1) {
-        model.k = std::clamp(-std::log(d2 / d1) / std::log(4.0), 0.25, 1.5);
+        // At least N^-1/2: no sampling pattern converges slower than independent samples.
+        model.k = std::clamp(-std::log(d2 / d1) / (2 * std::log(4.0)), 0.5, 1.5);
       }
-      if (d1 > 0) model.a = d1 / (std::pow(n0, -model.k) * (1.0 - std::pow(4.0, -model.k)));
+      if (d1 > 0) {
+        model.a = std::sqrt(d1 / (std::pow(n0, -2 * model.k) * (1 - std::pow(4.0, -2 * model.k))));
+      }
     }
-    // Everything else is put on the resolution (the shadow map follows it): b at R0, and its
-    // order m from R0 to 2 R0. No floor, so the prediction is checked by measuring.
-    const double sampling_at_n0 = model.a * std::pow(n0, -model.k);
-    model.b = std::max(0.0, e1 - sampling_at_n0);
+    // Resolution: what sampling leaves at (nq, R0) and (nq, 2 R0). Kept at >= 1/4 of the
+    // measured error so that R stays in play when sampling seems to explain everything.
+    const double s2 = model.Sampling(nq) * model.Sampling(nq);
+    const double q0 = std::sqrt(std::max(e2(at_nq) - s2, e2(at_nq) / 16));
+    model.b = q0;
     if (!options_.resolution) {
-      const Measurement& doubled = m.back();
-      const double rest = doubled.errors.all.mean - sampling_at_n0;
-      model.m =
-          rest > 0 && model.b > rest ? std::clamp(std::log2(model.b / rest), 0.25, 2.0) : 0.25;
-      // Tiles without casters cost nothing, so time grows slower than R^2; at least like R.
-      if (doubled.seconds > model.f) {
-        model.beta = std::clamp(std::log2((doubled.seconds - model.f) / (model.g * n0)), 1.0, 2.0);
-      }
+      const double q1 = std::sqrt(std::max(0.0, e2(m.size() - 1) - s2));
+      model.m = q1 > 0 && q0 > q1 ? std::clamp(std::log2(q0 / q1), 0.25, 2.0) : 0.25;
     } else {
       model.m = 0;  // R is not chosen
     }
+    FitCost(m, n0, nq, &model);
     std::fprintf(stderr,
-                 "target-error: model e(N,R) = %.4g N^-%.2f + %.4g (R/%d)^-%.2f, "
+                 "target-error: model e(N,R) = sqrt((%.4g N^-%.2f)^2 + (%.4g (R/%d)^-%.2f)^2), "
                  "t(N,R) = %.2f + %.4g N (R/%d)^%.2f s\n",
                  model.a, model.k, model.b, model.r0, model.m, model.f, model.g, model.r0,
                  model.beta);
     return model;
+  }
+
+  // Time per sample from the N series (a floor of 5 % of the first pilot keeps timing noise
+  // on tiny scenes from making samples look free); beta from the 2 R0 pilot, in [1, 2]
+  // (tiles without casters cost nothing, so time grows slower than R^2; at least like R).
+  void FitCost(const std::vector<Measurement>& m, int n0, int nq, Model* model) const {
+    const double t1 = m[0].seconds;
+    model->g = 0.05 * t1 / n0;
+    if (!options_.samples) model->g = std::max(model->g, (m[2].seconds - t1) / (15.0 * n0));
+    if (options_.samples) model->g = t1 / n0;
+    model->f = std::max(0.0, t1 - model->g * n0);
+    if (!options_.resolution) {
+      const double t_nq = options_.samples ? t1 : m[1].seconds;
+      const double base = model->g * nq;
+      const double t2 = m.back().seconds - (t_nq - base);  // the N-dependent part at 2 R0
+      if (base > 0 && t2 > 0) model->beta = std::clamp(std::log2(t2 / base), 1.0, 2.0);
+    }
   }
 
   // The cheapest (N, R) predicted to meet target / demand and costing more than `above`; nullopt

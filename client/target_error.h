@@ -2,11 +2,11 @@
 // error E (over accuracy points on receivers and in free space, against the reference) at the least
 // predicted bake time, bake, and measure.
 //
-// How: four cheap pilot bakes, N0 = 8, 32, 128 samples at R0 = 64 pixels and N0 at 2 R0 (the
-// shadow map follows the PDSM at 2R texels, epsilon is held at E/4), fit an error model
-//   e(N, R) = a N^-k + b (R / R0)^-m
-// (k and a from the differences along N, which cancel whatever does not depend on N; all the
-// rest is put on the resolution, m from R0 to 2 R0) and a cost model t(N, R) = f + g N (R/R0)^beta.
+// How: four cheap pilot bakes, N0 = 8, 32, 128 samples at R0 = 64 pixels and 32 samples at
+// 2 R0 (the shadow map follows the PDSM at 2R texels, epsilon is held at E/4), fit
+//   e(N, R) = sqrt((a N^-k)^2 + (b (R / R0)^-m)^2)
+// (independent errors add in quadrature: k and a from the squared differences along N, k >= 1/2;
+// b and m from what sampling leaves at R0 and 2 R0) and a cost model t = f + g N (R/R0)^beta.
 // The cheapest (N, R) predicted to meet E with a 25 % margin is baked and measured on the same
 // points; if it misses E, the demand is raised by the miss and a costlier configuration is baked,
 // at most kMaxRebakes times. Knobs the user set on the command line are kept as given.
