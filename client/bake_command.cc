@@ -9,6 +9,7 @@
 #include "client/commands.h"
 #include "client/local_bake.h"
 #include "client/progress_reporter.h"
+#include "client/target_error.h"
 #include "core/scene/scene_loader.h"
 
 namespace pdsm {
@@ -21,6 +22,7 @@ struct BakeFlags {
   bool no_preview = false;
   OverrideFlags overrides;
   int threads = 0, samples_per_task = 0;
+  std::optional<double> target_error;
 };
 
 std::string HumanBytes(uint64_t bytes) {
@@ -58,9 +60,49 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags, const std::string&
   if (!preview.empty()) std::printf("preview: %s\n", preview.c_str());
 }
 
+// --target-error E: the knobs given on the command line stay fixed, the others are chosen.
+int RunTargetErrorBake(const BakeFlags& flags, const pdsm::v1::BakeParams& overrides) {
+  TargetErrorOptions options;
+  options.scene_path = flags.scene_path;
+  options.output_path = flags.output_path;
+  options.target = *flags.target_error;
+  options.threads = flags.threads;
+  if (overrides.has_samples()) options.samples = overrides.samples();
+  if (overrides.has_shadow_map_resolution()) {
+    options.sm_resolution = overrides.shadow_map_resolution();
+  }
+  if (overrides.resolution_size() == 2) {
+    options.resolution = {overrides.resolution(0), overrides.resolution(1)};
+  }
+  if (overrides.has_epsilon()) options.epsilon = overrides.epsilon();
+  if (overrides.has_depth_bias()) options.depth_bias = overrides.depth_bias();
+  options.sampling = flags.overrides.sampling;
+  absl::StatusOr<TargetErrorResult> r = BakeToTargetError(options);
+  if (!r.ok()) return ReportError(r.status());
+  std::fprintf(stderr,
+               "target-error %g: chose samples %d, resolution %dx%d, sm-resolution %d, "
+               "epsilon %g, sampling %s; measured mean error %.5f (surface %.5f, free space "
+               "%.5f; predicted %.5f): %s; bake %.2fs, %d bakes in all %.1fs\n",
+               options.target, r->knobs.samples, r->knobs.width, r->knobs.height,
+               r->knobs.sm_resolution, r->knobs.epsilon, r->knobs.sampling.c_str(),
+               r->measured.all.mean, r->measured.surface.mean, r->measured.free_space.mean,
+               r->predicted, r->met ? "met" : "NOT met", r->seconds, r->bakes,
+               r->total_seconds);
+  std::printf("pdsm: %s\n", flags.output_path.c_str());
+  if (!r->met) {
+    std::fprintf(stderr,
+                 "pdsm: target error %g not reached after %d rebakes; %s holds the last "
+                 "(costliest) bake tried\n",
+                 options.target, kMaxRebakes, flags.output_path.c_str());
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
 int RunBake(const BakeFlags& flags) {
   absl::StatusOr<pdsm::v1::BakeParams> overrides = ToBakeParams(flags.overrides);
   if (!overrides.ok()) return ReportError(overrides.status());
+  if (flags.target_error) return RunTargetErrorBake(flags, *overrides);
   absl::StatusOr<Scene> scene = LoadSceneFile(flags.scene_path, *overrides);
   if (!scene.ok()) return ReportError(scene.status());
 
@@ -101,6 +143,10 @@ void RegisterBakeCommand(CLI::App& app, int* exit_code) {
       ->check(CLI::Range(1, 1 << 20));
   cmd->add_option("--preview", flags->preview_path, "Preview PNG (default: OUT with .png)");
   cmd->add_flag("--no-preview", flags->no_preview, "Write no preview image");
+  cmd->add_option("--target-error", flags->target_error,
+                  "Choose the knobs not given to reach this mean attenuation error at least "
+                  "cost (pilot bakes against the reference; writes no preview)")
+      ->check(CLI::Range(1e-6, 1.0));
   cmd->callback([flags, exit_code] { *exit_code = RunBake(*flags); });
 }
 

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <regex>
+#include <vector>
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
 
 namespace pdsm {
 
@@ -23,24 +25,24 @@ void AddOverrideFlags(CLI::App* cmd, OverrideFlags* flags) {
                   "Adaptive sampling: samples of a tile's first batch");
   cmd->add_flag("--surfaces-only", flags->surfaces_only,
                 "Keep A(z) only near receiver surfaces (static receivers; elsewhere NaN)");
+  cmd->add_option("--depth-bias", flags->depth_bias, "Constant depth bias, world units");
 }
 
-namespace {
-
-absl::Status SetSampling(const std::string& flag_value, pdsm::v1::BakeParams* params) {
-  std::string name = absl::AsciiStrToUpper(flag_value);
-  std::replace(name.begin(), name.end(), '-', '_');
+absl::StatusOr<pdsm::v1::Sampling> ParseSamplingName(const std::string& name,
+                                                     const std::string& flag) {
+  // Any case, '-' for '_': "blue-noise", "SOBOL" and "Halton" all name a bake.sampling value.
+  std::string upper = absl::AsciiStrToUpper(name);
+  std::replace(upper.begin(), upper.end(), '-', '_');
   pdsm::v1::Sampling value;
-  if (name == "SAMPLING_DEFAULT" || !pdsm::v1::Sampling_Parse(name, &value)) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "--sampling: expected stratified, uniform, sobol, halton or blue-noise (got \"%s\")",
-        flag_value));
+  if (upper != "SAMPLING_DEFAULT" && pdsm::v1::Sampling_Parse(upper, &value)) return value;
+  std::vector<std::string> names;
+  const google::protobuf::EnumDescriptor* e = pdsm::v1::Sampling_descriptor();
+  for (int i = 0; i < e->value_count(); ++i) {
+    if (e->value(i)->number() != 0) names.push_back(absl::AsciiStrToLower(e->value(i)->name()));
   }
-  params->set_sampling(value);
-  return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrFormat(
+      "%s: unknown sampling pattern \"%s\" (one of %s)", flag, name, absl::StrJoin(names, ", ")));
 }
-
-}  // namespace
 
 absl::StatusOr<pdsm::v1::BakeParams> ToBakeParams(const OverrideFlags& flags) {
   pdsm::v1::BakeParams params;
@@ -78,11 +80,16 @@ absl::StatusOr<pdsm::v1::BakeParams> ToBakeParams(const OverrideFlags& flags) {
     s = set_count("--adaptive-min-samples", flags.adaptive_min_samples,
                   [&](uint32_t v) { params.set_adaptive_min_samples(v); });
   }
-  if (s.ok() && !flags.sampling.empty()) s = SetSampling(flags.sampling, &params);
   if (!s.ok()) return s;
   if (flags.epsilon) params.set_epsilon(*flags.epsilon);
   if (flags.adaptive_tolerance) params.set_adaptive_tolerance(*flags.adaptive_tolerance);
   if (flags.surfaces_only) params.set_surfaces_only(true);
+  if (flags.depth_bias) params.set_depth_bias(*flags.depth_bias);
+  if (!flags.sampling.empty()) {
+    absl::StatusOr<pdsm::v1::Sampling> sampling = ParseSamplingName(flags.sampling, "--sampling");
+    if (!sampling.ok()) return sampling.status();
+    params.set_sampling(*sampling);
+  }
   return params;
 }
 

@@ -10,6 +10,9 @@ namespace pdsm {
 void RegisterBakeCommand(CLI::App& app, int* exit_code);
 void RegisterQueryCommand(CLI::App& app, int* exit_code);
 void RegisterInfoCommand(CLI::App& app, int* exit_code);
+// Accuracy: the ground truth and the speed/accuracy sweep.
+void RegisterReferenceCommand(CLI::App& app, int* exit_code);
+void RegisterSweepCommand(CLI::App& app, int* exit_code);
 // The distributed service (a pdsm-coordinator at --server).
 void RegisterSubmitCommand(CLI::App& app, int* exit_code);
 void RegisterJobCommands(CLI::App& app, int* exit_code);  // status, list, cancel, stats

@@ -11,6 +11,8 @@ int main(int argc, char** argv) {
   pdsm::RegisterBakeCommand(app, &exit_code);
   pdsm::RegisterQueryCommand(app, &exit_code);
   pdsm::RegisterInfoCommand(app, &exit_code);
+  pdsm::RegisterReferenceCommand(app, &exit_code);
+  pdsm::RegisterSweepCommand(app, &exit_code);
   pdsm::RegisterSubmitCommand(app, &exit_code);
   pdsm::RegisterJobCommands(app, &exit_code);
   pdsm::RegisterWatchCommand(app, &exit_code);

@@ -1,6 +1,7 @@
 #include "client/points_csv.h"
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 
 #include "absl/strings/numbers.h"
@@ -33,6 +34,14 @@ absl::StatusOr<std::vector<QueryPoint>> ReadPointsCsv(const std::string& path) {
     points.push_back(QueryPoint{{xyz[0], xyz[1], xyz[2]}, absl::StrJoin(fields, ",")});
   }
   return points;
+}
+
+void PrintAttenuationLine(const QueryPoint& point, double attenuation) {
+  if (std::isnan(attenuation)) {
+    std::printf("%s,nan\n", point.text.c_str());
+  } else {
+    std::printf("%s,%.6f\n", point.text.c_str(), attenuation);
+  }
 }
 
 }  // namespace pdsm

@@ -19,6 +19,10 @@ struct QueryPoint {
 
 absl::StatusOr<std::vector<QueryPoint>> ReadPointsCsv(const std::string& path);
 
+// Prints "x,y,z,attenuation" on stdout (6 decimals; "nan" when `attenuation` is NaN): the
+// output line of `pdsm query` and `pdsm reference`.
+void PrintAttenuationLine(const QueryPoint& point, double attenuation);
+
 }  // namespace pdsm
 
 #endif  // PDSM_CLIENT_POINTS_CSV_H_

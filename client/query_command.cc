@@ -26,18 +26,12 @@ struct QueryFlags {
   ServiceFlags service;
 };
 
-void PrintValue(const QueryPoint& point, double a) {
-  if (std::isnan(a)) {
-    std::printf("%s,nan\n", point.text.c_str());
-  } else {
-    std::printf("%s,%.6f\n", point.text.c_str(), a);
-  }
-}
-
 absl::Status QueryLocal(const QueryFlags& flags, const std::vector<QueryPoint>& points) {
   absl::StatusOr<PdsmImage> pdsm = ReadPdsm(flags.pdsm_path);
   if (!pdsm.ok()) return pdsm.status();
-  for (const QueryPoint& point : points) PrintValue(point, QueryAttenuation(*pdsm, point.world));
+  for (const QueryPoint& point : points) {
+    PrintAttenuationLine(point, QueryAttenuation(*pdsm, point.world));
+  }
   return absl::OkStatus();
 }
 
@@ -63,7 +57,9 @@ absl::Status QueryRemote(const QueryFlags& flags, const std::vector<QueryPoint>&
     if (static_cast<size_t>(response.attenuation_size()) != end - begin) {
       return absl::DataLossError("the coordinator answered a different number of points");
     }
-    for (size_t i = begin; i < end; ++i) PrintValue(points[i], response.attenuation(i - begin));
+    for (size_t i = begin; i < end; ++i) {
+      PrintAttenuationLine(points[i], response.attenuation(i - begin));
+    }
   }
   return absl::OkStatus();
 }

@@ -1,0 +1,101 @@
+#include "core/reference/accuracy_points.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "core/bake/bake_plan.h"
+
+namespace pdsm {
+namespace {
+
+// Receiver triangles in front of the light (world), with their cumulative areas.
+struct ReceiverAreas {
+  std::vector<glm::dvec3> triangles;  // 3 vertices each
+  std::vector<double> cumulative;     // running sum of areas
+};
+
+ReceiverAreas GatherReceivers(const Scene& scene) {
+  ReceiverAreas r;
+  double total = 0.0;
+  for (const TriangleMesh& mesh : scene.meshes) {
+    if (!Receives(mesh.role)) continue;
+    for (size_t i = 0; i + 2 < mesh.indices.size(); i += 3) {
+      const glm::dvec3 a = mesh.positions_world[mesh.indices[i]];
+      const glm::dvec3 b = mesh.positions_world[mesh.indices[i + 1]];
+      const glm::dvec3 c = mesh.positions_world[mesh.indices[i + 2]];
+      const double area = 0.5 * glm::length(glm::cross(b - a, c - a));
+      if (!(area > 0.0)) continue;
+      total += area;
+      r.triangles.insert(r.triangles.end(), {a, b, c});
+      r.cumulative.push_back(total);
+    }
+  }
+  return r;
+}
+
+// Uniform in a triangle (the square-root map).
+glm::dvec3 InTriangle(const glm::dvec3* v, double u1, double u2) {
+  const double su = std::sqrt(u1);
+  return (1.0 - su) * v[0] + su * (1.0 - u2) * v[1] + su * u2 * v[2];
+}
+
+}  // namespace
+
+absl::StatusOr<AccuracyPoints> MakeAccuracyPoints(const Scene& scene, int surface_count,
+                                                  int free_space_count, uint64_t seed) {
+  absl::StatusOr<BakePlan> plan = PlanBake(scene);
+  if (!plan.ok()) return plan.status();
+  const PdsmGeometry& g = plan->geometry();
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  AccuracyPoints points;
+
+  const ReceiverAreas receivers = GatherReceivers(scene);
+  // Rejection keeps only points inside the frustum; the attempt cap ends the loop for receivers
+  // wholly behind the light.
+  for (int attempt = 0;
+       !receivers.cumulative.empty() && static_cast<int>(points.surface.size()) < surface_count &&
+       attempt < 50 * surface_count;
+       ++attempt) {
+    const double pick = u01(rng) * receivers.cumulative.back();
+    const size_t t = std::min<size_t>(
+        std::upper_bound(receivers.cumulative.begin(), receivers.cumulative.end(), pick) -
+            receivers.cumulative.begin(),
+        receivers.cumulative.size() - 1);
+    const double u1 = u01(rng), u2 = u01(rng);
+    const glm::dvec3 p = InTriangle(&receivers.triangles[3 * t], u1, u2);
+    if (g.Locate(p).has_value()) points.surface.push_back(p);
+  }
+
+  const bool ortho = g.projection == Projection::kOrthographic;
+  while (static_cast<int>(points.free_space.size()) < free_space_count) {
+    const double s = g.s_min + u01(rng) * (g.s_max - g.s_min);
+    const double t = g.t_min + u01(rng) * (g.t_max - g.t_min);
+    const double z = g.z_near + u01(rng) * (g.z_far - g.z_near);
+    const glm::dvec3 p_light = ortho ? glm::dvec3(s, t, z) : glm::dvec3(s * z, t * z, z);
+    points.free_space.push_back(g.frame.WorldFromLight(p_light));
+  }
+  return points;
+}
+
+ErrorStats CompareAttenuation(const std::vector<double>& estimate,
+                              const std::vector<double>& reference) {
+  std::vector<double> errors;
+  for (size_t k = 0; k < std::min(estimate.size(), reference.size()); ++k) {
+    if (std::isfinite(estimate[k]) && std::isfinite(reference[k])) {
+      errors.push_back(std::abs(estimate[k] - reference[k]));
+    }
+  }
+  ErrorStats stats;
+  stats.count = errors.size();
+  if (errors.empty()) return stats;
+  std::sort(errors.begin(), errors.end());
+  for (double e : errors) stats.mean += e;
+  stats.mean /= errors.size();
+  stats.p95 = errors[std::min(errors.size() - 1, errors.size() * 95 / 100)];
+  stats.max = errors.back();
+  return stats;
+}
+
+}  // namespace pdsm

@@ -1,0 +1,214 @@
+#include "core/reference/embree_visibility.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <thread>
+
+#include <embree3/rtcore.h>
+
+#include "absl/strings/str_format.h"
+#include "core/sampling/light_samples.h"
+
+namespace pdsm {
+namespace {
+
+// Hits on a triangle whose plane passes within this distance (relative to the scene's size) of the
+// point are the point's own surface: the exact method's margin (kNearPointMargin).
+constexpr double kCoplanarMargin = 1e-9;
+// Float roundings of a coordinate of magnitude `scale` (2^-24 relative each): the ray starts this
+// many of them away from the point, past where rounding alone could put a hit.
+constexpr double kRoundingsOffset = 16.0;
+constexpr int kMaxReferenceSamples = 1 << 20;
+
+struct DeviceDeleter {
+  void operator()(RTCDeviceTy* d) const { rtcReleaseDevice(d); }
+};
+struct SceneDeleter {
+  void operator()(RTCSceneTy* s) const { rtcReleaseScene(s); }
+};
+
+// Casters in rebased light space, in double (for the filter) and float (for Embree).
+struct Casters {
+  std::vector<glm::dvec3> vertices;  // 3 per triangle
+  glm::dvec3 origin_light{0.0};      // subtracted from light-space coordinates
+  double scale = 1.0;                // largest rebased coordinate magnitude
+};
+
+// The ray context Embree hands to the filter: extended with the query point in double.
+struct PointContext {
+  RTCIntersectContext embree;  // first member: Embree passes a pointer to it
+  glm::dvec3 point;
+  double margin;
+};
+
+absl::StatusOr<Casters> GatherCasters(const Scene& scene) {
+  Casters casters;
+  const LightFrame& frame = scene.light.frame;
+  glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
+  for (const TriangleMesh& mesh : scene.meshes) {
+    if (!Casts(mesh.role)) continue;
+    for (uint32_t index : mesh.indices) {
+      if (index >= mesh.positions_world.size()) {
+        return absl::InvalidArgumentError(absl::StrFormat("%s: index %d out of range (%d vertices)",
+                                                          mesh.label, index,
+                                                          mesh.positions_world.size()));
+      }
+      const glm::dvec3 v = frame.LightFromWorld(mesh.positions_world[index]);
+      lo = glm::min(lo, v);
+      hi = glm::max(hi, v);
+      casters.vertices.push_back(v);
+    }
+    casters.vertices.resize(casters.vertices.size() / 3 * 3);
+  }
+  // A sun's frame centre is arbitrary: rebase on the casters instead, so floats keep digits.
+  if (scene.light.shape == LightShape::kSun && !casters.vertices.empty()) {
+    casters.origin_light = 0.5 * (lo + hi);
+  }
+  for (glm::dvec3& v : casters.vertices) {
+    v -= casters.origin_light;
+    casters.scale = std::max({casters.scale, std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+  }
+  return casters;
+}
+
+// Rejects hits on the query point's own surface (a plane through the point), in double.
+void RejectOwnSurface(const RTCFilterFunctionNArguments* args) {
+  const auto* context = reinterpret_cast<const PointContext*>(args->context);
+  const auto* casters = static_cast<const Casters*>(args->geometryUserPtr);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] == 0) continue;
+    const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+    const glm::dvec3& a = casters->vertices[3 * prim];
+    const glm::dvec3 normal =
+        glm::cross(casters->vertices[3 * prim + 1] - a, casters->vertices[3 * prim + 2] - a);
+    const double length = glm::length(normal);
+    if (length == 0.0 ||
+        std::abs(glm::dot(normal, context->point - a)) <= context->margin * length) {
+      args->valid[i] = 0;
+    }
+  }
+}
+
+absl::StatusOr<RTCScene> BuildScene(RTCDevice device, const Casters& casters) {
+  RTCScene rtc_scene = rtcNewScene(device);
+  rtcSetSceneFlags(rtc_scene, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(rtc_scene, RTC_BUILD_QUALITY_HIGH);
+  const size_t triangles = casters.vertices.size() / 3;
+  if (triangles > 0) {
+    RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* vertices = static_cast<float*>(
+        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                3 * sizeof(float), casters.vertices.size()));
+    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+        geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangles));
+    if (vertices == nullptr || indices == nullptr) {
+      rtcReleaseGeometry(geometry);
+      rtcReleaseScene(rtc_scene);
+      return absl::InternalError("embree: cannot allocate the caster buffers");
+    }
+    for (size_t k = 0; k < casters.vertices.size(); ++k) {
+      for (int c = 0; c < 3; ++c) vertices[3 * k + c] = static_cast<float>(casters.vertices[k][c]);
+      indices[k] = static_cast<unsigned>(k);
+    }
+    rtcSetGeometryUserData(geometry, const_cast<Casters*>(&casters));
+    rtcSetGeometryOccludedFilterFunction(geometry, RejectOwnSurface);
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometry(rtc_scene, geometry);
+    rtcReleaseGeometry(geometry);
+  }
+  rtcCommitScene(rtc_scene);
+  if (rtcGetDeviceError(device) != RTC_ERROR_NONE) {
+    rtcReleaseScene(rtc_scene);
+    return absl::InternalError("embree: building the caster scene failed");
+  }
+  return rtc_scene;
+}
+
+// Per point, its own stratification: independent errors between points, deterministic.
+uint64_t PointSeed(uint64_t seed, size_t index) {
+  uint64_t z = seed * 0x9E3779B97F4A7C15ull + index + 0x632BE59BD9B4E019ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+double HiddenFraction(RTCScene rtc_scene, const Scene& scene, const Casters& casters,
+                      const glm::dvec3& p, const std::vector<glm::dvec2>& samples) {
+  const bool sun = scene.light.shape == LightShape::kSun;
+  const double scale = std::max(casters.scale, glm::length(p));
+  const double offset = kRoundingsOffset * std::ldexp(scale, -24);
+  PointContext context;
+  rtcInitIntersectContext(&context.embree);
+  context.point = p;
+  context.margin = kCoplanarMargin * scale;
+  int hidden = 0;
+  for (const glm::dvec2& s : samples) {
+    // Rect/disk: to the sample on the light plane (t = 1). Sun: towards the sun, unbounded.
+    const glm::dvec3 direction =
+        sun ? -glm::dvec3(s.x, s.y, 1.0) : glm::dvec3(s.x, s.y, 0.0) - casters.origin_light - p;
+    RTCRay ray;
+    ray.org_x = static_cast<float>(p.x);
+    ray.org_y = static_cast<float>(p.y);
+    ray.org_z = static_cast<float>(p.z);
+    ray.dir_x = static_cast<float>(direction.x);
+    ray.dir_y = static_cast<float>(direction.y);
+    ray.dir_z = static_cast<float>(direction.z);
+    ray.tnear = static_cast<float>(offset / glm::length(direction));
+    ray.tfar = sun ? std::numeric_limits<float>::infinity() : 1.0f;
+    ray.time = 0.0f;
+    ray.mask = ~0u;
+    ray.id = 0;
+    ray.flags = 0;
+    rtcOccluded1(rtc_scene, &context.embree, &ray);
+    if (ray.tfar < 0.0f) ++hidden;  // Embree marks an occluded ray with tfar = -inf
+  }
+  return static_cast<double>(hidden) / samples.size();
+}
+
+}  // namespace
+
+absl::StatusOr<std::vector<double>> EmbreeAttenuation(const Scene& scene,
+                                                      std::span<const glm::dvec3> points_world,
+                                                      int samples, uint64_t seed) {
+  if (samples < 1 || samples > kMaxReferenceSamples) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("--samples: must be in [1, %d] (got %d)", kMaxReferenceSamples, samples));
+  }
+  absl::StatusOr<Casters> casters = GatherCasters(scene);
+  if (!casters.ok()) return casters.status();
+  std::unique_ptr<RTCDeviceTy, DeviceDeleter> device(rtcNewDevice(nullptr));
+  if (device == nullptr) return absl::InternalError("embree: cannot create a device");
+  absl::StatusOr<RTCScene> built = BuildScene(device.get(), *casters);
+  if (!built.ok()) return built.status();
+  std::unique_ptr<RTCSceneTy, SceneDeleter> rtc_scene(*built);
+
+  const bool sun = scene.light.shape == LightShape::kSun;
+  std::vector<double> result(points_world.size(), std::numeric_limits<double>::quiet_NaN());
+  std::atomic<size_t> next{0};
+  auto work = [&] {
+    for (size_t i = next++; i < points_world.size(); i = next++) {
+      const glm::dvec3 p_light = scene.light.frame.LightFromWorld(points_world[i]);
+      if (!std::isfinite(p_light.x) || !std::isfinite(p_light.y) || !std::isfinite(p_light.z) ||
+          (!sun && !(p_light.z > 0.0))) {
+        continue;  // stays NaN: behind the light, like `pdsm query` outside the
+                   // frustum
+      }
+      const std::vector<glm::dvec2> light_samples = GenerateLightSamples(
+          scene.light, samples, SamplingPattern::kStratified, PointSeed(seed, i));
+      result[i] = HiddenFraction(rtc_scene.get(), scene, *casters, p_light - casters->origin_light,
+                                 light_samples);
+    }
+  };
+  const size_t thread_count = std::clamp<size_t>(std::thread::hardware_concurrency(), 1,
+                                                 std::max<size_t>(points_world.size(), 1));
+  std::vector<std::thread> threads;
+  for (size_t t = 1; t < thread_count; ++t) threads.emplace_back(work);
+  work();
+  for (std::thread& thread : threads) thread.join();
+  return result;
+}
+
+}  // namespace pdsm

@@ -1,0 +1,239 @@
+// The accuracy commands as a user runs them: `pdsm reference` (output format, methods, bad
+// input), `pdsm sweep` (CSV columns and rows, error falling with samples) and
+// `pdsm bake --target-error` (the target is met, checked on points of the test's own).
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_split.h"
+#include "client/sweep_report.h"
+#include "core/pdsm/pdsm_file.h"
+#include "core/pdsm/pdsm_query.h"
+#include "core/reference/accuracy_points.h"
+#include "core/reference/exact_visibility.h"
+#include "core/scene/scene_loader.h"
+#include "tests/test_support.h"
+
+namespace pdsm {
+namespace {
+
+using testing::CommandResult;
+using testing::ExamplePath;
+using testing::ReadBytes;
+using testing::RunCommand;
+using testing::TempDir;
+using testing::WriteText;
+
+const std::string kPdsm = PDSM_CLI;
+
+std::vector<std::string> Lines(const std::string& text) {
+  return absl::StrSplit(text, '\n', absl::SkipEmpty());
+}
+
+double LastField(const std::string& line) {
+  const std::vector<std::string> f = absl::StrSplit(line, ',');
+  double value = NAN;
+  EXPECT_TRUE(f.back() == "nan" || absl::SimpleAtod(f.back(), &value)) << line;
+  return value;
+}
+
+TEST(ReferenceCli, ExactAndEmbreeAgreeInQueryFormat) {
+  TempDir dir;
+  const std::string points = dir.File("pts.csv");
+  // Umbra under the upper plate, lit far away, a penumbra point, behind the light (nan).
+  WriteText(points, "-1.5,0,-1\n# comment\n9,0,9\n1.4,0,1.2\n0,11,0\n");
+  const std::string base = kPdsm + " reference " + ExamplePath("plates") + " --points " + points;
+  const CommandResult exact = RunCommand(base + " --method exact", dir);
+  ASSERT_EQ(exact.exit_code, 0) << exact.err;
+  const CommandResult embree = RunCommand(base + " --method embree --samples 4096", dir);
+  ASSERT_EQ(embree.exit_code, 0) << embree.err;
+  const std::vector<std::string> a = Lines(exact.out), b = Lines(embree.out);
+  ASSERT_EQ(a.size(), 4u) << exact.out;
+  ASSERT_EQ(b.size(), 4u) << embree.out;
+  EXPECT_EQ(a[0], "-1.5,0,-1,1.000000");
+  EXPECT_EQ(a[1], "9,0,9,0.000000");
+  EXPECT_EQ(a[3], "0,11,0,nan");
+  EXPECT_EQ(b[3], "0,11,0,nan");
+  for (size_t k = 0; k < 3; ++k) {
+    EXPECT_NEAR(LastField(a[k]), LastField(b[k]), 5 * 0.5 / std::sqrt(4096.0)) << k;
+  }
+  // auto is exact for a rect light.
+  EXPECT_EQ(RunCommand(base, dir).out, exact.out);
+}
+
+TEST(ReferenceCli, BadInputExits2NamingTheFile) {
+  TempDir dir;
+  WriteText(dir.File("pts.csv"), "1,2,3\n1,2\n");
+  CommandResult r = RunCommand(
+      kPdsm + " reference " + ExamplePath("plates") + " --points " + dir.File("pts.csv"), dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("pts.csv:2"), std::string::npos) << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+
+  r = RunCommand(kPdsm + " reference " + dir.File("missing.json") + " --points " +
+                     dir.File("pts.csv"),
+                 dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("missing.json"), std::string::npos) << r.err;
+
+  r = RunCommand(
+      kPdsm + " reference " + ExamplePath("plates") + " --points " + dir.File("nope.csv"), dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("nope.csv"), std::string::npos) << r.err;
+
+  WriteText(dir.File("ok.csv"), "1,2,3\n");
+  r = RunCommand(kPdsm + " reference " + ExamplePath("sun_pillars") + " --points " +
+                     dir.File("ok.csv") + " --method exact",
+                 dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--method"), std::string::npos) << r.err;
+  r = RunCommand(kPdsm + " reference " + ExamplePath("plates") + " --points " +
+                     dir.File("ok.csv") + " --method magic",
+                 dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--method"), std::string::npos) << r.err;
+}
+
+// column name -> value, for each data row.
+std::vector<std::map<std::string, std::string>> ReadCsv(const std::string& path,
+                                                        std::string* header) {
+  const std::vector<std::string> lines = Lines(ReadBytes(path));
+  std::vector<std::map<std::string, std::string>> rows;
+  if (lines.empty()) return rows;
+  *header = lines[0];
+  const std::vector<std::string> names = absl::StrSplit(lines[0], ',');
+  for (size_t i = 1; i < lines.size(); ++i) {
+    const std::vector<std::string> cells = absl::StrSplit(lines[i], ',');
+    EXPECT_EQ(cells.size(), names.size()) << lines[i];
+    std::map<std::string, std::string> row;
+    for (size_t c = 0; c < std::min(cells.size(), names.size()); ++c) row[names[c]] = cells[c];
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+double Number(const std::map<std::string, std::string>& row, const std::string& column) {
+  double value = NAN;
+  EXPECT_TRUE(absl::SimpleAtod(row.at(column), &value)) << column << "=" << row.at(column);
+  return value;
+}
+
+TEST(SweepCli, TinyGridWritesCsvAndPlotWithErrorFallingWithSamples) {
+  TempDir dir;
+  const std::string out = dir.File("sweep");
+  const CommandResult r = RunCommand(
+      kPdsm + " sweep " + ExamplePath("plates") + " --out " + out +
+          " --samples 4,64 --resolution 96 --sm-resolution 384 --epsilon 0.002 --surface-points "
+          "400 --free-points 400 --threads 2",
+      dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::string header;
+  const auto rows = ReadCsv(out + "/sweep.csv", &header);
+  EXPECT_EQ(header, SweepCsvHeader());
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].at("samples"), "4");
+  EXPECT_EQ(rows[1].at("samples"), "64");
+  for (const auto& row : rows) {
+    EXPECT_EQ(row.at("resolution"), "96x96");
+    EXPECT_EQ(row.at("sm_resolution"), "384");
+    EXPECT_EQ(row.at("surface_n"), "400");
+    EXPECT_EQ(row.at("free_n"), "400");
+    EXPECT_GT(Number(row, "seconds"), 0.0);
+    EXPECT_GT(Number(row, "peak_rss_mib"), 1.0);
+    EXPECT_GT(Number(row, "file_bytes"), 0.0);
+    EXPECT_LE(Number(row, "surface_mean"), Number(row, "surface_max"));
+  }
+  // 16x the light samples: the sampling error dominates at 4 samples.
+  EXPECT_LT(Number(rows[1], "mean_abs"), Number(rows[0], "mean_abs") / 2);
+  EXPECT_LT(Number(rows[1], "surface_mean"), Number(rows[0], "surface_mean"));
+  EXPECT_LT(Number(rows[1], "free_mean"), Number(rows[0], "free_mean"));
+  EXPECT_EQ(Number(rows[1], "pareto") + Number(rows[0], "pareto") >= 1, true);
+  EXPECT_FALSE(std::filesystem::exists(out + "/sweep.csv.tmp"));
+  // The reference, computed once: a header and one line per point.
+  const std::vector<std::string> reference = Lines(ReadBytes(out + "/reference.csv"));
+  ASSERT_EQ(reference.size(), 801u);
+  EXPECT_EQ(reference[0], "kind,x,y,z,attenuation");
+  if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
+    EXPECT_GT(std::filesystem::file_size(out + "/sweep.png"), 1000u);
+    // --replot redraws it from the CSV alone.
+    std::filesystem::remove(out + "/sweep.png");
+    const CommandResult replot =
+        RunCommand(kPdsm + " sweep " + ExamplePath("plates") + " --out " + out + " --replot", dir);
+    EXPECT_EQ(replot.exit_code, 0) << replot.err;
+    EXPECT_GT(std::filesystem::file_size(out + "/sweep.png"), 1000u);
+  }
+}
+
+TEST(SweepCli, WithoutGnuplotWritesTheCsvAndWarns) {
+  TempDir dir;
+  const std::string out = dir.File("sweep");
+  const CommandResult r = RunCommand(
+      "env PATH=" + dir.File("empty") + " " + kPdsm + " sweep " + ExamplePath("plates") +
+          " --out " + out + " --samples 4 --resolution 48 --sm-resolution 96 --surface-points 50 "
+          "--free-points 50",
+      dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: no plot"), std::string::npos) << r.err;
+  std::string header;
+  EXPECT_EQ(ReadCsv(out + "/sweep.csv", &header).size(), 1u);
+  EXPECT_FALSE(std::filesystem::exists(out + "/sweep.png"));
+}
+
+TEST(SweepCli, BadKnobExits2) {
+  TempDir dir;
+  CommandResult r = RunCommand(kPdsm + " sweep " + ExamplePath("plates") + " --out " +
+                                   dir.File("s") + " --sampling NOPE",
+                               dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--sampling"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("STRATIFIED"), std::string::npos) << r.err;
+  r = RunCommand(kPdsm + " sweep " + ExamplePath("plates") + " --out " + dir.File("s") +
+                     " --resolution 12y5",
+                 dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--resolution"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.File("s/sweep.csv")));
+}
+
+TEST(TargetErrorCli, BakeMeetsTheTargetOnIndependentPoints) {
+  TempDir dir;
+  constexpr double kTarget = 0.02;
+  const std::string out = dir.File("plates.exr");
+  const CommandResult r = RunCommand(kPdsm + " bake " + ExamplePath("plates") + " -o " + out +
+                                         " --target-error 0.02 --threads 2",
+                                     dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("chose samples"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(": met"), std::string::npos) << r.err;
+  // Nothing but the PDSM left next to it.
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    const std::string name = entry.path().filename().string();
+    EXPECT_TRUE(name == "plates.exr" || name.rfind("cmd.", 0) == 0) << name;
+  }
+
+  // Measured again on points the chooser never saw, against the exact reference.
+  absl::StatusOr<Scene> scene = LoadSceneFile(ExamplePath("plates"));
+  ASSERT_TRUE(scene.ok());
+  absl::StatusOr<AccuracyPoints> points = MakeAccuracyPoints(*scene, 500, 500, 12345);
+  ASSERT_TRUE(points.ok());
+  std::vector<glm::dvec3> all = points->surface;
+  all.insert(all.end(), points->free_space.begin(), points->free_space.end());
+  absl::StatusOr<std::vector<double>> exact = ExactAttenuation(*scene, all);
+  absl::StatusOr<PdsmImage> pdsm = ReadPdsm(out);
+  ASSERT_TRUE(exact.ok() && pdsm.ok());
+  std::vector<double> baked;
+  for (const glm::dvec3& p : all) baked.push_back(QueryAttenuation(*pdsm, p));
+  const ErrorStats e = CompareAttenuation(baked, *exact);
+  EXPECT_EQ(e.count, all.size());
+  EXPECT_LE(e.mean, kTarget);
+  std::printf("target %.3f: independent mean error %.5f\n", kTarget, e.mean);
+}
+
+}  // namespace
+}  // namespace pdsm
