@@ -37,8 +37,11 @@ absl::StatusOr<pdsm::v1::Sampling> ParseSamplingName(const std::string& name,
   if (upper != "SAMPLING_DEFAULT" && pdsm::v1::Sampling_Parse(upper, &value)) return value;
   std::vector<std::string> names;
   const google::protobuf::EnumDescriptor* e = pdsm::v1::Sampling_descriptor();
-  for (int i = 0; i < e->value_count(); ++i) {
-    if (e->value(i)->number() != 0) names.push_back(absl::AsciiStrToLower(e->value(i)->name()));
+  for (int i = 0; i < e->value_count(); ++i) {  // as users type them: "blue-noise"
+    if (e->value(i)->number() == 0) continue;
+    std::string spelled = absl::AsciiStrToLower(e->value(i)->name());
+    std::replace(spelled.begin(), spelled.end(), '_', '-');
+    names.push_back(spelled);
   }
   return absl::InvalidArgumentError(absl::StrFormat(
       "%s: unknown sampling pattern \"%s\" (one of %s)", flag, name, absl::StrJoin(names, ", ")));

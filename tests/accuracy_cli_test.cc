@@ -192,7 +192,7 @@ TEST(SweepCli, BadKnobExits2) {
                                dir);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--sampling"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("STRATIFIED"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("stratified, uniform, sobol, halton, blue-noise"), std::string::npos) << r.err;
   r = RunCommand(kPdsm + " sweep " + ExamplePath("plates") + " --out " + dir.File("s") +
                      " --resolution 12y5",
                  dir);
