@@ -277,6 +277,7 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
   // Casters nearer than the floor still shadow what lies beyond it (they are drawn), but
   // points nearer than it are outside what the PDSM resolves: queries there are NaN.
   if (plan.z_scan_floor > g.z_near) g.z_valid_min = plan.z_scan_floor;
+  plan.header.format_version = MinimumFormatVersion(plan.header);
   for (const TriangleMesh& mesh : scene.meshes) {
     if (Casts(mesh.role)) AppendMesh(mesh, g.frame, &plan.casters);
     if (Receives(mesh.role)) AppendMesh(mesh, g.frame, &plan.receivers);

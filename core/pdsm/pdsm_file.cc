@@ -370,14 +370,19 @@ absl::StatusOr<PdsmHeader> PdsmHeaderFromExr(const Imf::Header& exr, absl::strin
   ReadBakeSettings(in, exr, &h);
   ReadAdaptive(in, exr, &h);
   if (!in.status().ok()) return in.status();
+  if (h.format_version < MinimumFormatVersion(h)) {
+    return absl::DataLossError(absl::StrFormat(
+        "%s: %s = %d, but its %s/%s attributes need version %d", path, kAttrFormatVersion,
+        h.format_version, kAttrSurfacesOnly, kAttrZValidMin, MinimumFormatVersion(h)));
+  }
   return h;
 }
 
 absl::Status ValidateHeaderForWrite(const PdsmHeader& h, absl::string_view path) {
-  if (h.format_version != kPdsmFormatVersion) {
+  if (h.format_version != MinimumFormatVersion(h)) {
     return absl::InvalidArgumentError(
-        absl::StrFormat("%s: header.format_version = %d, this build writes version %d", path,
-                        h.format_version, kPdsmFormatVersion));
+        absl::StrFormat("%s: header.format_version = %d, but its features need version %d", path,
+                        h.format_version, MinimumFormatVersion(h)));
   }
   if (h.geometry.width <= 0 || h.geometry.height <= 0) {
     return absl::InvalidArgumentError(

@@ -511,6 +511,33 @@ TEST_F(PdsmFileTest, NewerFormatVersionIsFailedPrecondition) {
   EXPECT_EQ(ReadPdsmHeader(path).status().code(), absl::StatusCode::kFailedPrecondition);
 }
 
+TEST_F(PdsmFileTest, VersionTwoOnlyWhenTheEvaluationRuleChanged) {
+  // Plain files stay version 1 (a version-1 reader opens them); surfaces-only and z_valid_min
+  // files are version 2, and a version-1 file claiming those features is refused.
+  EXPECT_EQ(HeaderOf(WriteSample("plain.exr")).typedAttribute<Imf::IntAttribute>(
+                "pdsmFormatVersion").value(), 1);
+  PdsmImage image = RandomImage(FullHeader(40, 24, 16), 7);
+  image.header.surfaces_only = true;
+  image.header.geometry.z_valid_min = image.header.geometry.z_near + 0.01;
+  const std::string path = Path("v2.exr");
+  EXPECT_EQ(WriteTiles(path, image.header, CutTiles(image)).code(),
+            absl::StatusCode::kInvalidArgument);  // the header still says version 1
+  image.header.format_version = MinimumFormatVersion(image.header);
+  ASSERT_TRUE(WriteTiles(path, image.header, CutTiles(image)).ok());
+  Imf::Header exr = HeaderOf(path);
+  EXPECT_EQ(exr.typedAttribute<Imf::IntAttribute>("pdsmFormatVersion").value(), 2);
+  absl::StatusOr<PdsmHeader> read = ReadPdsmHeader(path);
+  ASSERT_TRUE(read.ok()) << read.status();
+  EXPECT_EQ(read->format_version, 2);
+
+  exr.typedAttribute<Imf::IntAttribute>("pdsmFormatVersion").value() = 1;
+  const std::string lying = Path("v1_claiming_v2.exr");
+  WriteRawDeepTiled(lying, exr, {});
+  const absl::Status s = ReadPdsmHeader(lying).status();
+  EXPECT_EQ(s.code(), absl::StatusCode::kDataLoss) << s;
+  EXPECT_THAT(s.message(), HasSubstr("pdsmSurfacesOnly"));
+}
+
 TEST_F(PdsmFileTest, MissingAttributeIsDataLossNamingIt) {
   // A copy without the attribute (OpenEXR 3.1.5's Header::erase leaks it).
   const Imf::Header full = HeaderOf(WriteSample("sample.exr"));

@@ -14,11 +14,12 @@
 
 namespace pdsm {
 
-inline constexpr int kPdsmFormatVersion = 1;
+// The newest format this build reads and writes (docs/pdsm_format.md, "Versioning").
+inline constexpr int kPdsmFormatVersion = 2;
 
 // Everything a reader needs to evaluate the PDSM and to know how it was made.
 struct PdsmHeader {
-  int format_version = kPdsmFormatVersion;
+  int format_version = 1;  // MinimumFormatVersion(*this) for what a bake writes
   std::string scene_name;
   LightShape light_shape = LightShape::kRect;
   double light_half_width = 0, light_half_height = 0, light_radius = 0, tan_half_angle = 0;
@@ -49,6 +50,13 @@ struct PdsmHeader {
   // windows), or to 0 in pixels that hold no vertex.
   bool surfaces_only = false;
 };
+
+// Version 2 changed the evaluation rule (NaN nearer than z_valid_min, NaN-bracketed
+// surfaces-only windows); files that use neither stay version 1, so a version-1 reader still
+// opens them and their bytes did not change.
+inline int MinimumFormatVersion(const PdsmHeader& h) {
+  return h.surfaces_only || h.geometry.z_valid_min != 0 ? 2 : 1;
+}
 
 // One rectangle of pixels with their functions: the unit of writing and of assembling.
 struct PdsmTile {
