@@ -318,6 +318,7 @@ void FrameRenderer::SetShadeUniforms(ViewMode mode, const Camera& camera,
   u.Float("ambient", settings_.ambient);
   u.Vec2("window_min", glm::vec2(g.s_min, g.t_min));
   u.Vec2("inv_pitch", glm::vec2(1.0 / g.PixelPitchS(), 1.0 / g.PixelPitchT()));
+  u.Float("z_valid_min", static_cast<float>(g.z_valid_min));
   u.Int2("pdsm_size", glm::ivec2(g.width, g.height));
   u.Int("bilinear", settings_.bilinear ? 1 : 0);
   const ShadowMapLayout& layout = mode == ViewMode::kMultiSm ? im.multi_layout : im.single_layout;

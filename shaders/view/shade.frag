@@ -30,6 +30,7 @@ uniform vec2 window_min;        // (s_min, t_min)
 uniform vec2 inv_pitch;         // pixels per window unit
 uniform ivec2 pdsm_size;
 uniform int bilinear;           // 1: blend the 4 nearest pixels' results; 0: nearest pixel
+uniform float z_valid_min;      // nearer than this the PDSM knows nothing (pdsmZValidMin); 0 none
 const uint kPendingPixel = 0xFFFFFFFFu;  // count of a pixel not baked yet (job still running)
 const float kPending = -3.0;
 
@@ -64,10 +65,12 @@ float EvaluatePixel(ivec2 pixel, float z) {
     if (pdsm_vertices[offset + mid].x <= z) lo = mid + 1u; else hi = mid;
   }
   vec2 a = pdsm_vertices[offset + lo - 1u];
-  if (lo == count) return clamp(a.y, 0.0, 1.0);
+  // NaN (off a surfaces-only file's windows) is kept: clamp() of NaN is undefined in GLSL.
+  if (lo == count) return isnan(a.y) ? a.y : clamp(a.y, 0.0, 1.0);
   vec2 b = pdsm_vertices[offset + lo];
   float f = (z - a.x) / (b.x - a.x);
-  return clamp(a.y + f * (b.y - a.y), 0.0, 1.0);
+  float value = a.y + f * (b.y - a.y);
+  return isnan(value) ? value : clamp(value, 0.0, 1.0);
 }
 
 vec2 WindowFromLight(vec3 p, vec2 sample_offset) {
@@ -79,13 +82,16 @@ vec2 WindowFromLight(vec3 p, vec2 sample_offset) {
 // -1 outside the frustum (QueryAttenuation's NaN).
 float PdsmAttenuation(vec3 p) {
   if (orthographic == 0 && !(p.z > 0.0)) return -1.0;
+  if (p.z < z_valid_min) return -1.0;
   vec2 st = WindowFromLight(p, vec2(0.0));
   vec2 pixel = (st - window_min) * inv_pitch;
   if (any(lessThan(pixel, vec2(0.0))) || any(greaterThan(pixel, vec2(pdsm_size)))) return -1.0;
   ivec2 last = pdsm_size - 1;
   if (bilinear == 0) {
     ivec2 nearest = clamp(ivec2(floor(pixel)), ivec2(0), last);
-    return PendingPixel(nearest) ? kPending : EvaluatePixel(nearest, p.z);
+    if (PendingPixel(nearest)) return kPending;
+    float a = EvaluatePixel(nearest, p.z);
+    return isnan(a) ? -1.0 : a;
   }
   vec2 f = pixel - 0.5;
   vec2 base = floor(f);
@@ -100,7 +106,8 @@ float PdsmAttenuation(vec3 p) {
   float a10 = EvaluatePixel(ivec2(p1.x, p0.y), p.z);
   float a01 = EvaluatePixel(ivec2(p0.x, p1.y), p.z);
   float a11 = EvaluatePixel(ivec2(p1.x, p1.y), p.z);
-  return (1.0 - w.y) * ((1.0 - w.x) * a00 + w.x * a10) + w.y * ((1.0 - w.x) * a01 + w.x * a11);
+  float a = (1.0 - w.y) * ((1.0 - w.x) * a00 + w.x * a10) + w.y * ((1.0 - w.x) * a01 + w.x * a11);
+  return isnan(a) ? -1.0 : a;  // a NaN neighbour: unknown, as QueryAttenuation says
 }
 
 // Texel coordinates (continuous) of p in the shadow map of the sample at sample_offset.

@@ -20,10 +20,13 @@ inline const TempDir& ViewBakeDir() {
 
 // `example` baked at 64x64 PDSM pixels, 16 samples, 256-texel shadow maps: a few tenths of a
 // second, and enough penumbra to compare modes on. Same bytes every time (determinism).
-inline std::string SmallBake(const std::string& example) {
+// `surfaces_only`: the same bake keeping A(z) only near the receivers (NaN elsewhere).
+inline std::string SmallBake(const std::string& example, bool surfaces_only = false) {
   static std::map<std::string, std::string>* baked = new std::map<std::string, std::string>();
-  if (auto it = baked->find(example); it != baked->end()) return it->second;
+  const std::string name = example + (surfaces_only ? "_surfaces_only" : "");
+  if (auto it = baked->find(name); it != baked->end()) return it->second;
   pdsm::v1::BakeParams overrides;
+  overrides.set_surfaces_only(surfaces_only);
   overrides.add_resolution(64);
   overrides.add_resolution(64);
   overrides.set_samples(16);
@@ -32,10 +35,10 @@ inline std::string SmallBake(const std::string& example) {
   absl::StatusOr<Scene> scene = LoadSceneFile(ExamplePath(example), overrides);
   EXPECT_TRUE(scene.ok()) << scene.status();
   LocalBakeOptions options;
-  options.output_path = ViewBakeDir().File(example + ".exr");
+  options.output_path = ViewBakeDir().File(name + ".exr");
   absl::StatusOr<BakeSummary> summary = RunLocalBake(*scene, options);
   EXPECT_TRUE(summary.ok()) << summary.status();
-  (*baked)[example] = options.output_path;
+  (*baked)[name] = options.output_path;
   return options.output_path;
 }
 
