@@ -141,6 +141,12 @@ TEST(SurfacesOnly, ServiceMatchesTheLocalBakeByteForByte) {
       std::string(PDSM_CLI) + " bake " + scene + " -o " + local + " --no-preview --surfaces-only",
       cluster.dir());
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  // `pdsm info` says where the file is defined (format 2).
+  const testing::CommandResult info = testing::RunCommand(
+      std::string(PDSM_CLI) + " info " + local + " --json", cluster.dir());
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_NE(info.out.find("\"formatVersion\": 2"), std::string::npos) << info.out;
+  EXPECT_NE(info.out.find("\"surfacesOnly\": true"), std::string::npos) << info.out;
   const std::string job_id = cluster.Submit(scene, "--surfaces-only");
   const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
   ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error();
