@@ -14,12 +14,14 @@
 #include "spdlog/spdlog.h"
 #include "worker/gl/gl_functions.h"
 #include "worker/gl/gl_objects.h"
+#include "worker/gl/gl_program.h"
 #include "worker/gl/osmesa_context.h"
 #include "worker/gl/shadow_map_shaders.h"  // generated: the embedded GLSL sources
 
 namespace pdsm {
 namespace {
 
+using gl::CheckGlError;
 using gl::GlFunctions;
 
 // Pieces beyond this are not worth their memory (an 8192^2 piece is 512 MiB of attachments).
@@ -30,62 +32,9 @@ spdlog::logger& Logger() {
   return *logger;
 }
 
-// Drains the GL error flags; INTERNAL naming `what` and the first error if any was set.
-absl::Status CheckGlError(const GlFunctions& gl, absl::string_view what) {
-  const GLenum first = gl.GetError();
-  if (first == GL_NO_ERROR) return absl::OkStatus();
-  for (int i = 0; i < 16 && gl.GetError() != GL_NO_ERROR; ++i) {
-  }
-  return absl::InternalError(absl::StrFormat("GL error 0x%04x after %s", first, what));
-}
-
-absl::StatusOr<gl::Shader> CompileShader(const GlFunctions& gl, GLenum type, const char* source,
-                                         absl::string_view name) {
-  gl::Shader shader = gl::MakeShader(gl, type);
-  if (!shader) return absl::InternalError(absl::StrCat("glCreateShader failed for ", name));
-  gl.ShaderSource(shader.name(), 1, &source, nullptr);
-  gl.CompileShader(shader.name());
-  GLint ok = GL_FALSE;
-  gl.GetShaderiv(shader.name(), GL_COMPILE_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    GLint length = 0;
-    gl.GetShaderiv(shader.name(), GL_INFO_LOG_LENGTH, &length);
-    std::string log(std::max(length, 1), '\0');
-    gl.GetShaderInfoLog(shader.name(), length, nullptr, log.data());
-    return absl::InternalError(absl::StrCat("compiling ", name, " failed: ", log.c_str()));
-  }
-  return shader;
-}
-
 absl::StatusOr<gl::Program> LinkShadowMapProgram(const GlFunctions& gl) {
-  absl::StatusOr<gl::Shader> vertex =
-      CompileShader(gl, GL_VERTEX_SHADER, gl::kShadowMapVertexShader, "shadow_map.vert");
-  if (!vertex.ok()) return vertex.status();
-  absl::StatusOr<gl::Shader> fragment =
-      CompileShader(gl, GL_FRAGMENT_SHADER, gl::kShadowMapFragmentShader, "shadow_map.frag");
-  if (!fragment.ok()) return fragment.status();
-  gl::Program program = gl::MakeProgram(gl);
-  if (!program) return absl::InternalError("glCreateProgram failed");
-  gl.AttachShader(program.name(), vertex->name());
-  gl.AttachShader(program.name(), fragment->name());
-  gl.LinkProgram(program.name());
-  // Detached so the shaders are freed with their wrappers rather than with the program.
-  gl.DetachShader(program.name(), vertex->name());
-  gl.DetachShader(program.name(), fragment->name());
-  GLint ok = GL_FALSE;
-  gl.GetProgramiv(program.name(), GL_LINK_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    GLint length = 0;
-    gl.GetProgramiv(program.name(), GL_INFO_LOG_LENGTH, &length);
-    std::string log(std::max(length, 1), '\0');
-    gl.GetProgramInfoLog(program.name(), length, nullptr, log.data());
-    return absl::InternalError(
-        absl::StrCat("linking the shadow-map program failed: ", log.c_str()));
-  }
-  if (absl::Status status = CheckGlError(gl, "building the shadow-map program"); !status.ok()) {
-    return status;
-  }
-  return program;
+  return gl::BuildProgram(gl, gl::kShadowMapVertexShader, gl::kShadowMapFragmentShader,
+                          "the shadow-map program (shadow_map.vert, shadow_map.frag)");
 }
 
 absl::Status ValidateCamera(const ShadowMapCamera& camera) {
