@@ -11,9 +11,8 @@
 #include <tuple>
 #include <vector>
 
-#include "client/preview_image.h"
+#include "client/tile_output.h"
 #include "core/bake/adaptive_sampling.h"
-#include "core/bake/receiver_windows.h"
 #include "server/tile_assembly.h"
 #include "worker/bake_task.h"
 
@@ -41,13 +40,12 @@ class AdaptiveBake {
   AdaptiveBake(const BakePlan& plan, const LocalBakeOptions& options, PdsmWriter* writer)
       : plan_(plan),
         options_(options),
-        writer_(writer),
         min_samples_(std::max(1, plan.header.adaptive_min_samples)),
         max_samples_(plan.header.samples),
         min_interval_(kAdaptiveSurfaceDepthFraction *
                       (plan.geometry().z_far - plan.geometry().z_near)),
         tiles_(plan.tiles.size()),
-        preview_(plan.geometry().width, plan.geometry().height) {
+        output_(plan, !options.preview_path.empty(), writer) {
     std::lock_guard<std::mutex> lock(mu_);
     for (size_t t = 0; t < tiles_.size(); ++t) StartStage(static_cast<int>(t), 0);
   }
@@ -64,7 +62,7 @@ class AdaptiveBake {
     return summary_;
   }
 
-  const PreviewImage& preview() const { return preview_; }
+  const PreviewImage& preview() const { return output_.preview(); }
 
  private:
   double Elapsed() const {
@@ -177,23 +175,12 @@ class AdaptiveBake {
 
   absl::Status WriteTile(TaskRunner& runner, const std::vector<TileEvents>& parts, int samples,
                          AssemblyStats* assembly) {
-    const TileRect& rect = plan_.tiles[parts.front().tile_index];
-    std::optional<TileWindows> windows;  // surfaces-only: the tile's receiver windows
-    if (plan_.header.surfaces_only) windows = ComputeReceiverWindows(plan_, rect);
-    const PdsmTile tile =
-        AssembleTile(plan_.header, parts, samples, assembly, windows ? &*windows : nullptr);
-    {
-      std::lock_guard<std::mutex> lock(mu_);
-      if (tile.vertices.empty()) ++summary_.tiles_all_lit;
-      summary_.tile_samples_total += samples;
-    }
-    if (!options_.preview_path.empty()) {
-      absl::StatusOr<std::vector<float>> depth = runner.ReceiverDepth(rect);
-      if (!depth.ok()) return depth.status();
-      preview_.ShadeTile(tile, *depth);
-    }
-    std::lock_guard<std::mutex> lock(writer_mu_);
-    return writer_->WriteTile(tile);
+    absl::StatusOr<bool> all_lit = output_.Write(runner, parts, samples, assembly);
+    if (!all_lit.ok()) return all_lit.status();
+    std::lock_guard<std::mutex> lock(mu_);
+    if (*all_lit) ++summary_.tiles_all_lit;
+    summary_.tile_samples_total += samples;
+    return absl::OkStatus();
   }
 
   void ReportProgress() {
@@ -210,12 +197,11 @@ class AdaptiveBake {
 
   const BakePlan& plan_;
   const LocalBakeOptions& options_;
-  PdsmWriter* writer_;
   const int min_samples_, max_samples_;
   const double min_interval_;
   std::chrono::steady_clock::time_point start_;
 
-  std::mutex mu_;  // guards the members below up to writer_mu_, and TileState's queue fields
+  std::mutex mu_;  // guards the members below up to progress_mu_, and TileState's queue fields
   std::condition_variable wake_;
   std::vector<TileState> tiles_;
   std::set<QueuedTask> queue_;
@@ -226,9 +212,8 @@ class AdaptiveBake {
   absl::Status first_error_;
   BakeSummary summary_;
 
-  std::mutex writer_mu_;
   std::mutex progress_mu_;
-  PreviewImage preview_;
+  TileOutput output_;
 };
 
 }  // namespace

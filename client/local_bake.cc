@@ -6,15 +6,13 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
-#include <optional>
 #include <thread>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
 #include "client/adaptive_bake.h"
-#include "client/preview_image.h"
+#include "client/tile_output.h"
 #include "core/bake/bake_plan.h"
-#include "core/bake/receiver_windows.h"
 #include "core/bake/tile_reach.h"
 #include "core/pdsm/pdsm_file.h"
 
@@ -45,11 +43,10 @@ class LocalBake {
   LocalBake(const BakePlan& plan, const LocalBakeOptions& options, PdsmWriter* writer)
       : plan_(plan),
         options_(options),
-        writer_(writer),
         tasks_(MakeTasks(plan, options.samples_per_task)),
         tile_parts_(plan.tiles.size()),
         tile_parts_left_(plan.tiles.size()),
-        preview_(plan.geometry().width, plan.geometry().height) {
+        output_(plan, !options.preview_path.empty(), writer) {
     for (const BakeTask& task : tasks_) ++tile_parts_left_[task.tile_index];
   }
 
@@ -65,7 +62,7 @@ class LocalBake {
     return summary_;
   }
 
-  const PreviewImage& preview() const { return preview_; }
+  const PreviewImage& preview() const { return output_.preview(); }
   size_t task_count() const { return tasks_.size(); }
 
  private:
@@ -116,21 +113,13 @@ class LocalBake {
 
   absl::Status FinishTile(TaskRunner& runner, const std::vector<TileEvents>& parts,
                           AssemblyStats* assembly) {
-    const TileRect& rect = plan_.tiles[parts.front().tile_index];
-    std::optional<TileWindows> windows;
-    if (plan_.header.surfaces_only) windows = ComputeReceiverWindows(plan_, rect);
-    const PdsmTile tile = AssembleTile(plan_.header, parts, assembly, windows ? &*windows : nullptr);
-    if (tile.vertices.empty()) {
+    absl::StatusOr<bool> all_lit = output_.Write(runner, parts, /*tile_samples=*/0, assembly);
+    if (!all_lit.ok()) return all_lit.status();
+    if (*all_lit) {
       std::lock_guard<std::mutex> lock(mu_);
       ++summary_.tiles_all_lit;
     }
-    if (!options_.preview_path.empty()) {
-      absl::StatusOr<std::vector<float>> depth = runner.ReceiverDepth(rect);
-      if (!depth.ok()) return depth.status();
-      preview_.ShadeTile(tile, *depth);
-    }
-    std::lock_guard<std::mutex> lock(writer_mu_);
-    return writer_->WriteTile(tile);
+    return absl::OkStatus();
   }
 
   void ReportProgress() {
@@ -143,22 +132,20 @@ class LocalBake {
 
   const BakePlan& plan_;
   const LocalBakeOptions& options_;
-  PdsmWriter* writer_;
   const std::vector<BakeTask> tasks_;
   std::chrono::steady_clock::time_point start_;
   std::atomic<size_t> next_task_{0};
   std::atomic<int64_t> tasks_done_{0};
   std::atomic<bool> failed_{false};
 
-  std::mutex mu_;  // guards the members below up to writer_mu_
+  std::mutex mu_;  // guards the members below up to progress_mu_
   std::vector<std::vector<TileEvents>> tile_parts_;
   std::vector<int> tile_parts_left_;
   absl::Status first_error_;
   BakeSummary summary_;
 
-  std::mutex writer_mu_;
   std::mutex progress_mu_;
-  PreviewImage preview_;
+  TileOutput output_;
 };
 
 }  // namespace
