@@ -2,7 +2,6 @@
 // name and renamed when complete, so an interrupted download leaves nothing at OUT.
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 
 #include "absl/strings/str_cat.h"
 #include "client/cli_common.h"
@@ -21,34 +20,13 @@ struct FetchFlags {
 absl::Status Fetch(const FetchFlags& flags, const std::string& temp) {
   absl::StatusOr<ServiceConnection> c = Connect(flags.service);
   if (!c.ok()) return c.status();
-  std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-  if (!out) return absl::InvalidArgumentError(absl::StrCat("-o: cannot write \"", temp, "\""));
-  pdsm::v1::GetJobRequest request;
-  request.set_job_id(flags.job_id);
-  auto context = c->Call(std::chrono::hours(1));
-  auto reader = c->stub->FetchPdsm(context.get(), request);
-  pdsm::v1::PdsmChunk chunk;
-  uint64_t total = 0, received = 0;
-  bool first = true;
-  while (reader->Read(&chunk)) {
-    if (first) total = chunk.total_bytes(), first = false;
-    out.write(chunk.data().data(), static_cast<std::streamsize>(chunk.data().size()));
-    received += chunk.data().size();
-  }
-  if (grpc::Status s = reader->Finish(); !s.ok()) {
-    return CallError("fetching job " + flags.job_id, s, flags.service.server);
-  }
-  out.close();
-  if (!out) return absl::InternalError(absl::StrCat("writing \"", temp, "\" failed"));
-  if (received != total) {
-    return absl::DataLossError(absl::StrCat("fetching job ", flags.job_id, ": got ", received,
-                                            " of ", total, " bytes"));
-  }
+  absl::StatusOr<uint64_t> received = DownloadPdsm(*c, flags.service, flags.job_id, temp);
+  if (!received.ok()) return received.status();
   std::error_code ec;
   std::filesystem::rename(temp, flags.output_path, ec);
   if (ec) return absl::InternalError(absl::StrCat("-o: ", flags.output_path, ": ", ec.message()));
   std::printf("pdsm: %s (%llu bytes)\n", flags.output_path.c_str(),
-              static_cast<unsigned long long>(received));
+              static_cast<unsigned long long>(*received));
   return absl::OkStatus();
 }
 

@@ -1,5 +1,7 @@
 #include "client/service_connection.h"
 
+#include <fstream>
+
 #include "absl/strings/str_cat.h"
 #include "proto/grpc_support.h"
 
@@ -50,6 +52,34 @@ absl::Status CallError(const std::string& what, const grpc::Status& status,
   }
   return absl::Status(static_cast<absl::StatusCode>(status.error_code()),
                       absl::StrCat(what, ": ", status.error_message(), hint));
+}
+
+absl::StatusOr<uint64_t> DownloadPdsm(const ServiceConnection& c, const ServiceFlags& service,
+                                      const std::string& job_id, const std::string& path) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) return absl::InvalidArgumentError(absl::StrCat("cannot write \"", path, "\""));
+  pdsm::v1::GetJobRequest request;
+  request.set_job_id(job_id);
+  auto context = c.Call(std::chrono::hours(1));
+  auto reader = c.stub->FetchPdsm(context.get(), request);
+  pdsm::v1::PdsmChunk chunk;
+  uint64_t total = 0, received = 0;
+  bool first = true;
+  while (reader->Read(&chunk)) {
+    if (first) total = chunk.total_bytes(), first = false;
+    out.write(chunk.data().data(), static_cast<std::streamsize>(chunk.data().size()));
+    received += chunk.data().size();
+  }
+  if (grpc::Status s = reader->Finish(); !s.ok()) {
+    return CallError("fetching job " + job_id, s, service.server);
+  }
+  out.close();
+  if (!out) return absl::InternalError(absl::StrCat("writing \"", path, "\" failed"));
+  if (received != total) {
+    return absl::DataLossError(
+        absl::StrCat("fetching job ", job_id, ": got ", received, " of ", total, " bytes"));
+  }
+  return received;
 }
 
 }  // namespace pdsm

@@ -4,6 +4,7 @@
 #define PDSM_CLIENT_SERVICE_CONNECTION_H_
 
 #include <chrono>
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -37,6 +38,13 @@ absl::StatusOr<ServiceConnection> Connect(const ServiceFlags& flags);
 // for the codes that mean the connection or the token is wrong.
 absl::Status CallError(const std::string& what, const grpc::Status& status,
                        const std::string& server);
+
+// Streams a finished job's PDSM (FetchPdsm) into the file at `path`, created or truncated.
+// DATA_LOSS when fewer bytes arrive than announced; the file is then incomplete, and removing
+// or renaming it is the caller's business.
+// Returns the bytes received.
+absl::StatusOr<uint64_t> DownloadPdsm(const ServiceConnection& c, const ServiceFlags& service,
+                                      const std::string& job_id, const std::string& path);
 
 }  // namespace pdsm
 

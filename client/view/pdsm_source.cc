@@ -41,34 +41,6 @@ absl::Status WaitForJob(const ServiceConnection& c, const ServiceFlags& service,
   return absl::OkStatus();
 }
 
-absl::Status Download(const ServiceConnection& c, const ServiceFlags& service,
-                      const std::string& job_id, const std::string& path) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) return absl::UnavailableError(absl::StrCat("cannot write ", path));
-  pdsm::v1::GetJobRequest request;
-  request.set_job_id(job_id);
-  auto context = c.Call(std::chrono::hours(1));
-  auto reader = c.stub->FetchPdsm(context.get(), request);
-  pdsm::v1::PdsmChunk chunk;
-  uint64_t total = 0, received = 0;
-  bool first = true;
-  while (reader->Read(&chunk)) {
-    if (first) total = chunk.total_bytes(), first = false;
-    out.write(chunk.data().data(), static_cast<std::streamsize>(chunk.data().size()));
-    received += chunk.data().size();
-  }
-  if (grpc::Status s = reader->Finish(); !s.ok()) {
-    return CallError("fetching job " + job_id, s, service.server);
-  }
-  out.close();
-  if (!out) return absl::UnavailableError(absl::StrCat("writing ", path, " failed"));
-  if (received != total) {
-    return absl::DataLossError(
-        absl::StrCat("fetching job ", job_id, ": got ", received, " of ", total, " bytes"));
-  }
-  return absl::OkStatus();
-}
-
 }  // namespace
 
 absl::StatusOr<PdsmImage> LoadPdsmFile(const std::string& path) {
@@ -88,7 +60,7 @@ absl::StatusOr<PdsmImage> FetchJobPdsm(const ServiceFlags& service, const std::s
   if (absl::Status s = WaitForJob(*c, service, job_id); !s.ok()) return s;
   const std::filesystem::path temp = std::filesystem::temp_directory_path() /
                                      absl::StrCat("pdsm-view-", job_id, "-", ::getpid(), ".exr");
-  absl::Status s = Download(*c, service, job_id, temp.string());
+  absl::Status s = DownloadPdsm(*c, service, job_id, temp.string()).status();
   absl::StatusOr<PdsmImage> pdsm = s.ok() ? LoadPdsmFile(temp.string()) : s;
   std::error_code ec;
   std::filesystem::remove(temp, ec);
