@@ -16,15 +16,6 @@ struct InfoFlags {
   bool json = false;
 };
 
-const char* ShapeName(LightShape shape) {
-  switch (shape) {
-    case LightShape::kRect: return "rect";
-    case LightShape::kDisk: return "disk";
-    case LightShape::kSun: return "sun";
-  }
-  return "?";
-}
-
 std::string JsonString(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
@@ -83,7 +74,7 @@ int RunInfo(const InfoFlags& flags) {
         "\"samples\": %d, \"shadowMapResolution\": %d, \"epsilon\": %.17g, "
         "\"depthBias\": %.17g, \"slopeBias\": %.17g, \"tileSize\": %d, "
         "\"vertices\": %zu, \"maxVerticesPerPixel\": %zu, \"emptyPixels\": %zu%s%s}\n",
-        h.format_version, JsonString(h.scene_name).c_str(), JsonString(ShapeName(h.light_shape)).c_str(),
+        h.format_version, JsonString(h.scene_name).c_str(), JsonString(LightShapeName(h.light_shape)).c_str(),
         projection.c_str(), g.width, g.height, g.s_min, g.s_max, g.t_min, g.t_max, g.z_near,
         g.z_far, v3(g.frame.center).c_str(), v3(g.frame.n).c_str(), h.samples,
         h.shadow_map_resolution, h.epsilon, h.depth_bias, h.slope_bias, h.tile_size,
@@ -93,7 +84,7 @@ int RunInfo(const InfoFlags& flags) {
   }
   std::printf("%s: PDSM format %d, scene \"%s\"\n", flags.pdsm_path.c_str(), h.format_version,
               h.scene_name.c_str());
-  std::printf("  light       %s, centre %s, normal %s\n", ShapeName(h.light_shape),
+  std::printf("  light       %s, centre %s, normal %s\n", LightShapeName(h.light_shape),
               v3(g.frame.center).c_str(), v3(g.frame.n).c_str());
   std::printf("  projection  %s, %dx%d pixels, window s [%g, %g] t [%g, %g]\n",
               projection.c_str(), g.width, g.height, g.s_min, g.s_max, g.t_min, g.t_max);

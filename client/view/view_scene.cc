@@ -28,15 +28,6 @@ bool NearVec(const glm::dvec3& a, const glm::dvec3& b, double scale) {
   return Near(a.x, b.x, scale) && Near(a.y, b.y, scale) && Near(a.z, b.z, scale);
 }
 
-const char* ShapeName(LightShape shape) {
-  switch (shape) {
-    case LightShape::kRect: return "rect";
-    case LightShape::kDisk: return "disk";
-    case LightShape::kSun: return "sun";
-  }
-  return "?";
-}
-
 std::string Vec(const glm::dvec3& v) { return absl::StrFormat("(%g, %g, %g)", v.x, v.y, v.z); }
 
 void AppendTriangle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
@@ -80,8 +71,8 @@ absl::Status CheckPdsmMatchesScene(const Scene& scene, const PdsmHeader& header,
   }
   const LightSpec& light = scene.light;
   if (header.light_shape != light.shape) {
-    return mismatch("light_shape", absl::StrCat(ShapeName(header.light_shape), " vs ",
-                                                ShapeName(light.shape)));
+    return mismatch("light_shape", absl::StrCat(LightShapeName(header.light_shape), " vs ",
+                                                LightShapeName(light.shape)));
   }
   const LightFrame& baked = header.geometry.frame;
   if (!NearVec(baked.n, light.frame.n, 1.0)) {

@@ -28,6 +28,16 @@ struct TriangleMesh {
 
 enum class LightShape { kRect, kDisk, kSun };
 
+// "rect", "disk", "sun": the scene file's names, for messages and `pdsm info`.
+inline const char* LightShapeName(LightShape shape) {
+  switch (shape) {
+    case LightShape::kRect: return "rect";
+    case LightShape::kDisk: return "disk";
+    case LightShape::kSun: return "sun";
+  }
+  return "?";
+}
+
 struct LightSpec {
   LightShape shape = LightShape::kRect;
   // Rect and disk: the light's own frame (centre on the light, n into the scene).
