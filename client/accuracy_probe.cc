@@ -1,12 +1,11 @@
 #include "client/accuracy_probe.h"
 
 #include <chrono>
-#include <filesystem>
-#include <fstream>
 
 #include "absl/strings/str_format.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_query.h"
+#include "core/util/atomic_file.h"
 
 namespace pdsm {
 
@@ -56,26 +55,17 @@ absl::StatusOr<BakeErrors> AccuracyProbe::Measure(const std::string& pdsm_path) 
 }
 
 absl::Status AccuracyProbe::WriteReferenceCsv(const std::string& path) const {
-  const std::string temp = path + ".tmp";
-  {
-    std::ofstream out(temp, std::ios::trunc);
-    out << "kind,x,y,z,attenuation\n";
-    auto write = [&](const char* kind, const std::vector<glm::dvec3>& points,
-                     const std::vector<double>& reference) {
-      for (size_t i = 0; i < points.size(); ++i) {
-        out << absl::StrFormat("%s,%.17g,%.17g,%.17g,%.6f\n", kind, points[i].x, points[i].y,
-                               points[i].z, reference[i]);
-      }
-    };
-    write("surface", points_.surface, surface_reference_);
-    write("free", points_.free_space, free_space_reference_);
-    out.flush();
-    if (!out) return absl::InternalError(absl::StrFormat("%s: write failed", temp));
-  }
-  std::error_code ec;
-  std::filesystem::rename(temp, path, ec);
-  if (ec) return absl::InternalError(absl::StrFormat("%s: %s", path, ec.message()));
-  return absl::OkStatus();
+  std::string csv = "kind,x,y,z,attenuation\n";
+  auto append = [&](const char* kind, const std::vector<glm::dvec3>& points,
+                    const std::vector<double>& reference) {
+    for (size_t i = 0; i < points.size(); ++i) {
+      absl::StrAppendFormat(&csv, "%s,%.17g,%.17g,%.17g,%.6f\n", kind, points[i].x, points[i].y,
+                            points[i].z, reference[i]);
+    }
+  };
+  append("surface", points_.surface, surface_reference_);
+  append("free", points_.free_space, free_space_reference_);
+  return WriteFileAtomically(path, csv);
 }
 
 }  // namespace pdsm

@@ -1,11 +1,10 @@
 #include "client/sweep_report.h"
 
-#include <filesystem>
-#include <fstream>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
+#include "core/util/atomic_file.h"
 
 namespace pdsm {
 namespace {
@@ -50,18 +49,9 @@ void MarkParetoFront(std::vector<SweepRow>* rows) {
 }
 
 absl::Status WriteSweepCsv(const std::string& path, const std::vector<SweepRow>& rows) {
-  const std::string temp = path + ".tmp";
-  {
-    std::ofstream out(temp, std::ios::trunc);
-    out << SweepCsvHeader() << "\n";
-    for (const SweepRow& row : rows) out << RowCells(row) << "\n";
-    out.flush();
-    if (!out) return absl::InternalError(absl::StrFormat("%s: write failed", temp));
-  }
-  std::error_code ec;
-  std::filesystem::rename(temp, path, ec);
-  if (ec) return absl::InternalError(absl::StrFormat("%s: %s", path, ec.message()));
-  return absl::OkStatus();
+  std::string csv = SweepCsvHeader() + "\n";
+  for (const SweepRow& row : rows) absl::StrAppend(&csv, RowCells(row), "\n");
+  return WriteFileAtomically(path, csv);
 }
 
 }  // namespace pdsm
