@@ -1,6 +1,7 @@
 #include "core/bake/tile_reach.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -120,19 +121,27 @@ std::vector<TileRect> BlocksOf(const TileRect& tile) {
   return blocks;
 }
 
+// Triangle k of `mesh` in double, and whether it lies wholly outside one of `region`'s
+// half-spaces (then it cannot shadow the tile's rays).
+std::array<glm::dvec3, 3> CasterTriangle(const LightSpaceMesh& mesh, size_t k) {
+  return {glm::dvec3(mesh.positions[mesh.indices[3 * k]]),
+          glm::dvec3(mesh.positions[mesh.indices[3 * k + 1]]),
+          glm::dvec3(mesh.positions[mesh.indices[3 * k + 2]])};
+}
+
+bool OutsideRegion(const std::vector<HalfSpace>& region, const std::array<glm::dvec3, 3>& p) {
+  return std::any_of(region.begin(), region.end(), [&](const HalfSpace& h) {
+    return h(p[0]) > 0 && h(p[1]) > 0 && h(p[2]) > 0;
+  });
+}
+
 }  // namespace
 
 bool TileHasCasters(const BakePlan& plan, const TileRect& tile) {
   const std::vector<HalfSpace> region = ShadowingRegion(plan, SpanOf(plan.geometry(), tile));
   const LightSpaceMesh& mesh = plan.casters;
   for (size_t k = 0; k < mesh.TriangleCount(); ++k) {
-    const glm::dvec3 p[3] = {glm::dvec3(mesh.positions[mesh.indices[3 * k]]),
-                             glm::dvec3(mesh.positions[mesh.indices[3 * k + 1]]),
-                             glm::dvec3(mesh.positions[mesh.indices[3 * k + 2]])};
-    const bool outside = std::any_of(region.begin(), region.end(), [&](const HalfSpace& h) {
-      return h(p[0]) > 0 && h(p[1]) > 0 && h(p[2]) > 0;
-    });
-    if (!outside) return true;
+    if (!OutsideRegion(region, CasterTriangle(mesh, k))) return true;
   }
   return false;
 }
@@ -145,15 +154,10 @@ TileReach ComputeTileReach(const BakePlan& plan, const TileRect& tile) {
   const LightSpaceMesh& mesh = plan.casters;
   std::vector<glm::dvec3> kept;  // 3 vertices per kept triangle
   for (size_t k = 0; k < mesh.TriangleCount(); ++k) {
-    const glm::dvec3 p[3] = {glm::dvec3(mesh.positions[mesh.indices[3 * k]]),
-                             glm::dvec3(mesh.positions[mesh.indices[3 * k + 1]]),
-                             glm::dvec3(mesh.positions[mesh.indices[3 * k + 2]])};
-    const bool outside = std::any_of(region.begin(), region.end(), [&](const HalfSpace& h) {
-      return h(p[0]) > 0 && h(p[1]) > 0 && h(p[2]) > 0;
-    });
-    if (outside) continue;
+    const std::array<glm::dvec3, 3> p = CasterTriangle(mesh, k);
+    if (OutsideRegion(region, p)) continue;
     reach.triangles.push_back(static_cast<uint32_t>(k));
-    kept.insert(kept.end(), p, p + 3);
+    kept.insert(kept.end(), p.begin(), p.end());
   }
   if (reach.triangles.empty()) return reach;
 
