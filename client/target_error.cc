@@ -10,6 +10,7 @@
 #include <optional>
 #include <vector>
 
+#include "absl/strings/ascii.h"
 #include "absl/strings/str_format.h"
 #include "client/child_bake.h"
 #include "core/scene/scene_loader.h"
@@ -137,20 +138,17 @@ class TargetErrorSearch {
   }
 
   // Time per sample from the N series (a floor of 5 % of the first pilot keeps timing noise
-  // on tiny scenes from making samples look free); beta from the 2 R0 pilot, in [1, 2]
-  // (tiles without casters cost nothing, so time grows slower than R^2; at least like R).
-  void FitCost(const std::vector<Measurement>& m, int n0, int nq, Model* model) const {
+  // on tiny scenes from making samples look free). beta stays 2: every sample scans R^2 rays
+  // and rasterizes a shadow map of (2R)^2 texels. Fitting it from the pilots failed: at 64^2
+  // and 128^2 their times are mostly process start-up, the fit gave beta = 1, and the chosen
+  // 768^2 bake took 10x its predicted time (plates, E = 0.005).
+  void FitCost(const std::vector<Measurement>& m, int n0, int /*nq*/, Model* model) const {
     const double t1 = m[0].seconds;
     model->g = 0.05 * t1 / n0;
     if (!options_.samples) model->g = std::max(model->g, (m[2].seconds - t1) / (15.0 * n0));
     if (options_.samples) model->g = t1 / n0;
     model->f = std::max(0.0, t1 - model->g * n0);
-    if (!options_.resolution) {
-      const double t_nq = options_.samples ? t1 : m[1].seconds;
-      const double base = model->g * nq;
-      const double t2 = m.back().seconds - (t_nq - base);  // the N-dependent part at 2 R0
-      if (base > 0 && t2 > 0) model->beta = std::clamp(std::log2(t2 / base), 1.0, 2.0);
-    }
+    model->beta = 2;
   }
 
   // The cheapest (N, R) predicted to meet target / demand and costing more than `above`; nullopt
@@ -200,9 +198,17 @@ absl::StatusOr<TargetErrorResult> BakeToTargetError(const TargetErrorOptions& op
   const auto start = std::chrono::steady_clock::now();
   absl::StatusOr<Scene> scene = LoadSceneFile(options.scene_path);
   if (!scene.ok()) return scene.status();
-  absl::StatusOr<std::string> sampling = SceneSamplingName(options.scene_path);
-  if (!sampling.ok()) return sampling.status();
-  BakeKnobs base = KnobsFromScene(*scene, options.sampling.empty() ? *sampling : options.sampling);
+  // The pattern is a knob too: where neither --sampling nor the scene file names one, the
+  // measured best is used (Sobol; docs/accuracy.md, "Sampling patterns").
+  absl::StatusOr<pdsm::v1::Scene> message = ParseSceneFile(options.scene_path);
+  if (!message.ok()) return message.status();
+  std::string sampling = options.sampling;
+  if (sampling.empty()) {
+    sampling = message->bake().sampling() == pdsm::v1::SAMPLING_DEFAULT
+                   ? "sobol"
+                   : absl::AsciiStrToLower(pdsm::v1::Sampling_Name(message->bake().sampling()));
+  }
+  BakeKnobs base = KnobsFromScene(*scene, sampling);
   absl::StatusOr<AccuracyProbe> probe = AccuracyProbe::Create(
       *scene, options.surface_points, options.free_space_points, kPointsSeed, ReferenceOptions{});
   if (!probe.ok()) return probe.status();
