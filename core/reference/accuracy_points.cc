@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <random>
 
 #include "core/bake/bake_plan.h"
+#include "core/sampling/hash_rng.h"
 
 namespace pdsm {
 namespace {
@@ -47,8 +47,9 @@ absl::StatusOr<AccuracyPoints> MakeAccuracyPoints(const Scene& scene, int surfac
   absl::StatusOr<BakePlan> plan = PlanBake(scene);
   if (!plan.ok()) return plan.status();
   const PdsmGeometry& g = plan->geometry();
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  // hash_rng, not std:: distributions: the same points on every standard library.
+  SplitMix64 rng(HashInts(seed, 0x61636375726163ULL));
+  auto u01 = [&rng](SplitMix64&) { return rng.NextDouble(); };
   AccuracyPoints points;
 
   const ReceiverAreas receivers = GatherReceivers(scene);
@@ -72,7 +73,9 @@ absl::StatusOr<AccuracyPoints> MakeAccuracyPoints(const Scene& scene, int surfac
   while (static_cast<int>(points.free_space.size()) < free_space_count) {
     const double s = g.s_min + u01(rng) * (g.s_max - g.s_min);
     const double t = g.t_min + u01(rng) * (g.t_max - g.t_min);
-    const double z = g.z_near + u01(rng) * (g.z_far - g.z_near);
+    // Nearer than z_valid_min the PDSM knows nothing (the scan floor): no point there.
+    const double z_min = std::max(g.z_near, g.z_valid_min);
+    const double z = z_min + u01(rng) * (g.z_far - z_min);
     const glm::dvec3 p_light = ortho ? glm::dvec3(s, t, z) : glm::dvec3(s * z, t * z, z);
     points.free_space.push_back(g.frame.WorldFromLight(p_light));
   }
@@ -82,12 +85,16 @@ absl::StatusOr<AccuracyPoints> MakeAccuracyPoints(const Scene& scene, int surfac
 ErrorStats CompareAttenuation(const std::vector<double>& estimate,
                               const std::vector<double>& reference) {
   std::vector<double> errors;
+  ErrorStats stats;
   for (size_t k = 0; k < std::min(estimate.size(), reference.size()); ++k) {
-    if (std::isfinite(estimate[k]) && std::isfinite(reference[k])) {
+    if (!std::isfinite(reference[k])) continue;
+    if (std::isfinite(estimate[k])) {
       errors.push_back(std::abs(estimate[k] - reference[k]));
+    } else {
+      errors.push_back(1.0);
+      ++stats.unknown;
     }
   }
-  ErrorStats stats;
   stats.count = errors.size();
   if (errors.empty()) return stats;
   std::sort(errors.begin(), errors.end());

@@ -23,16 +23,19 @@ struct AccuracyPoints {
 };
 
 // Every point lies inside the PDSM frustum the scene's bake plan fits (its window does not depend
-// on the resolution or sample knobs). A scene without receivers in front of the light gets no
+// on the resolution or sample knobs), no nearer than its z_valid_min. A scene without receivers in front of the light gets no
 // surface points. Errors: those of PlanBake.
 absl::StatusOr<AccuracyPoints> MakeAccuracyPoints(const Scene& scene, int surface_count,
                                                   int free_space_count, uint64_t seed);
 
-// Mean, 95th percentile and maximum of |estimate - reference| over the pairs where both are finite;
-// `count` of those pairs.
+// Mean, 95th percentile and maximum of |estimate - reference| over the points whose reference
+// is finite (`count` of them). An estimate that is NaN there -- the PDSM does not know the point:
+// nearer than its z_valid_min, or off a surfaces-only bake's windows -- counts as the worst
+// error, 1, and in `unknown`: a bake is never scored on fewer points than another.
 struct ErrorStats {
   double mean = 0, p95 = 0, max = 0;
   size_t count = 0;
+  size_t unknown = 0;
 };
 ErrorStats CompareAttenuation(const std::vector<double>& estimate,
                               const std::vector<double>& reference);
