@@ -14,7 +14,6 @@
 #include "core/assets/mesh_asset.h"
 #include "core/bake/adaptive_sampling.h"
 #include "core/bake/plan_fingerprint.h"
-#include "core/bake/tile_reach.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_query.h"
 #include "core/scene/scene_loader.h"
@@ -299,15 +298,6 @@ absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<in
   for (int t : done_tiles) {
     if (t >= 0 && t < static_cast<int>(done.size())) done[t] = true;
   }
-  // Adaptive jobs keep their caster-less tiles: the local adaptive bake gives them a pilot,
-  // whose sample count the file records.
-  if (!(*job)->plan.header.adaptive()) {
-    for (size_t t = 0; t < done.size(); ++t) {
-      if (done[t] || TileHasCasters((*job)->plan, (*job)->plan.tiles[t])) continue;
-      if (absl::Status s = StoreAllLitTile(**job, static_cast<int>(t)); !s.ok()) return s;
-      done[t] = true;
-    }
-  }
   JobSpec spec;
   spec.job_id = record.job_id;
   spec.priority = record.priority;
@@ -454,21 +444,6 @@ void Coordinator::JudgeStage(std::shared_ptr<ActiveJob> job, int tile_index,
   if (job->ended) return;
   job->adaptive[tile_index] = std::move(state);
   scheduler_.AddStage(job->record.job_id, tile_index);
-}
-
-absl::Status Coordinator::StoreAllLitTile(const ActiveJob& job, int tile_index) {
-  const TileRect& rect = job.plan.tiles.at(tile_index);
-  TileEvents none;
-  none.tile_index = tile_index;
-  none.x0 = rect.x0, none.y0 = rect.y0, none.width = rect.width, none.height = rect.height;
-  none.offsets.assign(none.PixelCount() + 1, 0);
-  AssemblyStats stats;
-  const PdsmTile tile = pdsm::AssembleTile(job.plan.header, std::span(&none, 1), &stats);
-  const std::string& id = job.record.job_id;
-  std::error_code ec;
-  std::filesystem::create_directories(TilesDir(id), ec);
-  if (absl::Status s = WriteTileFile(TilePath(id, tile_index), tile); !s.ok()) return s;
-  return store_->MarkTileDone(id, tile_index, NowMs());
 }
 
 void Coordinator::AssembleAndStore(std::shared_ptr<ActiveJob> job, int tile_index,

@@ -101,9 +101,6 @@ class Coordinator {
                                          bool enforce_limits) const;
   pdsm::v1::Job ToProto(const JobRecord& record) const;
   // `tile_samples` > 0: an adaptive tile baked with that many samples; 0: a fixed-count one.
-  // A tile no caster can reach is all lit: its file is stored at once, with no task (the
-  // local bake gives it one empty task; the bytes are the same).
-  absl::Status StoreAllLitTile(const ActiveJob& job, int tile_index);
   void AssembleAndStore(std::shared_ptr<ActiveJob> job, int tile_index,
                         std::vector<std::pair<int, TileEvents>> parts, int tile_samples);
   // Adaptive jobs: after a tile's stage, assemble the tile or queue its next stage
