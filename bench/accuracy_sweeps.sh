@@ -8,7 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 build=$(realpath "${1:-build}")
 out=${2:-$(mktemp -d)}
-shift 2 || true
+shift $(( $# < 2 ? $# : 2 ))
 scenes=${*:-plates sun dragon}
 shared=${PDSM_SHARED:-../shared}
 mkdir -p "$out"

@@ -42,8 +42,6 @@ class AdaptiveBake {
         options_(options),
         min_samples_(std::max(1, plan.header.adaptive_min_samples)),
         max_samples_(plan.header.samples),
-        min_interval_(kAdaptiveSurfaceDepthFraction *
-                      (plan.geometry().z_far - plan.geometry().z_near)),
         tiles_(plan.tiles.size()),
         output_(plan, !options.preview_path.empty(), writer) {
     std::lock_guard<std::mutex> lock(mu_);
@@ -149,20 +147,10 @@ class AdaptiveBake {
     TileState& s = tiles_[tile];
     // Merge each range's batches: exact integer sums, independent of how it was split.
     std::vector<TileEvents> ranges;
-    for (const std::vector<TileEvents>& parts : stage_parts)
+    for (const std::vector<TileEvents>& parts : stage_parts) {
       ranges.push_back(MergeTileEvents(parts));
-    for (size_t r = 0; r + 1 < ranges.size(); ++r) s.before.push_back(std::move(ranges[r]));
-    TileEvents last = std::move(ranges.back());
-    const int n2 = s.ranges.back().end - s.ranges.back().begin;
-    const int n1 = s.ranges.back().begin;
-    bool done = s.samples >= max_samples_;
-    if (!done) {
-      const TileEvents first = MergeTileEvents(s.before);
-      done = SplitHalfError(first, n1, last, n2, min_interval_) <= plan_.header.adaptive_tolerance;
-      s.before = {first};  // keep one merged list, not one per stage
     }
-    s.before.push_back(std::move(last));
-    if (!done) {
+    if (!JudgeAdaptiveStage(plan_.header, s.ranges, std::move(ranges), &s.before)) {
       std::lock_guard<std::mutex> lock(mu_);
       StartStage(tile, s.stage + 1);
       wake_.notify_all();
@@ -198,7 +186,6 @@ class AdaptiveBake {
   const BakePlan& plan_;
   const LocalBakeOptions& options_;
   const int min_samples_, max_samples_;
-  const double min_interval_;
   std::chrono::steady_clock::time_point start_;
 
   std::mutex mu_;  // guards the members below up to progress_mu_, and TileState's queue fields

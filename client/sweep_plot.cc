@@ -37,9 +37,17 @@ bool OnPath(const std::string& program) {
   return false;
 }
 
+// A gnuplot single-quoted string. Control characters become spaces: a newline would end the
+// command, and the title comes from the scene file ("x\n!rm ..." must stay text).
 std::string GnuplotQuote(const std::string& s) {
   std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("''") : std::string(1, c);
+  for (char c : s) {
+    if (c == '\'') {
+      out += "''";
+    } else {
+      out += static_cast<unsigned char>(c) < 0x20 || c == 0x7f ? ' ' : c;
+    }
+  }
   return out + "'";
 }
 
@@ -145,20 +153,27 @@ absl::Status PlotSweep(const std::string& csv_path, const std::string& png_path,
   if (!rows.ok()) return rows.status();
   const std::string temp_png = png_path + ".tmp";
   const std::string script_path = png_path + ".gp";
-  {
-    std::ofstream script(script_path, std::ios::trunc);
-    WriteScript(*rows, temp_png, title, script);
-  }
-  const std::string command = absl::StrCat("gnuplot ", ShellQuote(script_path), " 1>&2");
-  if (const int status = std::system(command.c_str()); status != 0) {
-    return absl::InternalError(
-        absl::StrFormat("gnuplot %s failed (status %d)", script_path, status));
-  }
+  absl::Status status = [&]() -> absl::Status {
+    {
+      std::ofstream script(script_path, std::ios::trunc);
+      WriteScript(*rows, temp_png, title, script);
+      script.flush();
+      if (!script) return absl::InternalError(absl::StrCat("writing \"", script_path, "\" failed"));
+    }
+    const std::string command = absl::StrCat("gnuplot ", ShellQuote(script_path), " 1>&2");
+    if (const int code = std::system(command.c_str()); code != 0) {
+      return absl::InternalError(absl::StrFormat("gnuplot %s failed (status %d)", script_path, code));
+    }
+    std::error_code ec;
+    std::filesystem::rename(temp_png, png_path, ec);
+    if (ec) return absl::InternalError(absl::StrFormat("%s: %s", png_path, ec.message()));
+    return absl::OkStatus();
+  }();
+  // Nothing of a failed plot stays beside the PNG.
   std::error_code ec;
-  std::filesystem::rename(temp_png, png_path, ec);
-  if (ec) return absl::InternalError(absl::StrFormat("%s: %s", png_path, ec.message()));
   std::filesystem::remove(script_path, ec);
-  return absl::OkStatus();
+  std::filesystem::remove(temp_png, ec);
+  return status;
 }
 
 }  // namespace pdsm

@@ -392,36 +392,20 @@ void Coordinator::JudgeStage(std::shared_ptr<ActiveJob> job, int tile_index,
     std::lock_guard<std::mutex> lock(mu_);
     state = std::move(job->adaptive[tile_index]);
   }
-  // The same steps as the local bake (client/adaptive_bake.cc): merge each range of the
-  // stage, compare the last range with everything before it.
+  // Merge each range of the stage, then the decision the local bake makes too
+  // (JudgeAdaptiveStage, core/bake/adaptive_sampling.h).
   const std::vector<SampleRange> ranges =
       AdaptiveStageRanges(state.stage, std::max(1, h.adaptive_min_samples), h.samples);
-  std::vector<TileEvents> before = std::move(state.before);
-  TileEvents last;
-  for (size_t r = 0; r < ranges.size(); ++r) {
+  std::vector<TileEvents> range_results;
+  for (const SampleRange& range : ranges) {
     std::vector<TileEvents> range_parts;
     for (auto& [begin, events] : parts) {
-      if (begin >= ranges[r].begin && begin < ranges[r].end) {
-        range_parts.push_back(std::move(events));
-      }
+      if (begin >= range.begin && begin < range.end) range_parts.push_back(std::move(events));
     }
-    TileEvents merged = MergeTileEvents(range_parts);
-    if (r + 1 < ranges.size()) {
-      before.push_back(std::move(merged));
-    } else {
-      last = std::move(merged);
-    }
+    range_results.push_back(MergeTileEvents(range_parts));
   }
-  const int n1 = ranges.back().begin, n2 = ranges.back().end - ranges.back().begin;
   const int samples = ranges.back().end;
-  TileEvents first = MergeTileEvents(before);
-  bool done = samples >= h.samples;
-  if (!done) {
-    const double min_interval =
-        kAdaptiveSurfaceDepthFraction * (h.geometry.z_far - h.geometry.z_near);
-    done = SplitHalfError(first, n1, last, n2, min_interval) <= h.adaptive_tolerance;
-  }
-  if (done) {
+  if (JudgeAdaptiveStage(h, ranges, std::move(range_results), &state.before)) {
     {
       std::lock_guard<std::mutex> lock(mu_);
       job->adaptive.erase(tile_index);
@@ -430,20 +414,19 @@ void Coordinator::JudgeStage(std::shared_ptr<ActiveJob> job, int tile_index,
       job->samples_done += h.samples - samples;
     }
     std::vector<std::pair<int, TileEvents>> all;
-    all.emplace_back(0, std::move(first));
-    all.emplace_back(n1, std::move(last));
+    all.emplace_back(0, std::move(state.before.front()));
     return AssembleAndStore(job, tile_index, std::move(all), samples);
   }
-  std::vector<TileEvents> both;
-  both.push_back(std::move(first));
-  both.push_back(std::move(last));
-  state.before.clear();
-  state.before.push_back(MergeTileEvents(both));
   ++state.stage;
-  std::lock_guard<std::mutex> lock(mu_);
-  if (job->ended) return;
-  job->adaptive[tile_index] = std::move(state);
-  scheduler_.AddStage(job->record.job_id, tile_index);
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (job->ended) return;
+    job->adaptive[tile_index] = std::move(state);
+    if (scheduler_.AddStage(job->record.job_id, tile_index)) return;
+  }
+  // A tile left open would hold its slot and the job would never end: fail it loudly.
+  EndJob(job->record.job_id, pdsm::v1::FAILED,
+         absl::StrCat("tile ", tile_index, ": its next adaptive stage could not be queued"));
 }
 
 void Coordinator::AssembleAndStore(std::shared_ptr<ActiveJob> job, int tile_index,

@@ -55,4 +55,30 @@ double SplitHalfError(const TileEvents& first, int n1, const TileEvents& second,
   return worst;
 }
 
+bool JudgeAdaptiveStage(const PdsmHeader& header, const std::vector<SampleRange>& ranges,
+                        std::vector<TileEvents> stage_results, std::vector<TileEvents>* earlier) {
+  for (size_t r = 0; r + 1 < stage_results.size(); ++r) {
+    earlier->push_back(std::move(stage_results[r]));
+  }
+  TileEvents last = std::move(stage_results.back());
+  const int n1 = ranges.back().begin, n2 = ranges.back().end - ranges.back().begin;
+  bool done = ranges.back().end >= header.samples;
+  if (!done) {
+    const PdsmGeometry& g = header.geometry;
+    TileEvents first = MergeTileEvents(*earlier);
+    done = SplitHalfError(first, n1, last, n2,
+                          kAdaptiveSurfaceDepthFraction * (g.z_far - g.z_near)) <=
+           header.adaptive_tolerance;
+    earlier->clear();
+    earlier->push_back(std::move(first));
+  }
+  earlier->push_back(std::move(last));
+  if (earlier->size() > 1) {  // keep one merged list, not one per range
+    TileEvents all = MergeTileEvents(*earlier);
+    earlier->clear();
+    earlier->push_back(std::move(all));
+  }
+  return done;
+}
+
 }  // namespace pdsm

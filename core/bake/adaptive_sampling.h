@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/events/event.h"
+#include "core/pdsm/pdsm_image.h"
 
 namespace pdsm {
 
@@ -41,6 +42,16 @@ inline constexpr double kAdaptiveSurfaceDepthFraction = 1.0 / 256.0;
 // REQUIRES: both have the same tile geometry; n1, n2 >= 1.
 double SplitHalfError(const TileEvents& first, int n1, const TileEvents& second, int n2,
                       double min_interval);
+
+// Judges a tile after one stage: the one decision the local bake and the service share, so
+// their files stay byte-identical. `ranges`: the stage's AdaptiveStageRanges; `stage_results`:
+// the merged events of each of those ranges, in the same order; `earlier`: the tile's events
+// of all earlier stages (any number of lists). Returns whether the tile is done (estimate
+// <= header.adaptive_tolerance, or the last range reached header.samples). On return
+// `earlier` holds one merged list of every sample so far.
+// REQUIRES: ranges.size() == stage_results.size() >= 1; header.adaptive().
+bool JudgeAdaptiveStage(const PdsmHeader& header, const std::vector<SampleRange>& ranges,
+                        std::vector<TileEvents> stage_results, std::vector<TileEvents>* earlier);
 
 // The per-pixel part of SplitHalfError.
 double SplitHalfPixelError(std::span<const Event> first, int n1, std::span<const Event> second,

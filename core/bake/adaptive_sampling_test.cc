@@ -77,5 +77,57 @@ TEST(SplitHalfErrorTest, TileErrorIsTheWorstPixel) {
   EXPECT_DOUBLE_EQ(SplitHalfError(a, 8, b, 8, 0.0), 0.25);
 }
 
+// One pixel whose `count` samples are all hidden from depth 5 on.
+TileEvents OnePixel(int count) {
+  TileEvents t;
+  t.width = t.height = 1;
+  if (count != 0) t.events = {{5.0f, count}};
+  t.offsets = {0, t.events.size()};
+  return t;
+}
+
+PdsmHeader AdaptiveHeader(int max_samples, double tolerance) {
+  PdsmHeader h;
+  h.samples = max_samples;
+  h.adaptive_tolerance = tolerance;
+  h.geometry.z_near = 1;
+  h.geometry.z_far = 10;
+  return h;
+}
+
+// The decision the local bake and the service share: agreeing pilot halves stop the tile,
+// disagreeing ones do not, reaching the maximum always does; `earlier` ends as one merged list
+// of every sample so far.
+TEST(JudgeAdaptiveStageTest, StopsOnAgreementOrAtTheMaximum) {
+  const PdsmHeader h = AdaptiveHeader(64, 0.05);
+  const std::vector<SampleRange> pilot = AdaptiveStageRanges(0, 16, 64);  // [0,8), [8,16)
+  ASSERT_EQ(pilot.size(), 2u);
+
+  std::vector<TileEvents> earlier;
+  std::vector<TileEvents> agree;
+  agree.push_back(OnePixel(4));
+  agree.push_back(OnePixel(4));
+  EXPECT_TRUE(JudgeAdaptiveStage(h, pilot, std::move(agree), &earlier));
+  ASSERT_EQ(earlier.size(), 1u);
+  EXPECT_EQ(earlier[0].events.size(), 1u);
+  EXPECT_EQ(earlier[0].events[0].count, 8);
+
+  earlier.clear();
+  std::vector<TileEvents> differ;
+  differ.push_back(OnePixel(0));
+  differ.push_back(OnePixel(8));  // 0 of 8 vs 8 of 8: estimate 0.5
+  EXPECT_FALSE(JudgeAdaptiveStage(h, pilot, std::move(differ), &earlier));
+  ASSERT_EQ(earlier.size(), 1u);
+  EXPECT_EQ(earlier[0].events[0].count, 8);
+
+  // The last stage ends at the maximum: done whatever the halves say.
+  const std::vector<SampleRange> last = {{32, 64}};
+  std::vector<TileEvents> final_range;
+  final_range.push_back(OnePixel(0));
+  EXPECT_TRUE(JudgeAdaptiveStage(h, last, std::move(final_range), &earlier));
+  ASSERT_EQ(earlier.size(), 1u);
+  EXPECT_EQ(earlier[0].events[0].count, 8);
+}
+
 }  // namespace
 }  // namespace pdsm
