@@ -112,10 +112,11 @@ absl::StatusOr<std::unique_ptr<FrameRenderer>> FrameRenderer::Create(
   GLint major = 0, minor = 0;
   gl.GetIntegerv(GL_MAJOR_VERSION, &major);
   gl.GetIntegerv(GL_MINOR_VERSION, &minor);
-  if (major < 4 || (major == 4 && minor < 3)) {
-    return absl::FailedPreconditionError(absl::StrCat(
-        "pdsm-view needs OpenGL 4.3 (shader storage buffers); this context is ", major, ".",
-        minor));
+  // 4.3 for the shader storage buffer of PDSM vertices, 4.5 for glClipControl (reversed depth).
+  if (major < 4 || (major == 4 && minor < 5)) {
+    return absl::UnavailableError(absl::StrCat(
+        "pdsm-view needs OpenGL 4.5 core (storage buffers, glClipControl); this context is ",
+        major, ".", minor));
   }
   std::unique_ptr<FrameRenderer> renderer(new FrameRenderer(gl, scene, settings));
   if (absl::Status s = renderer->Init(); !s.ok()) return s;
@@ -260,6 +261,9 @@ absl::Status FrameRenderer::EnsureShadowMaps(ViewMode mode) {
   u.Float("slope_bias", static_cast<float>(header.slope_bias));
   u.Float("z_near", static_cast<float>(header.geometry.z_near));
   u.Float("z_far", static_cast<float>(header.geometry.z_far));
+  const ShadowClipRange clip = ShadowClipRangeOf(header.geometry);
+  u.Float("clip_near", static_cast<float>(clip.near));
+  u.Float("clip_far", static_cast<float>(clip.far));
   u.Int("orthographic", header.geometry.projection == Projection::kOrthographic);
   const auto draw = [&](const glm::mat4& clip_from_light) {
     u.Mat4("clip_from_light", clip_from_light);

@@ -51,7 +51,7 @@ struct FrameTimings {
 
 class FrameRenderer {
  public:
-  // REQUIRES: a current GL 4.3+ core context from the driver `gl` was loaded from; `gl` and
+  // REQUIRES: a current GL 4.5 core context from the driver `gl` was loaded from; `gl` and
   // `scene` outlive the renderer. Uploads the scene and the PDSM. FAILED_PRECONDITION for an
   // older GL; RESOURCE_EXHAUSTED for a PDSM too large for this GL; INTERNAL for GL failures.
   static absl::StatusOr<std::unique_ptr<FrameRenderer>> Create(const gl::GlFunctions& gl,

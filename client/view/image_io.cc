@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "absl/strings/str_cat.h"
+#include "core/util/atomic_file.h"
 #include "core/util/png_writer.h"
 
 namespace pdsm::view {
@@ -59,18 +60,12 @@ absl::StatusOr<RgbImage> ReadPng(const std::string& path) {
 }
 
 absl::Status WritePfm(const std::string& path, const FloatImage& image) {
-  const std::string temp = path + ".part";
-  {
-    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-    if (!out) return absl::UnavailableError(absl::StrCat("cannot write ", path));
-    out << "Pf\n" << image.width << " " << image.height << "\n-1.0\n";  // -1: little-endian
-    for (int y = image.height - 1; y >= 0; --y) {
-      out.write(reinterpret_cast<const char*>(&image.values[static_cast<size_t>(y) * image.width]),
-                static_cast<std::streamsize>(image.width * sizeof(float)));
-    }
-    if (!out) return absl::UnavailableError(absl::StrCat("writing ", path, " failed"));
+  std::string bytes = absl::StrCat("Pf\n", image.width, " ", image.height, "\n-1.0\n");  // LE
+  for (int y = image.height - 1; y >= 0; --y) {
+    bytes.append(reinterpret_cast<const char*>(&image.values[static_cast<size_t>(y) * image.width]),
+                 static_cast<size_t>(image.width) * sizeof(float));
   }
-  return RenameIntoPlace(temp, path);
+  return WriteFileAtomically(path, bytes);
 }
 
 absl::StatusOr<FloatImage> ReadPfm(const std::string& path) {

@@ -10,18 +10,13 @@ namespace {
 
 constexpr uint64_t kMaxLayerBytes = uint64_t{2} << 30;
 
-// Depth range of the shadow maps' clip space, light-space z: wider than the bake's so that a
-// dynamic object moved past z_near or z_far still casts (it is only clipped at the light).
-struct ClipRange {
-  double near, far;
-};
-ClipRange ShadowClipRange(const PdsmGeometry& g) {
+}  // namespace
+
+ShadowClipRange ShadowClipRangeOf(const PdsmGeometry& g) {
   const double range = std::max(g.z_far - g.z_near, 1e-6);
   return {g.projection == Projection::kPerspective ? 0.25 * g.z_near : g.z_near - range,
           g.z_far + range};
 }
-
-}  // namespace
 
 glm::dvec2 LightHalfExtent(const PdsmHeader& header) {
   switch (header.light_shape) {
@@ -55,7 +50,7 @@ glm::mat4 ShadowClipFromLight(const PdsmHeader& header, const ShadowMapLayout& l
   const PdsmGeometry& g = header.geometry;
   const glm::dvec2 half = 0.5 * layout.window_size;
   const glm::dvec2 centre = layout.window_min + half;
-  const ClipRange clip = ShadowClipRange(g);
+  const ShadowClipRange clip = ShadowClipRangeOf(g);
   const double a = sample.x, b = sample.y;
   glm::dmat4 m(0.0);  // m[col][row]
   if (g.projection == Projection::kPerspective) {

@@ -39,6 +39,13 @@ ShadowMapLayout MakeShadowMapLayout(const PdsmHeader& header, int size, bool gro
 // clip_from_light of the shadow map of the sample `sample` (see above), with clip z / w in
 // [0, 1] (glClipControl GL_ZERO_TO_ONE) nearer larger, wide enough in depth not to clip
 // dynamic objects a little in front of the bake's z_near.
+// Depth range of the shadow maps' clip space, light-space z: wider than the bake's so that a
+// dynamic object moved past z_near or z_far still casts (it is only clipped at the light).
+struct ShadowClipRange {
+  double near, far;
+};
+ShadowClipRange ShadowClipRangeOf(const PdsmGeometry& g);
+
 glm::mat4 ShadowClipFromLight(const PdsmHeader& header, const ShadowMapLayout& layout,
                               glm::dvec2 sample);
 

@@ -117,10 +117,7 @@ absl::Status RenderScreenshot(FrameRenderer& renderer, const ViewOptions& option
                 absl::StrJoin(names, ",").c_str());
   }
   std::printf("wrote %s (%dx%d)\n", options.screenshot_path.c_str(), image.width, image.height);
-  if (!options.attenuation_path.empty()) {
-    if (modes.size() != 1) {
-      return absl::InvalidArgumentError("--save-attenuation: needs one mode, not --compare");
-    }
+  if (!options.attenuation_path.empty()) {  // one mode: ParseViewOptions refuses --compare
     if (absl::Status s = WritePfm(options.attenuation_path, attenuation); !s.ok()) return s;
   }
   return absl::OkStatus();

@@ -157,6 +157,9 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
     return absl::InvalidArgumentError(
         "--compare, --bench and --save-attenuation need --headless");
   }
+  if (!o.compare.empty() && !o.attenuation_path.empty()) {
+    return absl::InvalidArgumentError("--save-attenuation: needs one mode, not --compare");
+  }
   if (o.headless && o.screenshot_path.empty() && o.bench_frames == 0) {
     return absl::InvalidArgumentError("--headless needs --screenshot OUT.png (or --bench N)");
   }

@@ -1,4 +1,4 @@
-// Window runs: GLFW context (GL 4.5 core, else 4.3), orbit camera, keys to switch modes,
+// Window runs: GLFW context (GL 4.5 core), orbit camera, keys to switch modes,
 // toggle bilinear filtering and move the dynamic objects. Keys: docs/viewer.md.
 #define GLFW_INCLUDE_NONE  // GL declarations come from worker/gl (glcorearb.h)
 #include <GLFW/glfw3.h>
@@ -109,20 +109,18 @@ void OnScroll(GLFWwindow* window, double, double dy) {
 }
 
 absl::StatusOr<WindowPtr> OpenWindow(const ViewOptions& options) {
-  for (int minor : {5, 3}) {
-    glfwDefaultWindowHints();
-    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
-    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, minor);
-    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
-    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
-    GLFWwindow* window =
-        glfwCreateWindow(options.width, options.height, "pdsm-view", nullptr, nullptr);
-    if (window != nullptr) return WindowPtr(window);
-  }
+  glfwDefaultWindowHints();
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  GLFWwindow* window =
+      glfwCreateWindow(options.width, options.height, "pdsm-view", nullptr, nullptr);
+  if (window != nullptr) return WindowPtr(window);
   const char* description = nullptr;
   glfwGetError(&description);
   return absl::UnavailableError(absl::StrCat(
-      "cannot open a GL 4.3 core window: ", description ? description : "unknown GLFW error",
+      "cannot open a GL 4.5 core window: ", description ? description : "unknown GLFW error",
       " (no display? use --headless)"));
 }
 

@@ -1,5 +1,6 @@
 // Writing a whole file so that readers see the old file or the new one, never half of one:
-// the bytes go to a temporary name beside the target, which is renamed onto it.
+// the bytes go to a fresh temporary name beside the target (mkstemp), are synced, and the
+// temporary file is renamed onto the target.
 #ifndef PDSM_CORE_UTIL_ATOMIC_FILE_H_
 #define PDSM_CORE_UTIL_ATOMIC_FILE_H_
 

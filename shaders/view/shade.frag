@@ -224,6 +224,9 @@ float Attenuation(vec3 p) {
     float a = texelFetch(cpu_attenuation, ivec2(gl_FragCoord.xy), 0).r;
     return isnan(a) ? -1.0 : a;
   }
+  // Behind a perspective light the shadow maps have no projection (and float-to-int of the
+  // inf/NaN it would give is undefined): such points are lit.
+  if (orthographic == 0 && !(p.z > 0.0)) return 0.0;
   if (mode == kModeHard) return HardShadow(p);
   if (mode == kModePcf) return Pcf(p);
   if (mode == kModePcss) return Pcss(p);

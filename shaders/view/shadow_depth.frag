@@ -10,8 +10,10 @@ in vec3 normal_light;
 
 uniform float depth_bias;  // light-space units, the bake's (PDSM header)
 uniform float slope_bias;  // multiples of the depth change across one texel
-uniform float z_near;
+uniform float z_near;      // the bake's depth range: VSM's normalisation
 uniform float z_far;
+uniform float clip_near;   // the shadow maps' clip range (ShadowClipRangeOf), wider than the
+uniform float clip_far;    // bake's so that dynamic objects beyond it still cast
 uniform int orthographic;
 
 layout(location = 0) out vec2 depth_moments;
@@ -25,6 +27,6 @@ void main() {
   float z = BiasedDepth(position_light.z);
   float d = (z - z_near) / (z_far - z_near);
   depth_moments = vec2(z, d * d);
-  gl_FragDepth = orthographic != 0 ? clamp((z_far - z) / (z_far - z_near), 0.0, 1.0)
-                                   : clamp(z_near / z, 0.0, 1.0);
+  gl_FragDepth = orthographic != 0 ? clamp((clip_far - z) / (clip_far - clip_near), 0.0, 1.0)
+                                   : clamp(clip_near / z, 0.0, 1.0);
 }
