@@ -40,9 +40,8 @@ void AddHeader(const PdsmHeader& h, Feeder* f) {
   f->Add(h.samples), f->Add(h.shadow_map_resolution), f->Add(h.epsilon);
   f->Add(h.compression_metric), f->Add(h.depth_bias), f->Add(h.slope_bias), f->Add(h.sampling);
   f->Add(h.seed), f->Add(h.tile_size);
-  // Only adaptive bakes feed these, so fixed-count plans keep their fingerprints.
-  if (h.adaptive()) f->Add(h.adaptive_tolerance), f->Add(h.adaptive_min_samples);
-  f->Add(g.z_valid_min), f->Add(h.surfaces_only);
+  f->Add(h.adaptive_tolerance), f->Add(h.adaptive_min_samples);
+  f->Add(g.z_valid_min), f->Add(h.surfaces_only), f->Add(h.format_version);
 }
 
 }  // namespace

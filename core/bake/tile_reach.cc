@@ -123,6 +123,12 @@ std::vector<TileRect> BlocksOf(const TileRect& tile) {
 
 // Triangle k of `mesh` in double, and whether it lies wholly outside one of `region`'s
 // half-spaces (then it cannot shadow the tile's rays).
+// A window side in texels as an int, saturated: a wider window than int holds stays too big
+// for the texel budget instead of wrapping negative and slipping past it.
+int SaturatedExtent(int64_t texels) {
+  return static_cast<int>(std::min<int64_t>(texels, std::numeric_limits<int>::max()));
+}
+
 std::array<glm::dvec3, 3> CasterTriangle(const LightSpaceMesh& mesh, size_t k) {
   return {glm::dvec3(mesh.positions[mesh.indices[3 * k]]),
           glm::dvec3(mesh.positions[mesh.indices[3 * k + 1]]),
@@ -216,8 +222,8 @@ ShadowMapWindow ShadowMapWindowFor(const BakePlan& plan, const TileRect& rect,
   ShadowMapWindow window;
   window.x0 = plan.lattice.TexelS(s_lo);
   window.y0 = plan.lattice.TexelT(t_lo);
-  window.width = static_cast<int>(plan.lattice.TexelS(s_hi) - window.x0 + 1);
-  window.height = static_cast<int>(plan.lattice.TexelT(t_hi) - window.y0 + 1);
+  window.width = SaturatedExtent(plan.lattice.TexelS(s_hi) - window.x0 + 1);
+  window.height = SaturatedExtent(plan.lattice.TexelT(t_hi) - window.y0 + 1);
   return window;
 }
 
@@ -227,8 +233,8 @@ ShadowMapWindow UnionWindow(const ShadowMapWindow& a, const ShadowMapWindow& b) 
   ShadowMapWindow u;
   u.x0 = std::min(a.x0, b.x0);
   u.y0 = std::min(a.y0, b.y0);
-  u.width = static_cast<int>(std::max(a.x0 + a.width, b.x0 + b.width) - u.x0);
-  u.height = static_cast<int>(std::max(a.y0 + a.height, b.y0 + b.height) - u.y0);
+  u.width = SaturatedExtent(std::max(a.x0 + a.width, b.x0 + b.width) - u.x0);
+  u.height = SaturatedExtent(std::max(a.y0 + a.height, b.y0 + b.height) - u.y0);
   return u;
 }
 

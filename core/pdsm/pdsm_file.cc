@@ -339,7 +339,7 @@ void ReadBakeSettings(AttributeReader& in, const Imf::Header& exr, PdsmHeader* h
 
 // The adaptive attributes, when present: one count in [1, samples] per tile.
 void ReadAdaptive(AttributeReader& in, const Imf::Header& exr, PdsmHeader* h) {
-  if (exr.findTypedAttribute<Imf::DoubleAttribute>(kAttrAdaptiveTolerance) == nullptr) return;
+  if (exr.find(kAttrAdaptiveTolerance) == exr.end()) return;  // a wrong type is Get's error
   h->adaptive_tolerance = in.Get<double>(kAttrAdaptiveTolerance);
   h->adaptive_min_samples = in.Get<int>(kAttrAdaptiveMinSamples);
   const std::string text = in.Get<std::string>(kAttrTileSamples);
