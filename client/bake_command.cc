@@ -2,7 +2,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <utility>
+#include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "client/bake_overrides.h"
 #include "client/cli_common.h"
@@ -62,6 +65,20 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags, const std::string&
 
 // --target-error E: the knobs given on the command line stay fixed, the others are chosen.
 int RunTargetErrorBake(const BakeFlags& flags, const pdsm::v1::BakeParams& overrides) {
+  // The chooser's child bakes take only the knobs below: refuse the others rather than drop them.
+  const std::vector<std::pair<bool, const char*>> unsupported = {
+      {overrides.has_tile_size(), "--tile-size"},
+      {overrides.has_adaptive_tolerance(), "--adaptive-tolerance"},
+      {overrides.has_adaptive_min_samples(), "--adaptive-min-samples"},
+      {overrides.surfaces_only(), "--surfaces-only"},
+      {flags.samples_per_task != 0, "--samples-per-task"},
+      {!flags.preview_path.empty(), "--preview"}};
+  for (const auto& [given, flag] : unsupported) {
+    if (given) {
+      return ReportError(absl::InvalidArgumentError(
+          absl::StrCat(flag, ": cannot be combined with --target-error")));
+    }
+  }
   TargetErrorOptions options;
   options.scene_path = flags.scene_path;
   options.output_path = flags.output_path;

@@ -201,6 +201,20 @@ TEST(SweepCli, BadKnobExits2) {
   EXPECT_FALSE(std::filesystem::exists(dir.File("s/sweep.csv")));
 }
 
+// Knobs the chooser's bakes cannot take are refused, not silently dropped.
+TEST(TargetErrorCli, RefusesKnobsItWouldIgnore) {
+  TempDir dir;
+  for (const std::string flag : {"--tile-size 16", "--surfaces-only", "--adaptive-tolerance 0.1",
+                                 "--samples-per-task 4"}) {
+    const CommandResult r = RunCommand(kPdsm + " bake " + ExamplePath("plates") + " -o " +
+                                           dir.File("x.exr") + " --target-error 0.02 " + flag,
+                                       dir);
+    EXPECT_EQ(r.exit_code, 2) << flag << ": " << r.err;
+    EXPECT_NE(r.err.find(flag.substr(0, flag.find(' '))), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.File("x.exr")));
+  }
+}
+
 TEST(TargetErrorCli, BakeMeetsTheTargetOnIndependentPoints) {
   TempDir dir;
   constexpr double kTarget = 0.02;
