@@ -1,9 +1,5 @@
 #include "client/tile_output.h"
 
-#include <optional>
-
-#include "core/bake/receiver_windows.h"
-
 namespace pdsm {
 
 TileOutput::TileOutput(const BakePlan& plan, bool with_preview, PdsmWriter* writer)
@@ -15,12 +11,7 @@ TileOutput::TileOutput(const BakePlan& plan, bool with_preview, PdsmWriter* writ
 absl::StatusOr<bool> TileOutput::Write(TaskRunner& runner, const std::vector<TileEvents>& parts,
                                        int tile_samples, AssemblyStats* assembly) {
   const TileRect& rect = plan_.tiles[parts.front().tile_index];
-  std::optional<TileWindows> windows;
-  if (plan_.header.surfaces_only) windows = ComputeReceiverWindows(plan_, rect);
-  const TileWindows* tile_windows = windows ? &*windows : nullptr;
-  const PdsmTile tile =
-      tile_samples > 0 ? AssembleTile(plan_.header, parts, tile_samples, assembly, tile_windows)
-                       : AssembleTile(plan_.header, parts, assembly, tile_windows);
+  const PdsmTile tile = AssemblePlanTile(plan_, parts, tile_samples, assembly);
   if (with_preview_) {
     absl::StatusOr<std::vector<float>> depth = runner.ReceiverDepth(rect);
     if (!depth.ok()) return depth.status();

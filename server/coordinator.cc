@@ -443,15 +443,7 @@ void Coordinator::AssembleAndStore(std::shared_ptr<ActiveJob> job, int tile_inde
   events.reserve(parts.size());
   for (auto& [begin, e] : parts) events.push_back(std::move(e));
   AssemblyStats stats;
-  std::optional<TileWindows> windows;  // surfaces-only bakes: the tile's receiver windows
-  if (job->plan.header.surfaces_only) {
-    windows = ComputeReceiverWindows(job->plan, job->plan.tiles.at(tile_index));
-  }
-  const TileWindows* tile_windows = windows ? &*windows : nullptr;
-  const PdsmTile tile =
-      tile_samples > 0
-          ? pdsm::AssembleTile(job->plan.header, events, tile_samples, &stats, tile_windows)
-          : pdsm::AssembleTile(job->plan.header, events, &stats, tile_windows);
+  const PdsmTile tile = AssemblePlanTile(job->plan, events, tile_samples, &stats);
   events.clear();
 
   const std::string& id = job->record.job_id;

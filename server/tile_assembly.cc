@@ -1,6 +1,7 @@
 #include "server/tile_assembly.h"
 
 #include <chrono>
+#include <optional>
 #include <vector>
 
 #include "core/bake/surface_function.h"
@@ -56,6 +57,17 @@ PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> part
   stats->vertices += static_cast<int64_t>(tile.vertices.size());
   stats->seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return tile;
+}
+
+PdsmTile AssemblePlanTile(const BakePlan& plan, std::span<const TileEvents> parts,
+                          int tile_samples, AssemblyStats* stats) {
+  std::optional<TileWindows> windows;
+  if (plan.header.surfaces_only) {
+    windows = ComputeReceiverWindows(plan, plan.tiles.at(parts.front().tile_index));
+  }
+  const TileWindows* tile_windows = windows ? &*windows : nullptr;
+  return tile_samples > 0 ? AssembleTile(plan.header, parts, tile_samples, stats, tile_windows)
+                          : AssembleTile(plan.header, parts, stats, tile_windows);
 }
 
 }  // namespace pdsm

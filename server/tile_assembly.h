@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <span>
 
+#include "core/bake/bake_plan.h"
 #include "core/bake/receiver_windows.h"
 #include "core/events/event.h"
 #include "core/pdsm/pdsm_image.h"
@@ -32,6 +33,12 @@ PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> part
 PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts,
                       int tile_samples, AssemblyStats* stats,
                       const TileWindows* windows = nullptr);
+
+// The tile of `plan` the local bake and the coordinator both assemble: with its receiver
+// windows when the bake is surfaces-only, as an adaptive tile when `tile_samples` > 0.
+// REQUIRES: `parts` non-empty, all of tile parts.front().tile_index.
+PdsmTile AssemblePlanTile(const BakePlan& plan, std::span<const TileEvents> parts,
+                          int tile_samples, AssemblyStats* stats);
 
 }  // namespace pdsm
 

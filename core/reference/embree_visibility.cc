@@ -10,6 +10,7 @@
 #include <embree3/rtcore.h>
 
 #include "absl/strings/str_format.h"
+#include "core/sampling/hash_rng.h"
 #include "core/sampling/light_samples.h"
 
 namespace pdsm {
@@ -127,14 +128,6 @@ absl::StatusOr<RTCScene> BuildScene(RTCDevice device, const Casters& casters) {
   return rtc_scene;
 }
 
-// Per point, its own stratification: independent errors between points, deterministic.
-uint64_t PointSeed(uint64_t seed, size_t index) {
-  uint64_t z = seed * 0x9E3779B97F4A7C15ull + index + 0x632BE59BD9B4E019ull;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-
 double HiddenFraction(RTCScene rtc_scene, const Scene& scene, const Casters& casters,
                       const glm::dvec3& p, const std::vector<glm::dvec2>& samples) {
   const bool sun = scene.light.shape == LightShape::kSun;
@@ -197,7 +190,8 @@ absl::StatusOr<std::vector<double>> EmbreeAttenuation(const Scene& scene,
                    // frustum
       }
       const std::vector<glm::dvec2> light_samples = GenerateLightSamples(
-          scene.light, samples, SamplingPattern::kStratified, PointSeed(seed, i));
+          // Per point its own stratification: independent errors between points.
+          scene.light, samples, SamplingPattern::kStratified, HashInts(seed, i));
       result[i] = HiddenFraction(rtc_scene.get(), scene, *casters, p_light - casters->origin_light,
                                  light_samples);
     }

@@ -73,7 +73,6 @@ using GetProcAddressFn = GlProc (*)(const char* name);
   /* Used by the viewer (client/view): */                      \
   X(PFNGLUNIFORM2FPROC, Uniform2f)                             \
   X(PFNGLUNIFORM3FPROC, Uniform3f)                             \
-  X(PFNGLUNIFORM4FPROC, Uniform4f)                             \
   X(PFNGLUNIFORM2IPROC, Uniform2i)                             \
   X(PFNGLUNIFORMMATRIX3FVPROC, UniformMatrix3fv)               \
   X(PFNGLACTIVETEXTUREPROC, ActiveTexture)                     \
@@ -83,8 +82,7 @@ using GetProcAddressFn = GlProc (*)(const char* name);
   X(PFNGLFRAMEBUFFERTEXTURELAYERPROC, FramebufferTextureLayer) \
   X(PFNGLBLITFRAMEBUFFERPROC, BlitFramebuffer)                 \
   X(PFNGLDRAWARRAYSPROC, DrawArrays)                           \
-  X(PFNGLFINISHPROC, Finish)                                   \
-  X(PFNGLCULLFACEPROC, CullFace)
+  X(PFNGLFINISHPROC, Finish)
 
 // Plain table of function pointers; copyable, and valid only while a context made by the same
 // driver is current (GL entry points dispatch on the current context). Thread-compatible.
