@@ -2,7 +2,6 @@
 
 #include <chrono>
 #include <filesystem>
-#include <fstream>
 
 #include <unistd.h>
 
@@ -56,19 +55,13 @@ absl::StatusOr<std::unique_ptr<JobFollower>> JobFollower::Create(const ServiceFl
   return std::unique_ptr<JobFollower>(new JobFollower(service, job_id, plan, *std::move(c)));
 }
 
-absl::StatusOr<std::string> JobFollower::FetchStream(bool whole_pdsm, int tile_index) {
+absl::StatusOr<std::string> JobFollower::FetchTileBytes(int tile_index) {
   auto context = connection_.Call(std::chrono::minutes(10));
-  std::unique_ptr<grpc::ClientReader<pdsm::v1::PdsmChunk>> reader;
-  if (whole_pdsm) {
-    pdsm::v1::GetJobRequest request;
-    request.set_job_id(job_id_);
-    reader = connection_.stub->FetchPdsm(context.get(), request);
-  } else {
-    pdsm::v1::FetchTileRequest request;
-    request.set_job_id(job_id_);
-    request.set_tile_index(tile_index);
-    reader = connection_.stub->FetchTile(context.get(), request);
-  }
+  pdsm::v1::FetchTileRequest request;
+  request.set_job_id(job_id_);
+  request.set_tile_index(tile_index);
+  std::unique_ptr<grpc::ClientReader<pdsm::v1::PdsmChunk>> reader =
+      connection_.stub->FetchTile(context.get(), request);
   std::string bytes;
   uint64_t total = 0;
   pdsm::v1::PdsmChunk chunk;
@@ -76,8 +69,7 @@ absl::StatusOr<std::string> JobFollower::FetchStream(bool whole_pdsm, int tile_i
     if (first) total = chunk.total_bytes();
     bytes += chunk.data();
   }
-  const std::string what = whole_pdsm ? absl::StrCat("fetching job ", job_id_)
-                                      : absl::StrCat("fetching tile ", tile_index, " of job ", job_id_);
+  const std::string what = absl::StrCat("fetching tile ", tile_index, " of job ", job_id_);
   if (grpc::Status s = reader->Finish(); !s.ok()) return CallError(what, s, service_.server);
   if (bytes.size() != total) {
     return absl::DataLossError(absl::StrCat(what, ": got ", bytes.size(), " of ", total, " bytes"));
@@ -108,14 +100,13 @@ absl::StatusOr<JobSnapshot> JobFollower::Poll() {
                                                       job.error().empty() ? "" : ": ", job.error()));
   }
   if (job.state() == pdsm::v1::SUCCEEDED) {
-    absl::StatusOr<std::string> bytes = FetchStream(/*whole_pdsm=*/true, 0);
-    if (!bytes.ok()) return bytes.status();
     // ReadPdsm reads files: a temporary one, removed at once.
     const std::string temp = (std::filesystem::temp_directory_path() /
                               absl::StrCat("pdsm-view-", job_id_, "-", ::getpid(), ".exr"))
                                  .string();
-    { std::ofstream(temp, std::ios::binary) << *bytes; }
-    absl::StatusOr<PdsmImage> image = LoadPdsmFile(temp);
+    absl::StatusOr<uint64_t> received = DownloadPdsm(connection_, service_, job_id_, temp);
+    absl::StatusOr<PdsmImage> image =
+        received.ok() ? LoadPdsmFile(temp) : absl::StatusOr<PdsmImage>(received.status());
     std::error_code ec;
     std::filesystem::remove(temp, ec);
     if (!image.ok()) return image.status();
@@ -132,7 +123,7 @@ absl::StatusOr<JobSnapshot> JobFollower::Poll() {
   bool gained = false;
   for (int index : finished.tile_indices()) {
     if (tiles_.count(index) != 0) continue;
-    absl::StatusOr<std::string> bytes = FetchStream(/*whole_pdsm=*/false, index);
+    absl::StatusOr<std::string> bytes = FetchTileBytes(index);
     if (!bytes.ok()) break;  // e.g. the job ended meanwhile: the next poll sorts it out
     absl::StatusOr<PdsmTile> tile =
         DecodeTileFile(*bytes, absl::StrCat("job ", job_id_, " tile ", index));

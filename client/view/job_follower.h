@@ -66,7 +66,8 @@ class JobFollower {
   JobFollower(const ServiceFlags& service, const std::string& job_id, const BakePlan* plan,
               ServiceConnection connection)
       : service_(service), job_id_(job_id), plan_(plan), connection_(std::move(connection)) {}
-  absl::StatusOr<std::string> FetchStream(bool whole_pdsm, int tile_index);
+  // One finished tile's file bytes (FetchTile).
+  absl::StatusOr<std::string> FetchTileBytes(int tile_index);
 
   const ServiceFlags service_;
   const std::string job_id_;
