@@ -4,6 +4,7 @@
 #ifndef PDSM_CLIENT_VIEW_CPU_ATTENUATION_H_
 #define PDSM_CLIENT_VIEW_CPU_ATTENUATION_H_
 
+#include <cstdint>
 #include <vector>
 
 #include "core/pdsm/pdsm_image.h"
@@ -12,10 +13,13 @@ namespace pdsm::view {
 
 // `gbuffer`: width * height RGBA float32, (x, y, z) light space of the PDSM's frame and alpha
 // 1 where a surface was drawn. Returns width * height attenuations in the same order: NaN for
-// the background and outside the PDSM frustum. Uses every core (rows are independent).
+// the background and outside the PDSM frustum; `pending_value` where one of the (up to 4) PDSM
+// pixels the lookup blends is not baked yet (`pending`: one flag per PDSM pixel, or empty), as
+// the GPU path does. Uses every core (rows are independent).
 std::vector<float> EvaluateAttenuationImage(const PdsmImage& pdsm,
                                             const std::vector<float>& gbuffer, int width,
-                                            int height);
+                                            int height, const std::vector<uint8_t>& pending,
+                                            float pending_value);
 
 }  // namespace pdsm::view
 

@@ -302,7 +302,8 @@ absl::Status FrameRenderer::RenderCpuAttenuation(const glm::mat4& clip_from_ligh
   gl_.PixelStorei(GL_PACK_ALIGNMENT, 4);
   gl_.ReadPixels(0, 0, im.width, im.height, GL_RGBA, GL_FLOAT, gbuffer.data());
   const std::vector<float> attenuation =
-      EvaluateAttenuationImage(scene_->pdsm, gbuffer, im.width, im.height);
+      EvaluateAttenuationImage(scene_->pdsm, gbuffer, im.width, im.height, scene_->pending,
+                               kPending);
   gl_.BindTexture(GL_TEXTURE_2D, im.cpu_attenuation.name());
   gl_.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
   gl_.TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, im.width, im.height, GL_RED, GL_FLOAT,
