@@ -42,7 +42,8 @@ Camera DefaultCamera(const ViewScene& scene) {
   return camera;
 }
 
-absl::StatusOr<Camera> ParseCamera(const std::string& text, const std::string& flag) {
+absl::StatusOr<std::vector<double>> ParseFlagNumbers(const std::string& text,
+                                                     const std::string& flag) {
   std::vector<double> numbers;
   for (absl::string_view part : absl::StrSplit(text, ',')) {
     double value = 0;
@@ -52,6 +53,13 @@ absl::StatusOr<Camera> ParseCamera(const std::string& text, const std::string& f
     }
     numbers.push_back(value);
   }
+  return numbers;
+}
+
+absl::StatusOr<Camera> ParseCamera(const std::string& text, const std::string& flag) {
+  absl::StatusOr<std::vector<double>> parsed = ParseFlagNumbers(text, flag);
+  if (!parsed.ok()) return parsed.status();
+  const std::vector<double>& numbers = *parsed;
   if (numbers.size() != 6 && numbers.size() != 7) {
     return absl::InvalidArgumentError(absl::StrCat(
         flag, ": expected EX,EY,EZ,TX,TY,TZ[,FOV_DEG], got ", numbers.size(), " numbers"));

@@ -5,6 +5,7 @@
 #define PDSM_CLIENT_VIEW_CAMERA_H_
 
 #include <string>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -22,6 +23,11 @@ struct Camera {
 // Looks down at the casters' bounds from above, turned away from the light's side so that
 // shadows fall beside their casters, far enough to hold 1.5x their bounding sphere.
 Camera DefaultCamera(const ViewScene& scene);
+
+// The comma-separated finite numbers of a flag's value; INVALID_ARGUMENT naming `flag` and the
+// first part that is not one. Shared by --camera and the dynamic-object flags.
+absl::StatusOr<std::vector<double>> ParseFlagNumbers(const std::string& text,
+                                                     const std::string& flag);
 
 // "EX,EY,EZ,TX,TY,TZ[,FOV_DEG]" (world). INVALID_ARGUMENT naming `flag`.
 absl::StatusOr<Camera> ParseCamera(const std::string& text, const std::string& flag);

@@ -5,9 +5,9 @@
 #include <cmath>
 #include <limits>
 #include <optional>
-#include <thread>
 
 #include "core/pdsm/pdsm_query.h"
+#include "core/util/run_on_all_cores.h"
 
 namespace pdsm::view {
 
@@ -37,7 +37,7 @@ std::vector<float> EvaluateAttenuationImage(const PdsmImage& pdsm,
                          std::numeric_limits<float>::quiet_NaN());
   const LightFrame& frame = pdsm.header.geometry.frame;
   std::atomic<int> next_row{0};
-  const auto work = [&] {
+  RunOnAllCores(static_cast<size_t>(height), [&] {
     for (int y = next_row++; y < height; y = next_row++) {
       for (int x = 0; x < width; ++x) {
         const size_t p = static_cast<size_t>(y) * width + x;
@@ -55,12 +55,7 @@ std::vector<float> EvaluateAttenuationImage(const PdsmImage& pdsm,
         out[p] = static_cast<float>(QueryAttenuation(pdsm, p_world));
       }
     }
-  };
-  const int threads = std::max(1u, std::thread::hardware_concurrency());
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
-  for (std::thread& t : pool) t.join();
+  });
   return out;
 }
 

@@ -13,19 +13,12 @@ namespace {
 
 absl::StatusOr<std::vector<double>> ParseNumbers(const std::string& text, size_t count,
                                                  const std::string& flag) {
-  std::vector<double> numbers;
-  for (absl::string_view part : absl::StrSplit(text, ',')) {
-    double value = 0;
-    if (!absl::SimpleAtod(part, &value) || !std::isfinite(value)) {
-      return absl::InvalidArgumentError(
-          absl::StrCat(flag, ": \"", part, "\" is not a finite number"));
-    }
-    numbers.push_back(value);
-  }
-  if (numbers.size() != count) {
+  absl::StatusOr<std::vector<double>> numbers = ParseFlagNumbers(text, flag);
+  if (!numbers.ok()) return numbers.status();
+  if (numbers->size() != count) {
     return absl::InvalidArgumentError(
         absl::StrCat(flag, ": expected ", count, " comma-separated numbers, got ",
-                     numbers.size()));
+                     numbers->size()));
   }
   return numbers;
 }

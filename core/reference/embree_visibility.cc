@@ -12,6 +12,7 @@
 #include "absl/strings/str_format.h"
 #include "core/sampling/hash_rng.h"
 #include "core/sampling/light_samples.h"
+#include "core/util/run_on_all_cores.h"
 
 namespace pdsm {
 namespace {
@@ -180,8 +181,8 @@ absl::StatusOr<std::vector<double>> EmbreeAttenuation(const Scene& scene,
 
   const bool sun = scene.light.shape == LightShape::kSun;
   std::vector<double> result(points_world.size(), std::numeric_limits<double>::quiet_NaN());
-  std::atomic<size_t> next{0};
-  auto work = [&] {
+  std::atomic<size_t> next{0};  // points are independent: each writes only its own slot
+  RunOnAllCores(points_world.size(), [&] {
     for (size_t i = next++; i < points_world.size(); i = next++) {
       const glm::dvec3 p_light = scene.light.frame.LightFromWorld(points_world[i]);
       if (!std::isfinite(p_light.x) || !std::isfinite(p_light.y) || !std::isfinite(p_light.z) ||
@@ -195,13 +196,7 @@ absl::StatusOr<std::vector<double>> EmbreeAttenuation(const Scene& scene,
       result[i] = HiddenFraction(rtc_scene.get(), scene, *casters, p_light - casters->origin_light,
                                  light_samples);
     }
-  };
-  const size_t thread_count = std::clamp<size_t>(std::thread::hardware_concurrency(), 1,
-                                                 std::max<size_t>(points_world.size(), 1));
-  std::vector<std::thread> threads;
-  for (size_t t = 1; t < thread_count; ++t) threads.emplace_back(work);
-  work();
-  for (std::thread& thread : threads) thread.join();
+  });
   return result;
 }
 

@@ -27,6 +27,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
+#include "core/util/run_on_all_cores.h"
 
 namespace pdsm {
 namespace {
@@ -731,21 +732,15 @@ absl::StatusOr<std::vector<double>> ExactAttenuation(const Scene& scene,
   std::vector<double> result(points_world.size(), std::numeric_limits<double>::quiet_NaN());
   // Points are independent: threads take them one at a time and each writes only its own
   // slot, so the output does not depend on the scheduling.
-  const size_t thread_count = std::clamp<size_t>(std::thread::hardware_concurrency(), 1,
-                                                 std::max<size_t>(points_world.size(), 1));
   std::atomic<size_t> next{0};
-  auto work = [&] {
+  RunOnAllCores(points_world.size(), [&] {
     Workspace ws;
     for (size_t i = next++; i < points_world.size(); i = next++) {
       const glm::dvec3 p_light = scene.light.frame.LightFromWorld(points_world[i]);
       if (!(p_light.z > 0.0) || !Finite(p_light)) continue;  // stays NaN
       result[i] = HiddenFraction(*light, *triangles, p_light, &ws);
     }
-  };
-  std::vector<std::thread> threads;
-  for (size_t t = 1; t < thread_count; ++t) threads.emplace_back(work);
-  work();
-  for (std::thread& thread : threads) thread.join();
+  });
   return result;
 }
 
