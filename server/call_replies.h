@@ -6,7 +6,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "absl/status/status.h"
-#include "proto/grpc_support.h"
+#include "rpc/grpc_support.h"
 
 namespace pdsm {
 

@@ -17,9 +17,9 @@
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_query.h"
 #include "core/scene/scene_loader.h"
-#include "server/task_result.h"
-#include "server/tile_assembly.h"
-#include "server/tile_file.h"
+#include "rpc/tile_events_codec.h"
+#include "core/pipeline/tile_assembly.h"
+#include "core/pipeline/tile_file.h"
 
 namespace pdsm {
 namespace {

@@ -31,7 +31,7 @@
 #include "pdsm/v1/jobs.pb.h"
 #include "pdsm/v1/workers.pb.h"
 #include "server/job_store.h"
-#include "server/scheduler.h"
+#include "core/pipeline/scheduler.h"
 
 namespace pdsm {
 

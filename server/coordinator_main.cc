@@ -13,7 +13,7 @@
 #include <spdlog/spdlog.h>
 
 #include "absl/strings/str_cat.h"
-#include "proto/grpc_support.h"
+#include "rpc/grpc_support.h"
 #include "server/caller_auth.h"
 #include "server/coordinator.h"
 #include "server/jobs_service.h"

@@ -7,7 +7,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/assets/mesh_asset.h"
-#include "proto/grpc_support.h"
+#include "rpc/grpc_support.h"
 #include "server/call_replies.h"
 #include "server/watch_hub.h"
 

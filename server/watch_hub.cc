@@ -2,7 +2,7 @@
 
 #include <chrono>
 
-#include "proto/grpc_support.h"
+#include "rpc/grpc_support.h"
 
 namespace pdsm {
 namespace {

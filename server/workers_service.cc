@@ -1,7 +1,7 @@
 #include "server/workers_service.h"
 
 #include "absl/strings/str_cat.h"
-#include "proto/grpc_support.h"
+#include "rpc/grpc_support.h"
 #include "server/call_replies.h"
 
 namespace pdsm {

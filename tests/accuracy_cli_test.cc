@@ -12,7 +12,7 @@
 
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_split.h"
-#include "client/sweep_report.h"
+#include "client/measure/sweep_report.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_query.h"
 #include "core/reference/accuracy_points.h"
@@ -165,7 +165,9 @@ TEST(SweepCli, TinyGridWritesCsvAndPlotWithErrorFallingWithSamples) {
       tied = tied || std::abs(tb - ta) <= 0.002;
       dominated = dominated || (tb < ta && eb <= ea);
     }
-    if (!tied) EXPECT_EQ(Number(rows[a], "pareto"), dominated ? 0.0 : 1.0) << "row " << a;
+    if (!tied) {
+      EXPECT_EQ(Number(rows[a], "pareto"), dominated ? 0.0 : 1.0) << "row " << a;
+    }
   }
   for (const auto& entry : std::filesystem::directory_iterator(out)) {
     EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();

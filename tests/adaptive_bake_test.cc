@@ -1,4 +1,4 @@
-// Adaptive sampling end to end (core/bake/adaptive_sampling.h, client/adaptive_bake.h): on
+// Adaptive sampling end to end (core/bake/adaptive_sampling.h, worker/adaptive_bake.h): on
 // examples/plates, tiles outside the penumbrae stop at the first batch while penumbra tiles
 // take more; the result stays within the tolerance's promise against the exact reference
 // and a fixed-count bake; and the file is byte-identical whatever the threads and batches.
@@ -10,7 +10,7 @@
 #include <random>
 #include <vector>
 
-#include "client/local_bake.h"
+#include "worker/local_bake.h"
 #include "core/bake/adaptive_sampling.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_query.h"

@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "client/local_bake.h"
+#include "worker/local_bake.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_query.h"
 #include "core/reference/accuracy_points.h"

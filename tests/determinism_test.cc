@@ -2,7 +2,7 @@
 // into tasks (the distributed service relies on this).
 #include <gtest/gtest.h>
 
-#include "client/local_bake.h"
+#include "worker/local_bake.h"
 #include "core/scene/scene_loader.h"
 #include "tests/test_support.h"
 

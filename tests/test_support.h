@@ -12,6 +12,17 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include "core/pdsm/attenuation_function.h"
+
+namespace pdsm {
+
+// Readable failures for vertex comparisons (found by gtest through ADL).
+inline void PrintTo(const Vertex& v, std::ostream* os) {
+  *os << "(z=" << v.z << ", a=" << v.a << ")";
+}
+
+}  // namespace pdsm
+
 namespace pdsm::testing {
 
 // A fresh folder under the system temp dir, removed at destruction.

@@ -1,6 +1,7 @@
 #include "worker/coordinator_client.h"
 
 #include "absl/strings/str_cat.h"
+#include "rpc/tile_events_codec.h"
 
 namespace pdsm {
 namespace {
@@ -8,16 +9,6 @@ namespace {
 using std::chrono::milliseconds;
 constexpr milliseconds kShortCall(10'000);
 constexpr milliseconds kLongCall(300'000);  // results and assets may be tens of MiB
-
-void ToProto(const TileEvents& events, pdsm::v1::TileEventsData* data) {
-  data->mutable_offsets()->Assign(events.offsets.begin(), events.offsets.end());
-  data->mutable_z()->Reserve(static_cast<int>(events.events.size()));
-  data->mutable_count()->Reserve(static_cast<int>(events.events.size()));
-  for (const Event& e : events.events) {
-    data->add_z(e.z);
-    data->add_count(e.count);
-  }
-}
 
 }  // namespace
 
@@ -61,7 +52,7 @@ absl::StatusOr<bool> CoordinatorClient::ReportResult(uint64_t lease_id, const Ti
   request.set_worker_id(worker_id_);
   request.set_lease_id(lease_id);
   request.set_seconds(seconds);
-  ToProto(events, request.mutable_events());
+  TileEventsToProto(events, request.mutable_events());
   pdsm::v1::ReportResultResponse response;
   if (absl::Status s = FromGrpcStatus(stub_->ReportResult(&context, request, &response));
       !s.ok()) {

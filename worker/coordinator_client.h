@@ -10,7 +10,7 @@
 #include "absl/status/statusor.h"
 #include "core/events/event.h"
 #include "pdsm/v1/workers.grpc.pb.h"
-#include "proto/grpc_support.h"
+#include "rpc/grpc_support.h"
 
 namespace pdsm {
 

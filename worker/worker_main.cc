@@ -14,7 +14,7 @@
 #include <spdlog/spdlog.h>
 
 #include "absl/strings/str_format.h"
-#include "proto/grpc_support.h"
+#include "rpc/grpc_support.h"
 #include "worker/coordinator_client.h"
 #include "worker/remote_worker.h"
 

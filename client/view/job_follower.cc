@@ -7,7 +7,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "client/view/pdsm_source.h"
-#include "server/tile_file.h"
+#include "core/pipeline/tile_file.h"
 
 namespace pdsm::view {
 

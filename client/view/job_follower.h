@@ -19,7 +19,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
-#include "client/service_connection.h"
+#include "client/service/service_connection.h"
 #include "core/bake/bake_plan.h"
 #include "core/pdsm/pdsm_image.h"
 

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "absl/status/statusor.h"
-#include "client/service_connection.h"
+#include "client/service/service_connection.h"
 #include "core/pdsm/pdsm_image.h"
 
 namespace pdsm::view {

@@ -9,7 +9,7 @@
 #include <glm/glm.hpp>
 
 #include "absl/status/statusor.h"
-#include "client/service_connection.h"
+#include "client/service/service_connection.h"
 #include "client/view/camera.h"
 #include "client/view/frame_renderer.h"
 #include "client/view/view_mode.h"

@@ -28,9 +28,6 @@
 
 namespace pdsm {
 
-// Readable failures for vertex comparisons.
-void PrintTo(const Vertex& v, std::ostream* os) { *os << "(z=" << v.z << ", a=" << v.a << ")"; }
-
 namespace {
 
 namespace fs = std::filesystem;

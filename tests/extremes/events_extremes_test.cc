@@ -11,7 +11,7 @@
 
 #include "core/pdsm/attenuation_function.h"
 #include "core/pdsm/pdsm_file.h"
-#include "server/tile_assembly.h"
+#include "core/pipeline/tile_assembly.h"
 #include "tests/test_support.h"
 
 namespace pdsm::extremes {

@@ -13,7 +13,7 @@
 #include <gtest/gtest.h>
 #include <glm/glm.hpp>
 
-#include "client/local_bake.h"
+#include "worker/local_bake.h"
 #include "core/geometry/light_frame.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_query.h"

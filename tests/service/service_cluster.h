@@ -24,7 +24,7 @@
 
 #include "pdsm/v1/jobs.grpc.pb.h"
 #include "pdsm/v1/workers.grpc.pb.h"
-#include "proto/grpc_support.h"
+#include "rpc/grpc_support.h"
 #include "tests/test_support.h"
 
 extern char** environ;

@@ -6,7 +6,7 @@
 #include <map>
 #include <string>
 
-#include "client/local_bake.h"
+#include "worker/local_bake.h"
 #include "core/scene/scene_loader.h"
 #include "tests/test_support.h"
 

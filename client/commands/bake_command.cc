@@ -1,0 +1,170 @@
+// `pdsm bake SCENE.json -o OUT.exr [overrides]`: a local single-node bake.
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "client/bake_overrides.h"
+#include "client/cli_common.h"
+#include "client/commands.h"
+#include "worker/local_bake.h"
+#include "client/progress_reporter.h"
+#include "client/measure/target_error.h"
+#include "core/scene/scene_loader.h"
+
+namespace pdsm {
+namespace {
+
+struct BakeFlags {
+  std::string scene_path;
+  std::string output_path;
+  std::string preview_path;
+  bool no_preview = false;
+  OverrideFlags overrides;
+  int threads = 0, samples_per_task = 0;
+  std::optional<double> target_error;
+};
+
+std::string HumanBytes(uint64_t bytes) {
+  if (bytes >= (1u << 20)) return absl::StrFormat("%.1f MiB", bytes / 1048576.0);
+  if (bytes >= 1024) return absl::StrFormat("%.1f KiB", bytes / 1024.0);
+  return absl::StrFormat("%d B", bytes);
+}
+
+void PrintSummary(const Scene& scene, const BakeFlags& flags, const std::string& preview,
+                  const BakeSummary& s) {
+  std::fprintf(stderr,
+               "baked \"%s\": %dx%d PDSM, %d samples, %d tiles (%d all lit), %lld tasks\n"
+               "  time %.2fs; shadow maps %.2f thread-s (%lld maps, %.1f Mtexels), "
+               "scan conversion %.2f thread-s, merge+compress %.3f thread-s\n"
+               "  events %lld -> %lld merged -> %lld consolidated -> %lld vertices\n"
+               "  scan: %lld ray segments, %.1f Mtexels walked; %lld tiles skipped (no caster)\n",
+               scene.name.c_str(), scene.bake.width, scene.bake.height, scene.bake.samples, s.tiles,
+               s.tiles_all_lit, static_cast<long long>(s.tasks), s.seconds,
+               s.tasks_stats.shadow_map_seconds, static_cast<long long>(s.tasks_stats.shadow_maps),
+               s.tasks_stats.shadow_map_texels / 1e6, s.tasks_stats.scan_seconds,
+               s.assembly.seconds, static_cast<long long>(s.tasks_stats.events),
+               static_cast<long long>(s.assembly.merged_events),
+               static_cast<long long>(s.assembly.consolidated_events),
+               static_cast<long long>(s.assembly.vertices),
+               static_cast<long long>(s.tasks_stats.ray_segments),
+               s.tasks_stats.texels_walked / 1e6,
+               static_cast<long long>(s.tasks_stats.tiles_skipped));
+  if (scene.bake.adaptive() && s.tiles > 0) {
+    std::fprintf(stderr, "  adaptive sampling: tolerance %g, %.1f samples per tile on average "
+                 "(first batch %d, max %d)\n", scene.bake.adaptive_tolerance,
+                 static_cast<double>(s.tile_samples_total) / s.tiles,
+                 scene.bake.adaptive_min_samples, scene.bake.samples);
+  }
+  std::printf("pdsm: %s (%s)\n", flags.output_path.c_str(), HumanBytes(s.file_bytes).c_str());
+  if (!preview.empty()) std::printf("preview: %s\n", preview.c_str());
+}
+
+// --target-error E: the knobs given on the command line stay fixed, the others are chosen.
+int RunTargetErrorBake(const BakeFlags& flags, const pdsm::v1::BakeParams& overrides) {
+  // The chooser's child bakes take only the knobs below: refuse the others rather than drop them.
+  const std::vector<std::pair<bool, const char*>> unsupported = {
+      {overrides.has_tile_size(), "--tile-size"},
+      {overrides.has_adaptive_tolerance(), "--adaptive-tolerance"},
+      {overrides.has_adaptive_min_samples(), "--adaptive-min-samples"},
+      {overrides.surfaces_only(), "--surfaces-only"},
+      {flags.samples_per_task != 0, "--samples-per-task"},
+      {!flags.preview_path.empty(), "--preview"}};
+  for (const auto& [given, flag] : unsupported) {
+    if (given) {
+      return ReportError(absl::InvalidArgumentError(
+          absl::StrCat(flag, ": cannot be combined with --target-error")));
+    }
+  }
+  TargetErrorOptions options;
+  options.scene_path = flags.scene_path;
+  options.output_path = flags.output_path;
+  options.target = *flags.target_error;
+  options.threads = flags.threads;
+  if (overrides.has_samples()) options.samples = overrides.samples();
+  if (overrides.has_shadow_map_resolution()) {
+    options.sm_resolution = overrides.shadow_map_resolution();
+  }
+  if (overrides.resolution_size() == 2) {
+    options.resolution = {overrides.resolution(0), overrides.resolution(1)};
+  }
+  if (overrides.has_epsilon()) options.epsilon = overrides.epsilon();
+  if (overrides.has_depth_bias()) options.depth_bias = overrides.depth_bias();
+  options.sampling = flags.overrides.sampling;
+  absl::StatusOr<TargetErrorResult> r = BakeToTargetError(options);
+  if (!r.ok()) return ReportError(r.status());
+  std::fprintf(stderr,
+               "target-error %g: chose samples %d, resolution %dx%d, sm-resolution %d, "
+               "epsilon %g, sampling %s; measured mean error %.5f (surface %.5f, free space "
+               "%.5f; predicted %.5f): %s; bake %.2fs, %d bakes in all %.1fs\n",
+               options.target, r->knobs.samples, r->knobs.width, r->knobs.height,
+               r->knobs.sm_resolution, r->knobs.epsilon, r->knobs.sampling.c_str(),
+               r->measured.all.mean, r->measured.surface.mean, r->measured.free_space.mean,
+               r->predicted, r->met ? "met" : "NOT met", r->seconds, r->bakes,
+               r->total_seconds);
+  std::printf("pdsm: %s\n", flags.output_path.c_str());
+  if (!r->met) {
+    std::fprintf(stderr,
+                 "pdsm: target error %g not reached after %d rebakes; %s holds the last "
+                 "(costliest) bake tried\n",
+                 options.target, kMaxRebakes, flags.output_path.c_str());
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
+int RunBake(const BakeFlags& flags) {
+  absl::StatusOr<pdsm::v1::BakeParams> overrides = ToBakeParams(flags.overrides);
+  if (!overrides.ok()) return ReportError(overrides.status());
+  if (flags.target_error) return RunTargetErrorBake(flags, *overrides);
+  absl::StatusOr<Scene> scene = LoadSceneFile(flags.scene_path, *overrides);
+  if (!scene.ok()) return ReportError(scene.status());
+
+  LocalBakeOptions options;
+  options.output_path = flags.output_path;
+  if (!flags.no_preview) {
+    options.preview_path = !flags.preview_path.empty()
+                               ? flags.preview_path
+                               : std::filesystem::path(flags.output_path)
+                                     .replace_extension(".png")
+                                     .string();
+  }
+  options.threads = flags.threads;
+  options.samples_per_task = flags.samples_per_task;
+  ProgressReporter progress("bake " + scene->name);
+  options.on_progress = [&progress](const BakeProgress& p) {
+    progress.Update(p.tasks_done, p.tasks_total, p.seconds);
+  };
+  absl::StatusOr<BakeSummary> summary = RunLocalBake(*scene, options);
+  progress.Finish();
+  if (!summary.ok()) return ReportError(summary.status());
+  PrintSummary(*scene, flags, options.preview_path, *summary);
+  return kExitOk;
+}
+
+}  // namespace
+
+void RegisterBakeCommand(CLI::App& app, int* exit_code) {
+  auto flags = std::make_shared<BakeFlags>();
+  CLI::App* cmd = app.add_subcommand("bake", "Bake a PDSM locally (no server needed)");
+  cmd->add_option("scene", flags->scene_path, "Scene file (JSON)")->required();
+  cmd->add_option("-o,--output", flags->output_path, "Output PDSM (.exr)")->required();
+  AddOverrideFlags(cmd, &flags->overrides);
+  cmd->add_option("--threads", flags->threads, "Worker threads (default: one per core)")
+      ->check(CLI::Range(1, 1024));
+  cmd->add_option("--samples-per-task", flags->samples_per_task,
+                  "Light samples per task (default: all); does not change the result")
+      ->check(CLI::Range(1, 1 << 20));
+  cmd->add_option("--preview", flags->preview_path, "Preview PNG (default: OUT with .png)");
+  cmd->add_flag("--no-preview", flags->no_preview, "Write no preview image");
+  cmd->add_option("--target-error", flags->target_error,
+                  "Choose the knobs not given to reach this mean attenuation error at least "
+                  "cost (pilot bakes against the reference; writes no preview)")
+      ->check(CLI::Range(1e-6, 1.0));
+  cmd->callback([flags, exit_code] { *exit_code = RunBake(*flags); });
+}
+
+}  // namespace pdsm

@@ -1,0 +1,95 @@
+// `pdsm query PDSM.exr --points PTS.csv` or `pdsm query --job JOB --server ADDR --points
+// PTS.csv`: attenuation at world points, one output line each: "x,y,z,attenuation" (nan
+// outside the PDSM frustum). The remote form evaluates on the coordinator with the same code.
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "absl/strings/str_cat.h"
+#include "client/cli_common.h"
+#include "client/commands.h"
+#include "client/points_csv.h"
+#include "client/service/service_connection.h"
+#include "core/pdsm/pdsm_file.h"
+#include "core/pdsm/pdsm_query.h"
+
+namespace pdsm {
+namespace {
+
+// Points per QueryAttenuation call: well under the message limit (24 bytes a point).
+constexpr size_t kPointsPerCall = 100'000;
+
+struct QueryFlags {
+  std::string pdsm_path;
+  std::string points_path;
+  std::string job_id;
+  ServiceFlags service;
+};
+
+absl::Status QueryLocal(const QueryFlags& flags, const std::vector<QueryPoint>& points) {
+  absl::StatusOr<PdsmImage> pdsm = ReadPdsm(flags.pdsm_path);
+  if (!pdsm.ok()) return pdsm.status();
+  for (const QueryPoint& point : points) {
+    PrintAttenuationLine(point, QueryAttenuation(*pdsm, point.world));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status QueryRemote(const QueryFlags& flags, const std::vector<QueryPoint>& points) {
+  absl::StatusOr<ServiceConnection> c = Connect(flags.service);
+  if (!c.ok()) return c.status();
+  for (size_t begin = 0; begin < points.size(); begin += kPointsPerCall) {
+    const size_t end = std::min(points.size(), begin + kPointsPerCall);
+    pdsm::v1::QueryAttenuationRequest request;
+    request.set_job_id(flags.job_id);
+    for (size_t i = begin; i < end; ++i) {
+      pdsm::v1::QueryPoint* p = request.add_points();
+      p->set_x(points[i].world.x);
+      p->set_y(points[i].world.y);
+      p->set_z(points[i].world.z);
+    }
+    pdsm::v1::QueryAttenuationResponse response;
+    if (grpc::Status s = c->stub->QueryAttenuation(c->Call(std::chrono::minutes(5)).get(),
+                                                   request, &response);
+        !s.ok()) {
+      return CallError("querying job " + flags.job_id, s, flags.service.server);
+    }
+    if (static_cast<size_t>(response.attenuation_size()) != end - begin) {
+      return absl::DataLossError("the coordinator answered a different number of points");
+    }
+    for (size_t i = begin; i < end; ++i) {
+      PrintAttenuationLine(points[i], response.attenuation(i - begin));
+    }
+  }
+  return absl::OkStatus();
+}
+
+int RunQuery(const QueryFlags& flags) {
+  if (flags.pdsm_path.empty() == flags.job_id.empty()) {
+    return ReportError(absl::InvalidArgumentError(
+        "query: give either a PDSM file or --job JOB (with --server)"));
+  }
+  if (!flags.job_id.empty() && flags.service.server.empty()) {
+    return ReportError(absl::InvalidArgumentError("--job needs --server ADDR"));
+  }
+  absl::StatusOr<std::vector<QueryPoint>> points = ReadPointsCsv(flags.points_path);
+  if (!points.ok()) return ReportError(points.status());
+  const absl::Status s =
+      flags.job_id.empty() ? QueryLocal(flags, *points) : QueryRemote(flags, *points);
+  return s.ok() ? kExitOk : ReportError(s);
+}
+
+}  // namespace
+
+void RegisterQueryCommand(CLI::App& app, int* exit_code) {
+  auto flags = std::make_shared<QueryFlags>();
+  CLI::App* cmd = app.add_subcommand(
+      "query", "Attenuation at world points, from a PDSM file or a coordinator's job");
+  cmd->add_option("pdsm", flags->pdsm_path, "PDSM file (.exr)");
+  cmd->add_option("--points", flags->points_path, "Points file: one x,y,z per line")->required();
+  cmd->add_option("--job", flags->job_id, "A finished job on the coordinator, instead of a file");
+  AddServiceFlags(cmd, &flags->service, /*required=*/false);
+  cmd->callback([flags, exit_code] { *exit_code = RunQuery(*flags); });
+}
+
+}  // namespace pdsm

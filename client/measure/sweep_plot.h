@@ -1,0 +1,21 @@
+// DIR/sweep.png: a sweep's mean error against bake time on log-log axes, the Pareto front
+// joined, each point labelled with the knobs that vary in the sweep. Drawn by gnuplot from
+// DIR/sweep.csv alone, so `pdsm sweep --replot` can redraw a finished sweep.
+#ifndef PDSM_CLIENT_MEASURE_SWEEP_PLOT_H_
+#define PDSM_CLIENT_MEASURE_SWEEP_PLOT_H_
+
+#include <string>
+
+#include "absl/status/status.h"
+
+namespace pdsm {
+
+// Writes `png_path` (under a temporary name first) from the CSV WriteSweepCsv wrote.
+// NOT_FOUND when gnuplot is not installed; INVALID_ARGUMENT naming the file when the CSV is
+// not a sweep's; INTERNAL when gnuplot fails.
+absl::Status PlotSweep(const std::string& csv_path, const std::string& png_path,
+                       const std::string& title);
+
+}  // namespace pdsm
+
+#endif  // PDSM_CLIENT_MEASURE_SWEEP_PLOT_H_

@@ -1,0 +1,422 @@
+#include "core/pipeline/scheduler.h"
+
+#include <algorithm>
+#include <utility>
+
+#include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
+#include "core/bake/adaptive_sampling.h"
+
+namespace pdsm {
+
+// A lease is current from Issue() until it completes, fails or Tick() finds its deadline
+// passed; Extend() and Complete() in between are honoured even past the deadline, since no
+// other worker has been given the task yet and the work is not lost.
+
+bool Scheduler::JobKey::operator<(const JobKey& o) const {
+  if (priority != o.priority) return priority > o.priority;
+  if (sequence != o.sequence) return sequence < o.sequence;
+  return job_id < o.job_id;
+}
+
+Scheduler::Scheduler(SchedulerOptions options)
+    : options_(options), next_lease_id_(options.lease_id_base) {}
+
+void Scheduler::AddJob(const JobSpec& spec) {
+  Job& job = jobs_[spec.job_id];
+  job.key = {spec.priority, spec.sequence, spec.job_id};
+  // Nonsensical sizes become one sample per batch rather than tiles that never complete.
+  job.samples = std::max(1, spec.samples);
+  job.samples_per_task = std::max(1, spec.samples_per_task);
+  job.adaptive_min_samples = std::clamp(spec.adaptive_min_samples, 0, job.samples);
+  std::set<int> seen;
+  for (int tile : spec.tiles) {
+    if (seen.insert(tile).second) job.tile_order.push_back(tile);  // a repeat is the same tile
+  }
+  job.tiles_left = static_cast<int>(job.tile_order.size());
+  // Adaptive jobs: the tasks known so far (every tile's pilot); later stages add theirs.
+  job.tasks_left = int64_t{job.tiles_left} * static_cast<int64_t>(StageBatches(job, 0).size());
+  order_.insert(job.key);
+}
+
+std::optional<TaskLease> Scheduler::Lease(const std::string& worker_id, int64_t now_ms) {
+  Touch(worker_id, now_ms);
+  // With every tile slot taken only pending tasks of open tiles can go out, so the walk can
+  // skip the jobs that have none.
+  const std::set<JobKey>& walk = tiles_open_ < options_.max_open_tiles ? order_ : ready_;
+  for (const JobKey& key : walk) {
+    Job& job = jobs_.at(key.job_id);
+    if (Excluded(job, worker_id)) continue;
+    if (std::optional<TaskLease> lease = TryLease(job, worker_id, now_ms)) return lease;
+  }
+  return std::nullopt;
+}
+
+std::optional<TaskLease> Scheduler::TryLease(Job& job, const std::string& worker_id,
+                                             int64_t now_ms) {
+  // A worker skips only the tasks it failed on, fewer than max_worker_failures_per_job
+  // since it is not excluded.
+  for (const TaskRef& task : job.pending) {
+    const std::vector<std::pair<std::string, std::string>>& failures =
+        TileOf(job, task).tasks[task.second].failures;
+    const bool failed_here =
+        std::any_of(failures.begin(), failures.end(),
+                    [&](const auto& failure) { return failure.first == worker_id; });
+    if (!failed_here) return Issue(job, task, worker_id, now_ms);
+  }
+  // A freshly opened tile's first batch has failed on nobody.
+  if (OpenTile(job)) {
+    return Issue(job, {static_cast<int>(job.next_tile) - 1, 0}, worker_id, now_ms);
+  }
+  return std::nullopt;
+}
+
+bool Scheduler::OpenTile(Job& job) {
+  if (tiles_open_ >= options_.max_open_tiles || job.next_tile >= job.tile_order.size()) {
+    return false;
+  }
+  const int position = static_cast<int>(job.next_tile++);
+  Tile& tile = job.tiles[job.tile_order[position]];
+  tile.position = position;
+  AddTasks(job, tile, 0);
+  ++tiles_open_;
+  return true;
+}
+
+std::vector<std::pair<int, int>> Scheduler::StageBatches(const Job& job, int stage) {
+  std::vector<SampleRange> ranges;
+  if (job.adaptive_min_samples > 0) {
+    ranges = AdaptiveStageRanges(stage, job.adaptive_min_samples, job.samples);
+  } else if (stage == 0) {
+    ranges.push_back({0, job.samples});
+  }
+  std::vector<std::pair<int, int>> batches;
+  for (const SampleRange& r : ranges) {
+    for (int64_t b = r.begin; b < r.end; b += job.samples_per_task) {
+      batches.emplace_back(static_cast<int>(b),
+                           static_cast<int>(std::min<int64_t>(r.end, b + job.samples_per_task)));
+    }
+  }
+  return batches;
+}
+
+void Scheduler::AddTasks(Job& job, Tile& tile, int stage) {
+  tile.stage = stage;
+  tile.tasks_left = 0;
+  for (const auto& [begin, end] : StageBatches(job, stage)) {
+    job.pending.insert({tile.position, static_cast<int>(tile.tasks.size())});
+    Task task;
+    task.sample_begin = begin;
+    task.sample_end = end;
+    tile.tasks.push_back(std::move(task));
+    ++tile.tasks_left;
+  }
+  UpdateReady(job);
+}
+
+bool Scheduler::AddStage(const std::string& job_id, int tile_index) {
+  const auto job_it = jobs_.find(job_id);
+  if (job_it == jobs_.end() || job_it->second.adaptive_min_samples == 0) return false;
+  Job& job = job_it->second;
+  const auto tile_it = job.tiles.find(tile_index);
+  if (tile_it == job.tiles.end() || tile_it->second.tasks_left > 0) return false;
+  Tile& tile = tile_it->second;
+  const size_t added = StageBatches(job, tile.stage + 1).size();
+  if (added == 0) return false;
+  AddTasks(job, tile, tile.stage + 1);
+  job.tasks_left += static_cast<int64_t>(added);
+  return true;
+}
+
+TaskLease Scheduler::Issue(Job& job, TaskRef task, const std::string& worker_id, int64_t now_ms) {
+  const uint64_t lease_id = next_lease_id_++;
+  const int64_t deadline_ms = now_ms + options_.lease_ms;
+  job.pending.erase(task);
+  UpdateReady(job);
+  TileOf(job, task).tasks[task.second].lease_id = lease_id;
+  job.leases.insert(lease_id);
+  leases_[lease_id] = {job.key.job_id, task, worker_id, deadline_ms};
+  deadlines_.insert({deadline_ms, lease_id});
+
+  TaskLease lease;
+  lease.lease_id = lease_id;
+  lease.job_id = job.key.job_id;
+  lease.tile_index = job.tile_order[task.first];
+  const Task& t = TileOf(job, task).tasks[task.second];
+  lease.sample_begin = t.sample_begin;
+  lease.sample_end = t.sample_end;
+  lease.deadline_ms = deadline_ms;
+  return lease;
+}
+
+Scheduler::Tile& Scheduler::TileOf(Job& job, TaskRef task) {
+  return job.tiles.at(job.tile_order[task.first]);
+}
+
+absl::StatusOr<int64_t> Scheduler::Extend(const std::string& worker_id, uint64_t lease_id,
+                                          int64_t now_ms) {
+  Touch(worker_id, now_ms);
+  const LeaseMap::iterator it = FindCurrent(worker_id, lease_id);
+  if (it == leases_.end()) {
+    return absl::FailedPreconditionError(
+        absl::StrCat("lease ", lease_id, " is not a current lease of worker ", worker_id));
+  }
+  LeaseInfo& lease = it->second;
+  deadlines_.erase({lease.deadline_ms, lease_id});
+  lease.deadline_ms = now_ms + options_.lease_ms;
+  deadlines_.insert({lease.deadline_ms, lease_id});
+  return lease.deadline_ms;
+}
+
+ResultOutcome Scheduler::Complete(const std::string& worker_id, uint64_t lease_id, int64_t now_ms) {
+  Touch(worker_id, now_ms);
+  const LeaseMap::iterator it = FindCurrent(worker_id, lease_id);
+  if (it == leases_.end()) {
+    ++results_dropped_;
+    return {};
+  }
+  const LeaseInfo lease = TakeLease(it);
+  Job& job = jobs_.at(lease.job_id);
+  Tile& tile = TileOf(job, lease.task);
+  tile.tasks[lease.task.second].done = true;
+  --tile.tasks_left;
+  --job.tasks_left;
+  ++results_accepted_;
+
+  ResultOutcome outcome;
+  outcome.kind = tile.tasks_left == 0 ? ResultOutcome::kTileComplete : ResultOutcome::kAccepted;
+  outcome.job_id = lease.job_id;
+  outcome.tile_index = job.tile_order[lease.task.first];
+  outcome.sample_begin = tile.tasks[lease.task.second].sample_begin;
+  outcome.sample_end = tile.tasks[lease.task.second].sample_end;
+  return outcome;
+}
+
+std::optional<JobFailure> Scheduler::Fail(const std::string& worker_id, uint64_t lease_id,
+                                          const std::string& reason, bool handed_back,
+                                          int64_t now_ms) {
+  Touch(worker_id, now_ms);
+  const LeaseMap::iterator it = FindCurrent(worker_id, lease_id);
+  if (it == leases_.end()) return std::nullopt;  // stale: the task is already elsewhere
+  return FailTask(it, reason, handed_back);
+}
+
+std::vector<JobFailure> Scheduler::Tick(int64_t now_ms) {
+  std::vector<JobFailure> failures;
+  // A failing job takes its other leases out of deadlines_, so always restart at the front.
+  while (!deadlines_.empty() && deadlines_.begin()->first <= now_ms) {
+    const LeaseMap::iterator it = leases_.find(deadlines_.begin()->second);
+    ++leases_expired_;
+    const std::string reason = absl::StrCat("lease expired on worker ", it->second.worker_id);
+    if (std::optional<JobFailure> failure = FailTask(it, reason, /*handed_back=*/false)) {
+      failures.push_back(*std::move(failure));
+    }
+  }
+  ForgetInactiveWorkers(now_ms);
+  std::vector<JobFailure> stuck;
+  for (const auto& [job_id, job] : jobs_) {
+    if (std::optional<JobFailure> failure = CheckStuck(job)) {
+      stuck.push_back(*std::move(failure));
+    }
+  }
+  for (JobFailure& failure : stuck) {
+    RemoveJob(failure.job_id);
+    failures.push_back(std::move(failure));
+  }
+  return failures;
+}
+
+void Scheduler::TileAssembled(const std::string& job_id, int tile_index) {
+  const auto job_it = jobs_.find(job_id);
+  if (job_it == jobs_.end()) return;
+  Job& job = job_it->second;
+  const auto tile_it = job.tiles.find(tile_index);
+  if (tile_it == job.tiles.end() || tile_it->second.tasks_left > 0) return;
+  job.tiles.erase(tile_it);
+  --job.tiles_left;
+  --tiles_open_;
+}
+
+bool Scheduler::JobComplete(const std::string& job_id) const {
+  const auto it = jobs_.find(job_id);
+  return it != jobs_.end() && it->second.tiles_left == 0;
+}
+
+void Scheduler::RemoveJob(const std::string& job_id) {
+  const auto it = jobs_.find(job_id);
+  if (it == jobs_.end()) return;
+  Job& job = it->second;
+  for (uint64_t lease_id : job.leases) {
+    const LeaseMap::iterator lease = leases_.find(lease_id);
+    deadlines_.erase({lease->second.deadline_ms, lease_id});
+    leases_.erase(lease);
+  }
+  tiles_open_ -= static_cast<int>(job.tiles.size());
+  order_.erase(job.key);
+  ready_.erase(job.key);
+  jobs_.erase(it);
+}
+
+std::optional<TaskLease> Scheduler::FindLease(uint64_t lease_id) const {
+  const auto it = leases_.find(lease_id);
+  if (it == leases_.end()) return std::nullopt;
+  const LeaseInfo& info = it->second;
+  const Job& job = jobs_.at(info.job_id);
+  TaskLease lease;
+  lease.lease_id = lease_id;
+  lease.job_id = info.job_id;
+  lease.tile_index = job.tile_order[info.task.first];
+  const Task& task = job.tiles.at(lease.tile_index).tasks[info.task.second];
+  lease.sample_begin = task.sample_begin;
+  lease.sample_end = task.sample_end;
+  lease.deadline_ms = info.deadline_ms;
+  return lease;
+}
+
+bool Scheduler::HasJob(const std::string& job_id) const { return jobs_.contains(job_id); }
+
+SchedulerStats Scheduler::Stats(int64_t now_ms) const {
+  SchedulerStats stats;
+  for (const auto& [job_id, job] : jobs_) {
+    stats.tasks_pending += static_cast<int>(job.tasks_left - job.leases.size());
+  }
+  stats.tasks_leased = static_cast<int>(leases_.size());
+  stats.tiles_open = tiles_open_;
+  // Workers Tick() has not yet forgotten sit at the front.
+  int inactive = 0;
+  for (const auto& [seen_ms, worker_id] : workers_by_seen_) {
+    if (now_ms - seen_ms <= options_.worker_active_ms) break;
+    ++inactive;
+  }
+  stats.workers_active = static_cast<int>(workers_by_seen_.size()) - inactive;
+  stats.leases_expired = leases_expired_;
+  stats.results_dropped = results_dropped_;
+  stats.results_accepted = results_accepted_;
+  return stats;
+}
+
+Scheduler::LeaseMap::iterator Scheduler::FindCurrent(const std::string& worker_id,
+                                                     uint64_t lease_id) {
+  const LeaseMap::iterator it = leases_.find(lease_id);
+  if (it == leases_.end() || it->second.worker_id != worker_id) return leases_.end();
+  return it;
+}
+
+Scheduler::LeaseInfo Scheduler::TakeLease(LeaseMap::iterator it) {
+  LeaseInfo lease = std::move(it->second);
+  const uint64_t lease_id = it->first;
+  leases_.erase(it);
+  deadlines_.erase({lease.deadline_ms, lease_id});
+  Job& job = jobs_.at(lease.job_id);
+  job.leases.erase(lease_id);
+  TileOf(job, lease.task).tasks[lease.task.second].lease_id.reset();
+  return lease;
+}
+
+void Scheduler::Requeue(Job& job, TaskRef task) {
+  job.pending.insert(task);
+  UpdateReady(job);
+}
+
+std::optional<JobFailure> Scheduler::FailTask(LeaseMap::iterator it, const std::string& reason,
+                                              bool handed_back) {
+  const LeaseInfo lease = TakeLease(it);
+  Job& job = jobs_.at(lease.job_id);
+  if (!handed_back) {
+    std::optional<JobFailure> failure = CountFailure(job, lease.task, lease.worker_id, reason);
+    if (failure) {
+      RemoveJob(lease.job_id);
+      return failure;
+    }
+  }
+  Requeue(job, lease.task);
+  return std::nullopt;
+}
+
+std::optional<JobFailure> Scheduler::CountFailure(Job& job, TaskRef task,
+                                                  const std::string& worker_id,
+                                                  const std::string& reason) {
+  ++job.worker_failures[worker_id];
+  job.last_failure = reason;
+  std::vector<std::pair<std::string, std::string>>& failures =
+      TileOf(job, task).tasks[task.second].failures;
+  failures.emplace_back(worker_id, reason);
+  if (static_cast<int>(failures.size()) < options_.max_task_failures) return std::nullopt;
+
+  const int64_t begin = TileOf(job, task).tasks[task.second].sample_begin;
+  const int64_t end = TileOf(job, task).tasks[task.second].sample_end;
+  std::string why = absl::StrCat("tile ", job.tile_order[task.first], " samples [", begin, ", ",
+                                 end, ") failed on ", failures.size(), " workers:");
+  for (const auto& [worker, what] : failures) absl::StrAppend(&why, " ", worker, ": ", what, ";");
+  why.pop_back();
+  return JobFailure{job.key.job_id, std::move(why)};
+}
+
+bool Scheduler::Excluded(const Job& job, const std::string& worker_id) const {
+  const auto it = job.worker_failures.find(worker_id);
+  return it != job.worker_failures.end() && it->second >= options_.max_worker_failures_per_job;
+}
+
+bool Scheduler::FailedAllRemaining(const Job& job, const std::string& worker_id) const {
+  // Each failure is on a different task, so fewer failures than tasks left settles it, and
+  // nobody has failed a task of an unopened tile.
+  const auto it = job.worker_failures.find(worker_id);
+  if (it == job.worker_failures.end() || it->second < job.tasks_left) return false;
+  if (job.next_tile < job.tile_order.size()) return false;
+  for (const auto& [tile_index, tile] : job.tiles) {
+    for (const Task& task : tile.tasks) {
+      if (task.done) continue;
+      const bool failed_here =
+          std::any_of(task.failures.begin(), task.failures.end(),
+                      [&](const auto& failure) { return failure.first == worker_id; });
+      if (!failed_here) return false;
+    }
+  }
+  return true;
+}
+
+std::optional<JobFailure> Scheduler::CheckStuck(const Job& job) const {
+  if (job.tasks_left == 0) return std::nullopt;
+  // Only workers that failed in this job can be unable to run it; if some active worker has
+  // not, it can, and with ForgetInactiveWorkers() just run workers_by_seen_ is the active set.
+  const size_t active = workers_by_seen_.size();
+  if (active == 0 || active > job.worker_failures.size()) return std::nullopt;
+  for (const auto& [seen_ms, worker_id] : workers_by_seen_) {
+    if (!Excluded(job, worker_id) && !FailedAllRemaining(job, worker_id)) return std::nullopt;
+  }
+  return JobFailure{
+      job.key.job_id,
+      absl::StrCat(
+          "no worker can run the job: every active worker (", active,
+          ") is excluded from it after ", options_.max_worker_failures_per_job,
+          " failures or has failed all its remaining tasks; last failure: ", job.last_failure)};
+}
+
+void Scheduler::UpdateReady(const Job& job) {
+  if (job.pending.empty()) {
+    ready_.erase(job.key);
+  } else {
+    ready_.insert(job.key);
+  }
+}
+
+void Scheduler::Touch(const std::string& worker_id, int64_t now_ms) {
+  auto [it, inserted] = worker_seen_ms_.try_emplace(worker_id, now_ms);
+  if (!inserted) {
+    if (it->second >= now_ms) return;  // a call from the past changes nothing
+    workers_by_seen_.erase({it->second, worker_id});
+    it->second = now_ms;
+  }
+  workers_by_seen_.insert({now_ms, worker_id});
+}
+
+void Scheduler::ForgetInactiveWorkers(int64_t now_ms) {
+  // Forgetting them keeps the worker tables the size of the active farm despite churn.
+  while (!workers_by_seen_.empty() &&
+         now_ms - workers_by_seen_.begin()->first > options_.worker_active_ms) {
+    worker_seen_ms_.erase(workers_by_seen_.begin()->second);
+    workers_by_seen_.erase(workers_by_seen_.begin());
+  }
+}
+
+}  // namespace pdsm

@@ -1,0 +1,281 @@
+#include "core/pipeline/tile_file.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <bit>
+#include <cerrno>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <string_view>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/string_view.h"
+#include "core/util/little_endian.h"
+
+namespace pdsm {
+namespace {
+
+constexpr char kMagic[8] = {'P', 'D', 'S', 'M', 'T', 'I', 'L', 'E'};
+// magic, version, x0, y0, width, height, offset_count, vertex_count.
+constexpr size_t kHeaderBytes = sizeof(kMagic) + 4 + 4 * 4 + 8 + 8;
+constexpr size_t kChecksumBytes = 8;
+constexpr size_t kOffsetBytes = 8;
+constexpr size_t kVertexBytes = 8;  // float z, float a
+// Version 2 (tiles of adaptive bakes) appends int32 samples after the vertices.
+constexpr uint32_t kFixedSamplesVersion = 1;
+constexpr size_t kSamplesBytes = 4;
+
+// FNV-1a, 64 bits.
+uint64_t Checksum(std::string_view bytes) {
+  uint64_t hash = 0xcbf29ce484222325ull;
+  for (const char c : bytes) {
+    hash ^= static_cast<unsigned char>(c);
+    hash *= 0x100000001b3ull;
+  }
+  return hash;
+}
+
+
+absl::Status ErrnoStatus(int error_number, absl::string_view message) {
+  return error_number != 0 ? absl::ErrnoToStatus(error_number, message)
+                           : absl::UnknownError(message);
+}
+
+// ErrnoStatus of the errno now: read before anything (such as building the message) can
+// change it.
+absl::Status LastErrnoStatus(const char* action, const std::string& name, const char* more = "") {
+  const int error_number = errno;
+  return ErrnoStatus(error_number, absl::StrCat(action, " ", name, more));
+}
+
+absl::Status CheckTileForWrite(const PdsmTile& tile, const std::string& path) {
+  const auto bad = [&](absl::string_view what) {
+    return absl::InvalidArgumentError(absl::StrFormat("%s: tile at (%d, %d) size %dx%d: %s", path,
+                                                      tile.x0, tile.y0, tile.width, tile.height,
+                                                      what));
+  };
+  if (tile.x0 < 0 || tile.y0 < 0 || tile.width < 0 || tile.height < 0) {
+    return bad("negative corner or size");
+  }
+  const uint64_t pixels = static_cast<uint64_t>(tile.width) * static_cast<uint64_t>(tile.height);
+  if (tile.offsets.size() != pixels + 1) {
+    return bad(absl::StrFormat("%d offsets, expected %d", tile.offsets.size(), pixels + 1));
+  }
+  if (tile.offsets[0] != 0 || tile.offsets.back() != tile.vertices.size()) {
+    return bad(absl::StrFormat("offsets do not span the %d vertices", tile.vertices.size()));
+  }
+  for (size_t p = 0; p < pixels; ++p) {
+    if (tile.offsets[p + 1] < tile.offsets[p]) {
+      return bad(absl::StrFormat("offsets decrease at pixel %d", p));
+    }
+  }
+  return absl::OkStatus();
+}
+
+std::string Encode(const PdsmTile& tile) {
+  // Fixed-count tiles keep version 1, byte for byte.
+  const bool adaptive = tile.samples > 0;
+  const size_t size = kHeaderBytes + tile.offsets.size() * kOffsetBytes +
+                      tile.vertices.size() * kVertexBytes + (adaptive ? kSamplesBytes : 0) +
+                      kChecksumBytes;
+  std::string bytes(size, '\0');
+  ByteWriter out(bytes.data());
+  out.Bytes(kMagic, sizeof(kMagic));
+  out.U32(adaptive ? kTileFileVersion : kFixedSamplesVersion);
+  out.I32(tile.x0);
+  out.I32(tile.y0);
+  out.I32(tile.width);
+  out.I32(tile.height);
+  out.U64(tile.offsets.size());
+  out.U64(tile.vertices.size());
+  for (const uint64_t offset : tile.offsets) out.U64(offset);
+  for (const Vertex& v : tile.vertices) {
+    out.F32(v.z);
+    out.F32(v.a);
+  }
+  if (adaptive) out.I32(tile.samples);
+  out.U64(Checksum(std::string_view(bytes).substr(0, size - kChecksumBytes)));
+  return bytes;
+}
+
+// Writes `bytes` to a new file at `temp` and syncs it to the disk.
+absl::Status WriteSynced(const std::string& temp, const std::string& bytes) {
+  std::FILE* file = std::fopen(temp.c_str(), "wb");
+  if (file == nullptr) return LastErrnoStatus("cannot create", temp);
+  absl::Status status;
+  if (std::fwrite(bytes.data(), 1, bytes.size(), file) != bytes.size()) {
+    status = LastErrnoStatus("cannot write", temp);
+  } else if (std::fflush(file) != 0) {
+    status = LastErrnoStatus("cannot flush", temp);
+  } else if (::fsync(::fileno(file)) != 0) {
+    // Before the rename: a crash must not leave a renamed file with missing bytes.
+    status = LastErrnoStatus("cannot sync", temp);
+  }
+  if (std::fclose(file) != 0 && status.ok()) {
+    status = LastErrnoStatus("cannot close", temp);
+  }
+  return status;
+}
+
+// Syncs the folder holding `path`, so that a rename into it survives a crash.
+absl::Status SyncParentDir(const std::string& path) {
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  const std::string dir = parent.empty() ? std::string(".") : parent.string();
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return LastErrnoStatus("cannot open folder", dir, " to sync it");
+  absl::Status status;
+  if (::fsync(fd) != 0) status = LastErrnoStatus("cannot sync folder", dir);
+  ::close(fd);
+  return status;
+}
+
+// The whole file. NOT_FOUND when there is none.
+absl::StatusOr<std::string> ReadWholeFile(const std::string& path) {
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (file == nullptr) {
+    const int error_number = errno;
+    if (error_number == ENOENT) return absl::NotFoundError(absl::StrCat("no tile file ", path));
+    return ErrnoStatus(error_number, absl::StrCat("cannot open ", path));
+  }
+  struct stat info;
+  if (::fstat(::fileno(file), &info) != 0) {
+    const int error_number = errno;
+    std::fclose(file);
+    return ErrnoStatus(error_number, absl::StrCat("cannot stat ", path));
+  }
+  if (!S_ISREG(info.st_mode)) {
+    std::fclose(file);
+    return absl::DataLossError(absl::StrCat(path, ": not a regular file"));
+  }
+  // The file's real length bounds the allocation, whatever its header says.
+  std::string bytes(static_cast<size_t>(info.st_size), '\0');
+  const size_t read = std::fread(bytes.data(), 1, bytes.size(), file);
+  const bool failed = std::ferror(file) != 0;
+  const int error_number = errno;
+  std::fclose(file);
+  if (failed) return ErrnoStatus(error_number, absl::StrCat("cannot read ", path));
+  if (read != bytes.size()) {
+    return absl::DataLossError(absl::StrFormat("%s: file shrank while being read (%d of %d bytes)",
+                                               path, read, bytes.size()));
+  }
+  return bytes;
+}
+
+absl::StatusOr<PdsmTile> Decode(const std::string& bytes, const std::string& path) {
+  const auto corrupt = [&](absl::string_view what) {
+    return absl::DataLossError(absl::StrCat("tile file ", path, ": ", what));
+  };
+  const size_t size = bytes.size();
+  if (size < kHeaderBytes + kOffsetBytes + kChecksumBytes) {
+    return corrupt(absl::StrFormat("truncated (%d bytes, a tile file has at least %d)", size,
+                                   kHeaderBytes + kOffsetBytes + kChecksumBytes));
+  }
+  if (std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0) {
+    return corrupt("not a tile file (bad magic)");
+  }
+  ByteReader in(bytes.data() + sizeof(kMagic));
+  const uint32_t version = in.U32();
+  PdsmTile tile;
+  tile.x0 = in.I32();
+  tile.y0 = in.I32();
+  tile.width = in.I32();
+  tile.height = in.I32();
+  const uint64_t offset_count = in.U64();
+  const uint64_t vertex_count = in.U64();
+  const size_t trailer = version == kTileFileVersion ? kSamplesBytes : 0;
+  if (version == kTileFileVersion || version == kFixedSamplesVersion) {
+    // Sizes first, for a better message than a checksum mismatch on a truncated file.
+    if (tile.x0 < 0 || tile.y0 < 0 || tile.width < 0 || tile.height < 0) {
+      return corrupt(absl::StrFormat("negative corner or size (%d, %d) %dx%d", tile.x0, tile.y0,
+                                     tile.width, tile.height));
+    }
+    const uint64_t pixels = static_cast<uint64_t>(tile.width) * static_cast<uint64_t>(tile.height);
+    if (offset_count != pixels + 1) {
+      return corrupt(absl::StrFormat("%d offsets for %dx%d pixels, expected %d", offset_count,
+                                     tile.width, tile.height, pixels + 1));
+    }
+    // Both counts are at most size / 8 before they are multiplied: no overflow.
+    if (offset_count > size / kOffsetBytes || vertex_count > size / kVertexBytes ||
+        kHeaderBytes + offset_count * kOffsetBytes + vertex_count * kVertexBytes + trailer +
+                kChecksumBytes !=
+            size) {
+      return corrupt(absl::StrFormat(
+          "%d bytes, but its header describes %d offsets and %d vertices (truncated?)", size,
+          offset_count, vertex_count));
+    }
+  }
+  const uint64_t stored_checksum = ByteReader(bytes.data() + size - kChecksumBytes).U64();
+  if (stored_checksum != Checksum(std::string_view(bytes).substr(0, size - kChecksumBytes))) {
+    return corrupt("checksum mismatch");
+  }
+  if (version > kTileFileVersion) {
+    return absl::FailedPreconditionError(
+        absl::StrFormat("tile file %s: version %d is newer than this build reads (%d)", path,
+                        version, kTileFileVersion));
+  }
+  if (version != kTileFileVersion && version != kFixedSamplesVersion) {
+    return corrupt(absl::StrCat("invalid version ", version));
+  }
+
+  tile.offsets.resize(offset_count);
+  for (uint64_t& offset : tile.offsets) offset = in.U64();
+  if (tile.offsets[0] != 0) return corrupt("the first offset is not 0");
+  for (size_t p = 0; p + 1 < tile.offsets.size(); ++p) {
+    if (tile.offsets[p + 1] < tile.offsets[p]) {
+      return corrupt(absl::StrFormat("offsets decrease at pixel %d", p));
+    }
+  }
+  if (tile.offsets.back() != vertex_count) {
+    return corrupt(absl::StrFormat("the last offset %d is not the vertex count %d",
+                                   tile.offsets.back(), vertex_count));
+  }
+  tile.vertices.resize(vertex_count);
+  for (Vertex& v : tile.vertices) {
+    v.z = in.F32();
+    v.a = in.F32();
+  }
+  if (trailer > 0) {
+    tile.samples = in.I32();
+    if (tile.samples < 1) return corrupt(absl::StrFormat("%d samples", tile.samples));
+  }
+  return tile;
+}
+
+}  // namespace
+
+absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile) {
+  if (absl::Status s = CheckTileForWrite(tile, path); !s.ok()) return s;
+  const std::string bytes = Encode(tile);
+  const std::string temp = path + ".tmp";
+  if (absl::Status s = WriteSynced(temp, bytes); !s.ok()) {
+    std::remove(temp.c_str());
+    return absl::Status(s.code(), absl::StrCat(s.message(), " (writing tile file ", path, ")"));
+  }
+  if (std::rename(temp.c_str(), path.c_str()) != 0) {
+    const int error_number = errno;
+    std::remove(temp.c_str());
+    return ErrnoStatus(error_number, absl::StrCat("cannot rename ", temp, " to ", path));
+  }
+  if (absl::Status s = SyncParentDir(path); !s.ok()) {
+    return absl::Status(s.code(), absl::StrCat(s.message(), " (after writing ", path, ")"));
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<PdsmTile> ReadTileFile(const std::string& path) {
+  absl::StatusOr<std::string> bytes = ReadWholeFile(path);
+  if (!bytes.ok()) return bytes.status();
+  return Decode(*bytes, path);
+}
+
+absl::StatusOr<PdsmTile> DecodeTileFile(const std::string& bytes, const std::string& label) {
+  return Decode(bytes, label);
+}
+
+}  // namespace pdsm

@@ -1,0 +1,50 @@
+// Local single-node bake: the same planner, worker tasks and tile assembly as the distributed
+// service, run in one process by a pool of threads (each with its own OSMesa context).
+#ifndef PDSM_WORKER_LOCAL_BAKE_H_
+#define PDSM_WORKER_LOCAL_BAKE_H_
+
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "absl/status/statusor.h"
+#include "core/scene/scene.h"
+#include "core/pipeline/tile_assembly.h"
+#include "worker/bake_task.h"
+
+namespace pdsm {
+
+struct BakeProgress {
+  int64_t tasks_done = 0;
+  int64_t tasks_total = 0;
+  double seconds = 0;
+};
+
+struct LocalBakeOptions {
+  std::string output_path;   // the .exr; written under a temporary name, renamed at the end
+  std::string preview_path;  // a .png of the receivers' attenuation seen from the light; "" none
+  int threads = 0;           // 0: one per core
+  int samples_per_task = 0;  // light samples per task; 0: all of a tile's samples in one task
+  // Called from worker threads, serialized, after each task.
+  std::function<void(const BakeProgress&)> on_progress;
+};
+
+struct BakeSummary {
+  double seconds = 0;
+  int tiles = 0;
+  int tiles_all_lit = 0;  // tiles with no event at all (no caster can reach their rays)
+  int64_t tasks = 0;
+  int64_t tile_samples_total = 0;  // light samples summed over tiles (adaptive bakes: < max)
+  TaskStats tasks_stats;          // summed over threads (thread-seconds)
+  AssemblyStats assembly;
+  uint64_t file_bytes = 0;
+};
+
+// Same scene and parameters give the same file bytes whatever `threads` and
+// `samples_per_task`. On error nothing is left at output_path. Adaptive scenes
+// (bake.adaptiveTolerance > 0) are baked by worker/adaptive_bake.h.
+absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOptions& options);
+
+}  // namespace pdsm
+
+#endif  // PDSM_WORKER_LOCAL_BAKE_H_
