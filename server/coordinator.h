@@ -1,37 +1,42 @@
-// The coordinator's logic behind both gRPC services (jobs_service.h, workers_service.h): jobs
-// and their state on disk, assets, scheduling, tile assembly and the final PDSM. The services
-// only translate messages and check callers; everything here speaks absl::Status.
-//
-// On disk under data_dir: jobs.db (SQLite, job_store.h), assets/ (asset_store.h), and per job
-// jobs/<id>/tiles/<index>.tile (assembled tiles, tile_file.h) then jobs/<id>/pdsm.exr. A tile
-// is durable once its row is in jobs.db; the PDSM is written from the tile files when every
-// tile is, so a restart resumes each unfinished job with only its missing tiles.
+// The coordinator's logic behind both gRPC services (jobs_service.h, workers_service.h). The
+// services only translate messages and check callers; everything here speaks absl::Status.
+// It is the bake engine (core/pipeline/bake_engine.h, the same one the local bake runs) plus
+// what a service needs around it, each in its own file:
+//   job_admission.h      what a submitted job must satisfy, planning within the limits
+//   job_store.h          job state in SQLite (jobs.db), so jobs survive a restart
+//   stored_job.h         where a running job's tiles and PDSM go (DATA_DIR/jobs/<id>/)
+//   coordinator_assets.h uploaded mesh blobs (DATA_DIR/assets/)
+//   query_cache.h        the PDSM QueryAttenuation reads
+// On start every unfinished job found in the data dir resumes with only its missing tiles.
 //
 // Thread-safe. Heavy work (tile assembly, the final file) runs on an internal pool, never on
 // the caller's thread, except SubmitBake's scene validation and planning.
 #ifndef PDSM_SERVER_COORDINATOR_H_
 #define PDSM_SERVER_COORDINATOR_H_
 
-#include <condition_variable>
 #include <cstdint>
-#include <deque>
-#include <functional>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
+#include <glm/glm.hpp>
+
+#include "absl/base/thread_annotations.h"
 #include "absl/status/statusor.h"
-#include "core/assets/asset_store.h"
-#include "core/bake/bake_plan.h"
+#include "absl/synchronization/mutex.h"
+#include "absl/synchronization/notification.h"
 #include "core/events/event.h"
+#include "core/pipeline/bake_engine.h"
+#include "core/util/work_queue.h"
 #include "pdsm/v1/jobs.pb.h"
 #include "pdsm/v1/workers.pb.h"
+#include "server/coordinator_assets.h"
+#include "server/job_admission.h"
 #include "server/job_store.h"
-#include "core/pipeline/scheduler.h"
+#include "server/query_cache.h"
+#include "server/stored_job.h"
 
 namespace pdsm {
 
@@ -43,10 +48,7 @@ struct CoordinatorOptions {
   int max_task_failures = 3;
   int max_worker_failures = 3;
   int assembly_threads = 1;
-  // Admission limits (RESOURCE_EXHAUSTED above them).
-  int64_t max_job_pixels = int64_t{8192} * 8192;
-  int max_samples = 65536;
-  int64_t max_triangles = 20'000'000;
+  AdmissionLimits limits;         // RESOURCE_EXHAUSTED above them
   int64_t max_asset_bytes = int64_t{1} << 30;
 };
 
@@ -57,10 +59,7 @@ class Coordinator {
   ~Coordinator();  // stops the pool and the ticker; unfinished work stays on disk
 
   // ---- Job API ----
-  std::vector<std::string> FindMissingAssets(const std::vector<std::string>& sha256) const;
-  // Stores a complete blob. INVALID_ARGUMENT (bad hash or content), RESOURCE_EXHAUSTED (size).
-  absl::Status PutAsset(const std::string& sha256, std::string_view bytes);
-  int64_t max_asset_bytes() const { return options_.max_asset_bytes; }
+  CoordinatorAssets& assets() { return *assets_; }
   absl::StatusOr<pdsm::v1::Job> SubmitBake(const pdsm::v1::SubmitBakeRequest& request);
   absl::StatusOr<pdsm::v1::Job> GetJob(const std::string& job_id);
   absl::StatusOr<std::vector<pdsm::v1::Job>> ListJobs(int limit);
@@ -78,6 +77,7 @@ class Coordinator {
 
   // ---- Worker API ----
   std::optional<pdsm::v1::Task> LeaseTask(const std::string& worker_id);
+  // The lease's length in ms. FAILED_PRECONDITION when the lease is not current.
   absl::StatusOr<int64_t> ExtendLease(const std::string& worker_id, uint64_t lease_id);
   // False when the result was dropped (late, duplicate, job gone). INVALID_ARGUMENT when the
   // events do not fit the task's tile.
@@ -85,60 +85,35 @@ class Coordinator {
                                     const pdsm::v1::TileEventsData& events);
   void ReportFailure(const std::string& worker_id, uint64_t lease_id, const std::string& reason,
                      bool handed_back);
+  // FAILED_PRECONDITION when the job is not running.
   absl::StatusOr<pdsm::v1::GetJobSceneResponse> JobScene(const std::string& job_id);
-  absl::StatusOr<std::string> GetAsset(const std::string& sha256) const;
 
  private:
-  struct ActiveJob;
   explicit Coordinator(const CoordinatorOptions& options);
   absl::Status Resume();
-  // `plan`: the job's plan when the caller has it (a new job); else planned from the record.
+  // Hands the job to the engine. `plan`: the job's plan when the caller has it (a new job);
+  // otherwise planned from the record's scene.
   absl::Status Activate(const JobRecord& record, const std::vector<int>& done_tiles,
                         std::optional<BakePlan> plan);
-  absl::StatusOr<std::shared_ptr<ActiveJob>> LoadActive(const JobRecord& record,
-                                                        std::optional<BakePlan> plan);
-  absl::StatusOr<BakePlan> PlanFromScene(const pdsm::v1::Scene& scene, const std::string& label,
-                                         bool enforce_limits) const;
+  std::shared_ptr<StoredJob> Active(const std::string& job_id) const;
+  void Forget(const std::string& job_id);
+  // The job as the API shows it: the stored record, with the engine's progress while it runs.
   pdsm::v1::Job ToProto(const JobRecord& record) const;
-  // `tile_samples` > 0: an adaptive tile baked with that many samples; 0: a fixed-count one.
-  void AssembleAndStore(std::shared_ptr<ActiveJob> job, int tile_index,
-                        std::vector<std::pair<int, TileEvents>> parts, int tile_samples);
-  // Adaptive jobs: after a tile's stage, assemble the tile or queue its next stage
-  // (docs/algorithms.md section 9).
-  void JudgeStage(std::shared_ptr<ActiveJob> job, int tile_index,
-                  std::vector<std::pair<int, TileEvents>> parts);
-  void FinishJob(std::shared_ptr<ActiveJob> job);
-  void EndJob(const std::string& job_id, pdsm::v1::JobState state, const std::string& error);
-  void Post(std::function<void()> work);
-  void PoolLoop();
-  void TickLoop();
-  std::string JobDir(const std::string& job_id) const;
-  std::string TilesDir(const std::string& job_id) const;
-  std::string TilePath(const std::string& job_id, int tile_index) const;
-  int64_t NowMs() const;
+  void TickUntilStopped();
 
   const CoordinatorOptions options_;
   std::unique_ptr<JobStore> store_;
-  std::unique_ptr<AssetStore> assets_;
+  std::unique_ptr<CoordinatorAssets> assets_;
+  QueryCache query_cache_;
+  const int64_t started_ms_;
 
-  std::mutex mu_;  // guards everything below up to pool_mu_
-  Scheduler scheduler_;
-  std::map<std::string, std::shared_ptr<ActiveJob>> active_;
-  std::deque<std::pair<int64_t, int64_t>> recent_results_;  // (time ms, events), last 60 s
-  int64_t started_ms_ = 0;
-  bool stopping_ = false;
-  std::condition_variable tick_cv_;
-
-  std::mutex pool_mu_;
-  std::condition_variable pool_cv_;
-  std::deque<std::function<void()>> pool_queue_;
-  bool pool_stopping_ = false;
-  std::vector<std::thread> pool_;
-  std::thread ticker_;
-
-  std::mutex query_mu_;  // the last queried PDSM, kept for repeated queries
-  std::string query_job_;
-  std::shared_ptr<const struct PdsmImage> query_image_;
+  BakeEngine engine_;
+  mutable absl::Mutex mu_;
+  std::map<std::string, std::shared_ptr<StoredJob>> active_ ABSL_GUARDED_BY(mu_);
+  absl::Notification stopping_;
+  // Declared last: destroyed (stopped, joined) first, while what its work uses still exists.
+  // Runs the ticker and the engine's heavy work.
+  WorkQueue pool_;
 };
 
 }  // namespace pdsm

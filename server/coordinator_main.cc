@@ -180,11 +180,11 @@ int main(int argc, char** argv) {
   app.add_option("--max-message-bytes", flags.max_message_bytes,
                  "Largest request accepted (RESOURCE_EXHAUSTED above)")
       ->check(CLI::Range(1 << 16, 1 << 30))->capture_default_str();
-  app.add_option("--max-job-pixels", o.max_job_pixels, "Largest PDSM (width x height)")
+  app.add_option("--max-job-pixels", o.limits.max_job_pixels, "Largest PDSM (width x height)")
       ->check(CLI::PositiveNumber)->capture_default_str();
-  app.add_option("--max-samples", o.max_samples, "Most light samples per job")
+  app.add_option("--max-samples", o.limits.max_samples, "Most light samples per job")
       ->check(CLI::Range(1, 65536))->capture_default_str();
-  app.add_option("--max-triangles", o.max_triangles, "Most triangles per job")
+  app.add_option("--max-triangles", o.limits.max_triangles, "Most triangles per job")
       ->check(CLI::PositiveNumber)->capture_default_str();
   app.add_option("--max-asset-bytes", o.max_asset_bytes, "Largest mesh asset")
       ->check(CLI::PositiveNumber)->capture_default_str();

@@ -34,10 +34,10 @@ class UploadReactor final : public grpc::ServerReadReactor<pdsm::v1::AssetChunk>
         return Fail(absl::InvalidArgumentError(
             "sha256: the first chunk must name the blob's 64-hex-digit SHA-256"));
       }
-      if (static_cast<int64_t>(chunk_.total_bytes()) > coordinator_->max_asset_bytes()) {
+      if (static_cast<int64_t>(chunk_.total_bytes()) > coordinator_->assets().max_asset_bytes()) {
         return Fail(absl::ResourceExhaustedError(
             absl::StrCat("total_bytes: ", chunk_.total_bytes(), " is above the asset limit of ",
-                         coordinator_->max_asset_bytes())));
+                         coordinator_->assets().max_asset_bytes())));
       }
       expected_bytes_ = chunk_.total_bytes();
       // Grow with the data, not with the claim: a client may announce more than it sends.
@@ -60,7 +60,7 @@ class UploadReactor final : public grpc::ServerReadReactor<pdsm::v1::AssetChunk>
       return Fail(absl::InvalidArgumentError(absl::StrCat(
           "data: got ", blob_.size(), " bytes, total_bytes announced ", expected_bytes_)));
     }
-    if (absl::Status s = coordinator_->PutAsset(sha256_, blob_); !s.ok()) return Fail(s);
+    if (absl::Status s = coordinator_->assets().Put(sha256_, blob_); !s.ok()) return Fail(s);
     response_->set_sha256(sha256_);
     response_->set_bytes(blob_.size());
     spdlog::info("asset {}: stored, {} bytes", sha256_, blob_.size());
@@ -151,7 +151,7 @@ grpc::ServerUnaryReactor* JobsService::FindMissingAssets(
     }
     hashes.push_back(request->sha256(i));
   }
-  for (std::string& h : coordinator_->FindMissingAssets(hashes)) {
+  for (std::string& h : coordinator_->assets().FindMissing(hashes)) {
     response->add_missing_sha256(std::move(h));
   }
   return Answer(context, grpc::Status::OK);

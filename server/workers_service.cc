@@ -124,7 +124,7 @@ grpc::ServerWriteReactor<pdsm::v1::AssetData>* WorkersService::FetchAsset(
   if (grpc::Status s = auth_->Check(context, Audience::kWorker); !s.ok()) {
     return new RefusedStream<grpc::ServerWriteReactor<pdsm::v1::AssetData>>(s);
   }
-  return new AssetReactor(coordinator_->GetAsset(request->sha256()));
+  return new AssetReactor(coordinator_->assets().Get(request->sha256()));
 }
 
 }  // namespace pdsm

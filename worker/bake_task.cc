@@ -140,6 +140,7 @@ absl::Status TaskRunner::UploadCasters(const TileReach& reach) {
       positions.push_back(plan_.casters.positions[plan_.casters.indices[3 * tri + k]]);
     }
   }
+  receivers_uploaded_ = false;
   return renderer_->SetGeometry(positions, indices);
 }
 
@@ -148,8 +149,14 @@ absl::StatusOr<TileEvents> TaskRunner::Run(const BakeTask& task, TaskStats* stat
   const TileRect& tile = plan_.tiles.at(task.tile_index);
   TileEvents result = EmptyTileEvents(tile);
   if (task.sample_begin >= task.sample_end) return result;
+  // Nothing can shadow these rays: all lit, no shadow map. Counted once per tile, at the
+  // batch that starts its samples.
+  if (!TileHasCasters(plan_, tile)) {
+    if (task.sample_begin == 0) ++stats->tiles_skipped;
+    return result;
+  }
   const TileReach reach = ComputeTileReach(plan_, tile);
-  if (reach.empty()) return result;  // nothing can shadow these rays: all lit, no work
+  if (reach.empty()) return result;
   std::optional<TileWindows> windows;
   if (plan_.header.surfaces_only) windows = ComputeReceiverWindows(plan_, tile);
   const std::vector<BlockScan> blocks = ScannedBlocks(plan_, reach, windows);
@@ -216,9 +223,13 @@ absl::StatusOr<TileEvents> TaskRunner::Run(const BakeTask& task, TaskStats* stat
 
 absl::StatusOr<std::vector<float>> TaskRunner::ReceiverDepth(const TileRect& tile) {
   // The light-centre view of the receivers on the PDSM's own pixel grid.
-  if (absl::Status s = renderer_->SetGeometry(plan_.receivers.positions, plan_.receivers.indices);
-      !s.ok()) {
-    return s;
+  if (!receivers_uploaded_) {
+    if (absl::Status s =
+            renderer_->SetGeometry(plan_.receivers.positions, plan_.receivers.indices);
+        !s.ok()) {
+      return s;
+    }
+    receivers_uploaded_ = true;
   }
   const PdsmGeometry& g = plan_.geometry();
   ShadowMapCamera camera;

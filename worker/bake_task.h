@@ -19,8 +19,7 @@ namespace pdsm {
 
 struct BakeTask {
   int tile_index = 0;
-  // [sample_begin, sample_end) of plan.samples. Empty: a tile no caster reaches, returned
-  // all lit at once (no reach, no shadow map).
+  // [sample_begin, sample_end) of plan.samples. Empty: returned all lit at once.
   int sample_begin = 0;
   int sample_end = 0;
 };
@@ -32,7 +31,7 @@ struct TaskStats {
   int64_t shadow_map_texels = 0;
   int64_t events = 0;             // before merging
   int64_t texels_walked = 0;      // shadow-map texels visited by scan conversion
-  int64_t tiles_skipped = 0;      // tasks of tiles no caster reaches (no shadow map at all)
+  int64_t tiles_skipped = 0;      // tiles no caster reaches (no shadow map at all)
   int64_t ray_segments = 0;       // ray pieces scan-converted (rays x samples, x windows)
   void Add(const TaskStats& o);
 };
@@ -49,7 +48,8 @@ class TaskRunner {
                                  const std::function<bool()>& cancelled = nullptr);
 
   // Light-space depth of the nearest receiver seen along each PDSM ray of the tile (the
-  // preview's surface), +infinity where none; row-major over the tile.
+  // preview's surface), +infinity where none; row-major over the tile. Consecutive calls
+  // upload the receivers once.
   absl::StatusOr<std::vector<float>> ReceiverDepth(const TileRect& tile);
 
  private:
@@ -59,6 +59,7 @@ class TaskRunner {
 
   const BakePlan& plan_;
   std::unique_ptr<ShadowMapRenderer> renderer_;
+  bool receivers_uploaded_ = false;  // the renderer holds the receivers (ReceiverDepth)
 };
 
 }  // namespace pdsm

@@ -1,183 +1,176 @@
 #include "worker/local_bake.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <filesystem>
+#include <limits>
 #include <memory>
-#include <mutex>
-#include <thread>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
-#include "worker/adaptive_bake.h"
-#include "worker/tile_output.h"
+#include "absl/synchronization/mutex.h"
 #include "core/bake/bake_plan.h"
-#include "core/bake/tile_reach.h"
 #include "core/pdsm/pdsm_file.h"
+#include "core/pipeline/bake_engine.h"
+#include "core/util/work_queue.h"
+#include "worker/local_output.h"
 
 namespace pdsm {
 namespace {
 
-// Tasks are ordered tile by tile, so only the tiles that threads are working on hold partial
-// results: peak memory is bounded by the tiles in flight, not by the PDSM's size. A tile no
-// caster can reach gets one task with no sample: it is written all lit without any shadow map.
-std::vector<BakeTask> MakeTasks(const BakePlan& plan, int samples_per_task) {
-  const int total = static_cast<int>(plan.samples.size());
-  const int batch = samples_per_task > 0 ? samples_per_task : total;
-  std::vector<BakeTask> tasks;
-  for (const TileRect& tile : plan.tiles) {
-    if (!TileHasCasters(plan, tile)) {
-      tasks.push_back(BakeTask{tile.index, 0, 0});
-      continue;
-    }
-    for (int begin = 0; begin < total; begin += batch) {
-      tasks.push_back(BakeTask{tile.index, begin, std::min(total, begin + batch)});
-    }
-  }
-  return tasks;
-}
+constexpr char kJobId[] = "local";
+// In one process a thread never vanishes with its lease: leases last as long as the bake.
+constexpr int64_t kLocalLeaseMs = std::numeric_limits<int64_t>::max() / 4;
+// How long an idle thread waits for work before looking again whether the bake is over.
+constexpr absl::Duration kIdleWait = absl::Seconds(1);
 
-class LocalBake {
+// One thread of the bake: its task runner, its statistics.
+class LocalWorker {
  public:
-  LocalBake(const BakePlan& plan, const LocalBakeOptions& options, PdsmWriter* writer)
-      : plan_(plan),
-        options_(options),
-        tasks_(MakeTasks(plan, options.samples_per_task)),
-        tile_parts_(plan.tiles.size()),
-        tile_parts_left_(plan.tiles.size()),
-        output_(plan, !options.preview_path.empty(), writer) {
-    for (const BakeTask& task : tasks_) ++tile_parts_left_[task.tile_index];
+  LocalWorker(int index, const BakePlan& plan, BakeEngine* engine, LocalOutput* output)
+      : id_(absl::StrCat("local-", index)), plan_(plan), engine_(engine), output_(output) {}
+
+  // Renders the preview's receiver depths of every `stride`-th tile from `first`.
+  bool Start(int first, int stride) {
+    absl::StatusOr<std::unique_ptr<TaskRunner>> runner = TaskRunner::Create(plan_);
+    if (!runner.ok()) return Stop(runner.status());
+    runner_ = *std::move(runner);
+    if (!output_->has_preview()) return true;
+    for (size_t t = first; t < plan_.tiles.size(); t += stride) {
+      absl::StatusOr<std::vector<float>> depth = runner_->ReceiverDepth(plan_.tiles[t]);
+      if (!depth.ok()) return Stop(depth.status());
+      output_->SetReceiverDepth(static_cast<int>(t), *std::move(depth));
+    }
+    return true;
   }
 
-  absl::StatusOr<BakeSummary> Run(int threads) {
-    start_ = std::chrono::steady_clock::now();
-    std::vector<std::thread> pool;
-    for (int t = 0; t < threads; ++t) pool.emplace_back([this] { WorkerLoop(); });
-    for (std::thread& thread : pool) thread.join();
-    if (!first_error_.ok()) return first_error_;
-    summary_.tiles = static_cast<int>(plan_.tiles.size());
-    summary_.tasks = static_cast<int64_t>(tasks_.size());
-    summary_.seconds = Elapsed();
-    return summary_;
+  // Leases, runs and reports tasks until the bake has ended.
+  void RunTasks(const std::function<void()>& after_task) {
+    while (!output_->ended()) {
+      const std::optional<TaskLease> lease = engine_->Lease(id_, kIdleWait);
+      if (!lease) continue;
+      absl::StatusOr<TileEvents> events =
+          runner_->Run(BakeTask{lease->tile_index, lease->sample_begin, lease->sample_end},
+                       &stats_, [this] { return output_->ended(); });
+      if (events.ok()) {
+        engine_->Report(id_, lease->lease_id, *std::move(events));
+      } else {
+        engine_->ReportFailure(id_, lease->lease_id, events.status(),
+                               /*handed_back=*/absl::IsCancelled(events.status()));
+      }
+      after_task();
+    }
   }
 
-  const PreviewImage& preview() const { return output_.preview(); }
-  size_t task_count() const { return tasks_.size(); }
+  const TaskStats& stats() const { return stats_; }
 
  private:
-  double Elapsed() const {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  bool Stop(const absl::Status& status) {
+    engine_->Fail(kJobId, status);
+    return false;
   }
 
-  void Fail(const absl::Status& status) {
-    std::lock_guard<std::mutex> lock(mu_);
-    if (first_error_.ok()) first_error_ = status;
-    failed_ = true;
-  }
-
-  void WorkerLoop() {
-    absl::StatusOr<std::unique_ptr<TaskRunner>> runner = TaskRunner::Create(plan_);
-    if (!runner.ok()) return Fail(runner.status());
-    TaskStats stats;
-    AssemblyStats assembly;
-    while (!failed_) {
-      const size_t index = next_task_.fetch_add(1);
-      if (index >= tasks_.size()) break;
-      if (absl::Status s = RunTask(**runner, tasks_[index], &stats, &assembly); !s.ok()) {
-        return Fail(s);
-      }
-    }
-    std::lock_guard<std::mutex> lock(mu_);
-    summary_.tasks_stats.Add(stats);
-    summary_.assembly.Add(assembly);
-  }
-
-  absl::Status RunTask(TaskRunner& runner, const BakeTask& task, TaskStats* stats,
-                       AssemblyStats* assembly) {
-    absl::StatusOr<TileEvents> events = runner.Run(task, stats);
-    if (events.ok() && task.sample_begin == task.sample_end) ++stats->tiles_skipped;
-    if (!events.ok()) return events.status();
-    std::vector<TileEvents> parts;
-    {
-      std::lock_guard<std::mutex> lock(mu_);
-      tile_parts_[task.tile_index].push_back(*std::move(events));
-      if (--tile_parts_left_[task.tile_index] == 0) parts.swap(tile_parts_[task.tile_index]);
-    }
-    if (!parts.empty()) {
-      if (absl::Status s = FinishTile(runner, parts, assembly); !s.ok()) return s;
-    }
-    ReportProgress();
-    return absl::OkStatus();
-  }
-
-  absl::Status FinishTile(TaskRunner& runner, const std::vector<TileEvents>& parts,
-                          AssemblyStats* assembly) {
-    absl::StatusOr<bool> all_lit = output_.Write(runner, parts, /*tile_samples=*/0, assembly);
-    if (!all_lit.ok()) return all_lit.status();
-    if (*all_lit) {
-      std::lock_guard<std::mutex> lock(mu_);
-      ++summary_.tiles_all_lit;
-    }
-    return absl::OkStatus();
-  }
-
-  void ReportProgress() {
-    const int64_t done = ++tasks_done_;
-    if (!options_.on_progress) return;
-    std::lock_guard<std::mutex> lock(progress_mu_);
-    options_.on_progress(
-        BakeProgress{done, static_cast<int64_t>(tasks_.size()), Elapsed()});
-  }
-
+  const std::string id_;
   const BakePlan& plan_;
-  const LocalBakeOptions& options_;
-  const std::vector<BakeTask> tasks_;
-  std::chrono::steady_clock::time_point start_;
-  std::atomic<size_t> next_task_{0};
-  std::atomic<int64_t> tasks_done_{0};
-  std::atomic<bool> failed_{false};
+  BakeEngine* const engine_;
+  LocalOutput* const output_;
+  std::unique_ptr<TaskRunner> runner_;
+  TaskStats stats_;
+};
 
-  std::mutex mu_;  // guards the members below up to progress_mu_
-  std::vector<std::vector<TileEvents>> tile_parts_;
-  std::vector<int> tile_parts_left_;
-  absl::Status first_error_;
-  BakeSummary summary_;
+// Threads worth starting: more than tasks would only cost contexts.
+int ThreadCount(const BakePlan& plan, const LocalBakeOptions& options) {
+  const int64_t wanted = options.threads > 0 ? options.threads : CoreCount();
+  const int64_t batch = options.samples_per_task > 0 ? options.samples_per_task
+                                                     : std::max(1, plan.header.samples);
+  const int64_t batches = (std::max(1, plan.header.samples) + batch - 1) / batch;
+  const int64_t tasks = std::max<int64_t>(1, static_cast<int64_t>(plan.tiles.size()) * batches);
+  return static_cast<int>(std::clamp<int64_t>(wanted, 1, tasks));
+}
 
-  std::mutex progress_mu_;
-  TileOutput output_;
+// Waits until all `count` threads have called Arrive (the preview's depths are all rendered
+// before any tile can be shaded).
+class StartLine {
+ public:
+  explicit StartLine(int count) : waiting_(count) {}
+  void Arrive() {
+    absl::MutexLock lock(&mu_);
+    --waiting_;
+    mu_.Await(absl::Condition(this, &StartLine::AllArrived));
+  }
+
+ private:
+  bool AllArrived() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) { return waiting_ <= 0; }
+  absl::Mutex mu_;
+  int waiting_ ABSL_GUARDED_BY(mu_);
 };
 
 }  // namespace
 
 absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOptions& options) {
-  absl::StatusOr<BakePlan> plan = PlanBake(scene);
-  if (!plan.ok()) return plan.status();
+  const auto start = std::chrono::steady_clock::now();
+  const auto elapsed = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  absl::StatusOr<BakePlan> planned = PlanBake(scene);
+  if (!planned.ok()) return planned.status();
+  const auto plan = std::make_shared<const BakePlan>(*std::move(planned));
   absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
       PdsmWriter::Create(options.output_path, plan->header);
   if (!writer.ok()) return writer.status();
+  auto output = std::make_shared<LocalOutput>(*plan, writer->get(), options.preview_path);
 
-  const int cores = options.threads > 0
-                        ? options.threads
-                        : static_cast<int>(std::thread::hardware_concurrency());
-  absl::StatusOr<BakeSummary> summary;
-  if (plan->header.adaptive()) {
-    summary = RunAdaptiveTiles(*plan, options, std::max(1, cores), writer->get());
-    if (!summary.ok()) return summary.status();
-  } else {
-    LocalBake bake(*plan, options, writer->get());
-    const int threads =
-        std::clamp(cores, 1, static_cast<int>(std::max<size_t>(1, bake.task_count())));
-    summary = bake.Run(threads);
-    if (!summary.ok()) return summary.status();
-    summary->tile_samples_total = int64_t{plan->header.samples} * summary->tiles;
-    if (!options.preview_path.empty()) {
-      if (absl::Status s = bake.preview().Write(options.preview_path); !s.ok()) return s;
-    }
+  const int threads = ThreadCount(*plan, options);
+  EngineOptions engine_options;
+  engine_options.scheduler.lease_ms = kLocalLeaseMs;
+  // Enough open tiles that no thread waits while another judges a stage.
+  engine_options.scheduler.max_open_tiles = 2 * threads;
+  engine_options.executor = [](std::function<void()> work) { work(); };
+  engine_options.task_failure_ends_job = true;
+  BakeEngine engine(std::move(engine_options));
+  EngineJob job;
+  job.job_id = kJobId;
+  job.plan = plan;
+  job.samples_per_task = options.samples_per_task;
+  job.output = output;
+  if (absl::Status s = engine.AddJob(std::move(job)); !s.ok()) return s;
+
+  absl::Mutex progress_mu;
+  const auto report_progress = [&] {
+    if (!options.on_progress) return;
+    const std::optional<JobProgress> p = engine.Progress(kJobId);
+    if (!p) return;
+    absl::MutexLock lock(&progress_mu);
+    options.on_progress(BakeProgress{p->tasks_done, p->tasks_total, elapsed()});
+  };
+  std::vector<std::unique_ptr<LocalWorker>> workers;
+  for (int t = 0; t < threads; ++t) {
+    workers.push_back(std::make_unique<LocalWorker>(t, *plan, &engine, output.get()));
   }
-  if (absl::Status s = (*writer)->Finish(); !s.ok()) return s;
+  StartLine start_line(threads);
+  WorkQueue queue(threads);
+  for (int t = 0; t < threads; ++t) {
+    queue.Post([&, t] {
+      const bool started = workers[t]->Start(t, threads);
+      start_line.Arrive();
+      if (started) workers[t]->RunTasks(report_progress);
+    });
+  }
+  queue.Wait();
+  if (!output->ended()) return absl::InternalError("the local bake stopped before its end");
+  if (absl::Status s = output->status(); !s.ok()) return s;
+
+  const JobProgress progress = output->progress();
+  BakeSummary summary;
+  summary.seconds = elapsed();
+  summary.tiles = progress.tiles_total;
+  summary.tiles_all_lit = progress.tiles_all_lit;
+  summary.tasks = progress.tasks_done;
+  summary.tile_samples_total = progress.tile_samples_total;
+  summary.assembly = progress.assembly;
+  for (const auto& w : workers) summary.tasks_stats.Add(w->stats());
   std::error_code ec;
-  summary->file_bytes = std::filesystem::file_size(options.output_path, ec);
+  summary.file_bytes = std::filesystem::file_size(options.output_path, ec);
   return summary;
 }
 

@@ -1,5 +1,7 @@
-// Local single-node bake: the same planner, worker tasks and tile assembly as the distributed
-// service, run in one process by a pool of threads (each with its own OSMesa context).
+// The local single-node bake: the service in one process. The same planner, scheduler, stage
+// rule and tile assembly as the distributed bake (core/pipeline/bake_engine.h), driven by N
+// threads of a WorkQueue, each with its own task runner (its own OSMesa context); no gRPC, no
+// sockets. Tiles go into the PDSM file as they finish (worker/local_output.h).
 #ifndef PDSM_WORKER_LOCAL_BAKE_H_
 #define PDSM_WORKER_LOCAL_BAKE_H_
 
@@ -8,15 +10,15 @@
 #include <string>
 
 #include "absl/status/statusor.h"
-#include "core/scene/scene.h"
 #include "core/pipeline/tile_assembly.h"
+#include "core/scene/scene.h"
 #include "worker/bake_task.h"
 
 namespace pdsm {
 
 struct BakeProgress {
   int64_t tasks_done = 0;
-  int64_t tasks_total = 0;
+  int64_t tasks_total = 0;  // known so far: adaptive stages add theirs
   double seconds = 0;
 };
 
@@ -24,7 +26,7 @@ struct LocalBakeOptions {
   std::string output_path;   // the .exr; written under a temporary name, renamed at the end
   std::string preview_path;  // a .png of the receivers' attenuation seen from the light; "" none
   int threads = 0;           // 0: one per core
-  int samples_per_task = 0;  // light samples per task; 0: all of a tile's samples in one task
+  int samples_per_task = 0;  // light samples per task; 0: a tile's whole stage in one task
   // Called from worker threads, serialized, after each task.
   std::function<void(const BakeProgress&)> on_progress;
 };
@@ -32,17 +34,17 @@ struct LocalBakeOptions {
 struct BakeSummary {
   double seconds = 0;
   int tiles = 0;
-  int tiles_all_lit = 0;  // tiles with no event at all (no caster can reach their rays)
+  int tiles_all_lit = 0;  // tiles with no vertex at all (no caster can reach their rays)
   int64_t tasks = 0;
   int64_t tile_samples_total = 0;  // light samples summed over tiles (adaptive bakes: < max)
-  TaskStats tasks_stats;          // summed over threads (thread-seconds)
+  TaskStats tasks_stats;           // summed over threads (thread-seconds)
   AssemblyStats assembly;
   uint64_t file_bytes = 0;
 };
 
 // Same scene and parameters give the same file bytes whatever `threads` and
-// `samples_per_task`. On error nothing is left at output_path. Adaptive scenes
-// (bake.adaptiveTolerance > 0) are baked by worker/adaptive_bake.h.
+// `samples_per_task`, and the same bytes as the coordinator's bake. The first task that fails
+// fails the bake with its status; on error nothing is left at output_path.
 absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOptions& options);
 
 }  // namespace pdsm

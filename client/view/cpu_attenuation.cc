@@ -7,7 +7,7 @@
 #include <optional>
 
 #include "core/pdsm/pdsm_query.h"
-#include "core/util/run_on_all_cores.h"
+#include "core/util/work_queue.h"
 
 namespace pdsm::view {
 

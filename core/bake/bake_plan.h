@@ -46,6 +46,10 @@ struct BakePlan {
 
   const PdsmGeometry& geometry() const { return header.geometry; }
   bool has_casters() const { return !casters.indices.empty(); }
+  // The index of the tile whose first pixel is (x0, y0). REQUIRES: a tile starts there.
+  int TileIndexAt(int x0, int y0) const {
+    return (y0 / header.tile_size) * tiles_x + x0 / header.tile_size;
+  }
 };
 
 // The constant depth bias used when the scene sets none: float32 depths round at about

@@ -275,6 +275,12 @@ std::optional<TaskLease> Scheduler::FindLease(uint64_t lease_id) const {
 
 bool Scheduler::HasJob(const std::string& job_id) const { return jobs_.contains(job_id); }
 
+std::optional<int64_t> Scheduler::TasksLeft(const std::string& job_id) const {
+  const auto it = jobs_.find(job_id);
+  if (it == jobs_.end()) return std::nullopt;
+  return it->second.tasks_left;
+}
+
 SchedulerStats Scheduler::Stats(int64_t now_ms) const {
   SchedulerStats stats;
   for (const auto& [job_id, job] : jobs_) {

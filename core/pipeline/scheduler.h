@@ -1,7 +1,8 @@
-// The coordinator's scheduling state machine: which task a worker gets next, leases and their
+// The scheduling state machine of every bake: which task a worker gets next, leases and their
 // deadlines, failures, exclusions, cancellation. Pure logic with an explicit clock (`now_ms`),
-// so tests drive it with a fake clock; the gRPC service (coordinator_service.h) owns one and
-// calls it under its mutex.
+// so tests drive it with a fake clock. Not thread-safe: core/pipeline/bake_engine.h owns one
+// and calls it under its mutex, for the coordinator's remote workers and the local bake's
+// threads alike.
 //
 // A job's work is its tiles x sample batches. Tasks are handed out tile by tile: at most
 // `max_open_tiles` tiles (over all jobs) have work issued but are not yet assembled, which is
@@ -132,6 +133,9 @@ class Scheduler {
   std::optional<TaskLease> FindLease(uint64_t lease_id) const;
 
   bool HasJob(const std::string& job_id) const;
+  // Tasks of the job not yet accepted, as far as they are known (an adaptive job's later
+  // stages add theirs); nullopt for an unknown job.
+  std::optional<int64_t> TasksLeft(const std::string& job_id) const;
   SchedulerStats Stats(int64_t now_ms) const;
 
  private:

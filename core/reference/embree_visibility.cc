@@ -12,7 +12,7 @@
 #include "absl/strings/str_format.h"
 #include "core/sampling/hash_rng.h"
 #include "core/sampling/light_samples.h"
-#include "core/util/run_on_all_cores.h"
+#include "core/util/work_queue.h"
 
 namespace pdsm {
 namespace {

@@ -27,7 +27,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
-#include "core/util/run_on_all_cores.h"
+#include "core/util/work_queue.h"
 
 namespace pdsm {
 namespace {

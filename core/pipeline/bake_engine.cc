@@ -1,0 +1,387 @@
+#include "core/pipeline/bake_engine.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include "absl/strings/str_cat.h"
+
+namespace pdsm {
+namespace {
+
+constexpr int64_t kRateWindowMs = 60'000;
+
+int64_t SteadyNowMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+EngineOptions WithDefaults(EngineOptions options) {
+  if (!options.now_ms) options.now_ms = SteadyNowMs;
+  return options;
+}
+
+JobSpec SchedulerSpec(const EngineJob& job) {
+  const PdsmHeader& header = job.plan->header;
+  JobSpec spec;
+  spec.job_id = job.job_id;
+  spec.priority = job.priority;
+  spec.sequence = job.sequence;
+  spec.samples = header.samples;
+  spec.samples_per_task = job.samples_per_task > 0 ? job.samples_per_task : header.samples;
+  if (header.adaptive()) spec.adaptive_min_samples = std::max(1, header.adaptive_min_samples);
+  std::vector<bool> done(job.plan->tiles.size(), false);
+  for (int t : job.done_tiles) {
+    if (t >= 0 && t < static_cast<int>(done.size())) done[t] = true;
+  }
+  for (size_t t = 0; t < done.size(); ++t) {
+    if (!done[t]) spec.tiles.push_back(static_cast<int>(t));
+  }
+  return spec;
+}
+
+}  // namespace
+
+// A job in progress. Every field but `spec` and `ended` is guarded by BakeEngine::mu_ (the
+// annotation cannot name another object's mutex); `ended` is also read without it, to drop
+// heavy work early.
+struct BakeEngine::Job {
+  EngineJob spec;
+  std::map<int, std::vector<StageBatch>> batches;  // open tiles: their stage's batches so far
+  std::map<int, TileStageState> stages;            // adaptive tiles between stages
+  JobProgress progress;
+  int output_calls = 0;  // JobOutput calls in flight
+  struct DeferredEnd {
+    JobEnd end;
+    absl::Status status;
+    JobProgress progress;
+  };
+  std::optional<DeferredEnd> deferred_end;
+  std::atomic<bool> ended{false};
+};
+
+BakeEngine::BakeEngine(EngineOptions options)
+    : options_(WithDefaults(std::move(options))),
+      started_ms_(options_.now_ms()),
+      scheduler_(options_.scheduler) {}
+
+BakeEngine::~BakeEngine() = default;
+
+BakeEngine::JobPtr BakeEngine::FindJob(const std::string& job_id) const {
+  const auto it = jobs_.find(job_id);
+  return it == jobs_.end() ? nullptr : it->second;
+}
+
+int64_t BakeEngine::TasksTotal(const Job& job) const {
+  return job.progress.tasks_done + scheduler_.TasksLeft(job.spec.job_id).value_or(0);
+}
+
+absl::Status BakeEngine::AddJob(EngineJob spec) {
+  if (!spec.plan || !spec.output) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("job ", spec.job_id, ": a job needs a plan and an output"));
+  }
+  auto job = std::make_shared<Job>();
+  const JobSpec scheduled = SchedulerSpec(spec);
+  JobProgress& p = job->progress;
+  p.tiles_total = static_cast<int>(spec.plan->tiles.size());
+  p.tiles_done = p.tiles_total - static_cast<int>(scheduled.tiles.size());
+  p.samples_total = int64_t{spec.plan->header.samples} * p.tiles_total;
+  p.samples_done = int64_t{spec.plan->header.samples} * p.tiles_done;
+  p.samples_at_add = p.samples_done;
+  p.added_ms = options_.now_ms();
+  p.started = spec.started;
+  job->spec = std::move(spec);
+  bool complete = false;
+  {
+    absl::MutexLock lock(&mu_);
+    if (jobs_.contains(job->spec.job_id)) {
+      return absl::AlreadyExistsError(
+          absl::StrCat("job ", job->spec.job_id, " is already in progress"));
+    }
+    scheduler_.AddJob(scheduled);
+    jobs_[job->spec.job_id] = job;
+    p.tasks_total = TasksTotal(*job);
+    complete = scheduler_.JobComplete(job->spec.job_id);
+    changed_.SignalAll();
+  }
+  if (complete) options_.executor([this, job] { FinishJob(job); });
+  return absl::OkStatus();
+}
+
+std::optional<TaskLease> BakeEngine::Lease(const std::string& worker_id, absl::Duration wait) {
+  const absl::Time deadline = absl::Now() + wait;
+  JobPtr first_lease_of;
+  std::optional<TaskLease> lease;
+  {
+    absl::MutexLock lock(&mu_);
+    for (;;) {
+      lease = scheduler_.Lease(worker_id, options_.now_ms());
+      if (lease || jobs_.empty() || wait <= absl::ZeroDuration()) break;
+      if (changed_.WaitWithDeadline(&mu_, deadline)) break;  // timed out
+    }
+    if (!lease) return std::nullopt;
+    const JobPtr job = FindJob(lease->job_id);
+    if (job && !job->progress.started) {
+      job->progress.started = true;
+      ++job->output_calls;  // Started() below counts as a call in flight
+      first_lease_of = job;
+    }
+  }
+  if (first_lease_of) {
+    first_lease_of->spec.output->Started();
+    EndOutputCall(first_lease_of);
+  }
+  return lease;
+}
+
+absl::StatusOr<int64_t> BakeEngine::Extend(const std::string& worker_id, uint64_t lease_id) {
+  absl::MutexLock lock(&mu_);
+  return scheduler_.Extend(worker_id, lease_id, options_.now_ms());
+}
+
+std::optional<TaskLease> BakeEngine::FindLease(uint64_t lease_id) const {
+  absl::MutexLock lock(&mu_);
+  return scheduler_.FindLease(lease_id);
+}
+
+bool BakeEngine::Report(const std::string& worker_id, uint64_t lease_id, TileEvents events) {
+  JobPtr job;
+  int tile = 0;
+  TileStageState state;
+  std::vector<StageBatch> batches;
+  {
+    absl::MutexLock lock(&mu_);
+    const int64_t now = options_.now_ms();
+    const ResultOutcome outcome = scheduler_.Complete(worker_id, lease_id, now);
+    if (outcome.kind == ResultOutcome::kDropped) return false;
+    job = FindJob(outcome.job_id);
+    if (!job) return false;  // cannot happen: an ended job's leases are gone
+    recent_results_.emplace_back(now, static_cast<int64_t>(events.events.size()));
+    ForgetOldRates(now);
+    JobProgress& p = job->progress;
+    ++p.tasks_done;
+    p.samples_done += outcome.sample_end - outcome.sample_begin;
+    tile = outcome.tile_index;
+    std::vector<StageBatch>& tile_batches = job->batches[tile];
+    tile_batches.push_back(StageBatch{outcome.sample_begin, std::move(events)});
+    if (outcome.kind == ResultOutcome::kTileComplete) {
+      batches.swap(tile_batches);
+      job->batches.erase(tile);
+      if (auto it = job->stages.find(tile); it != job->stages.end()) {
+        state = std::move(it->second);
+        job->stages.erase(it);
+      }
+    }
+  }
+  if (!batches.empty()) {
+    options_.executor([this, job, tile, s = std::move(state), b = std::move(batches)]() mutable {
+      CompleteStage(job, tile, std::move(s), std::move(b));
+    });
+  }
+  return true;
+}
+
+void BakeEngine::CompleteStage(const JobPtr& job, int tile_index, TileStageState state,
+                               std::vector<StageBatch> batches) {
+  if (job->ended) return;  // cancelled or failed while queued
+  StageVerdict verdict = JudgeStage(job->spec.plan->header, std::move(state), std::move(batches));
+  if (verdict.done) return StoreTile(job, tile_index, std::move(verdict));
+  {
+    absl::MutexLock lock(&mu_);
+    if (job->ended) return;
+    job->stages[tile_index] = std::move(verdict.next);
+    const bool queued = scheduler_.AddStage(job->spec.job_id, tile_index);
+    job->progress.tasks_total = TasksTotal(*job);
+    changed_.SignalAll();
+    if (queued) return;
+  }
+  // A tile left open would hold its slot and the job would never end: fail it loudly.
+  End(job, JobEnd::kFailed,
+      absl::InternalError(
+          absl::StrCat("tile ", tile_index, ": its next adaptive stage could not be queued")));
+}
+
+void BakeEngine::StoreTile(const JobPtr& job, int tile_index, StageVerdict verdict) {
+  AssemblyStats stats;
+  const PdsmTile tile =
+      AssemblePlanTile(*job->spec.plan, verdict.events, verdict.tile_samples, &stats);
+  verdict.events.clear();
+  if (!BeginOutputCall(job)) return;
+  const absl::Status stored = job->spec.output->StoreTile(tile);
+  EndOutputCall(job);
+  if (!stored.ok()) {
+    return End(job, JobEnd::kFailed,
+               absl::Status(stored.code(),
+                            absl::StrCat("storing tile ", tile_index, ": ", stored.message())));
+  }
+  bool complete = false;
+  {
+    absl::MutexLock lock(&mu_);
+    if (job->ended) return;
+    scheduler_.TileAssembled(job->spec.job_id, tile_index);
+    JobProgress& p = job->progress;
+    ++p.tiles_done;
+    if (tile.vertices.empty()) ++p.tiles_all_lit;
+    p.samples_done += verdict.samples_skipped;
+    p.tile_samples_total +=
+        verdict.tile_samples > 0 ? verdict.tile_samples : job->spec.plan->header.samples;
+    p.assembly.Add(stats);
+    complete = scheduler_.JobComplete(job->spec.job_id);
+    changed_.SignalAll();
+  }
+  if (complete) FinishJob(job);
+}
+
+void BakeEngine::FinishJob(const JobPtr& job) {
+  if (!BeginOutputCall(job)) return;
+  const absl::Status finished = job->spec.output->Finish();
+  if (finished.ok()) {
+    absl::MutexLock lock(&mu_);
+    if (!job->ended) {
+      job->ended = true;
+      jobs_.erase(job->spec.job_id);
+      scheduler_.RemoveJob(job->spec.job_id);
+      job->deferred_end = Job::DeferredEnd{JobEnd::kSucceeded, absl::OkStatus(), job->progress};
+      changed_.SignalAll();
+    }
+  }
+  EndOutputCall(job);  // calls Ended: kSucceeded, or what a cancel that won the race deferred
+  if (!finished.ok()) {
+    End(job, JobEnd::kFailed,
+        absl::Status(finished.code(), absl::StrCat("writing the PDSM: ", finished.message())));
+  }
+}
+
+bool BakeEngine::BeginOutputCall(const JobPtr& job) {
+  absl::MutexLock lock(&mu_);
+  if (job->ended) return false;
+  ++job->output_calls;
+  return true;
+}
+
+void BakeEngine::EndOutputCall(const JobPtr& job) {
+  std::optional<Job::DeferredEnd> end;
+  {
+    absl::MutexLock lock(&mu_);
+    if (--job->output_calls == 0 && job->deferred_end) {
+      end = std::move(job->deferred_end);
+      job->deferred_end.reset();
+    }
+  }
+  if (end) job->spec.output->Ended(end->end, end->status, end->progress);
+}
+
+void BakeEngine::End(const JobPtr& job, JobEnd end, const absl::Status& status) {
+  JobProgress progress;
+  {
+    absl::MutexLock lock(&mu_);
+    if (job->ended) return;
+    job->ended = true;
+    jobs_.erase(job->spec.job_id);
+    scheduler_.RemoveJob(job->spec.job_id);
+    changed_.SignalAll();
+    if (job->output_calls > 0) {
+      job->deferred_end = Job::DeferredEnd{end, status, job->progress};
+      return;
+    }
+    progress = job->progress;
+  }
+  job->spec.output->Ended(end, status, progress);
+}
+
+void BakeEngine::ReportFailure(const std::string& worker_id, uint64_t lease_id,
+                               const absl::Status& status, bool handed_back) {
+  JobPtr job;
+  std::optional<JobFailure> failure;
+  {
+    absl::MutexLock lock(&mu_);
+    const int64_t now = options_.now_ms();
+    if (options_.task_failure_ends_job && !handed_back) {
+      const std::optional<TaskLease> lease = scheduler_.FindLease(lease_id);
+      if (lease) job = FindJob(lease->job_id);
+      scheduler_.Fail(worker_id, lease_id, std::string(status.message()), /*handed_back=*/true,
+                      now);
+    } else {
+      failure = scheduler_.Fail(worker_id, lease_id, std::string(status.message()), handed_back,
+                                now);
+      if (failure) job = FindJob(failure->job_id);
+    }
+    changed_.SignalAll();
+  }
+  if (!job) return;
+  End(job, JobEnd::kFailed, failure ? absl::AbortedError(failure->reason) : status);
+}
+
+void BakeEngine::Tick() {
+  std::vector<std::pair<JobPtr, std::string>> failed;
+  {
+    absl::MutexLock lock(&mu_);
+    const int64_t now = options_.now_ms();
+    for (JobFailure& f : scheduler_.Tick(now)) {
+      if (JobPtr job = FindJob(f.job_id)) failed.emplace_back(job, std::move(f.reason));
+    }
+    ForgetOldRates(now);
+    changed_.SignalAll();
+  }
+  for (const auto& [job, reason] : failed) End(job, JobEnd::kFailed, absl::AbortedError(reason));
+}
+
+bool BakeEngine::Cancel(const std::string& job_id, const absl::Status& status) {
+  return EndById(job_id, JobEnd::kCancelled, status);
+}
+
+bool BakeEngine::Fail(const std::string& job_id, const absl::Status& status) {
+  return EndById(job_id, JobEnd::kFailed, status);
+}
+
+bool BakeEngine::EndById(const std::string& job_id, JobEnd end, const absl::Status& status) {
+  JobPtr job;
+  {
+    absl::MutexLock lock(&mu_);
+    job = FindJob(job_id);
+  }
+  if (!job) return false;
+  End(job, end, status);
+  return true;
+}
+
+std::shared_ptr<const BakePlan> BakeEngine::Plan(const std::string& job_id) const {
+  absl::MutexLock lock(&mu_);
+  const JobPtr job = FindJob(job_id);
+  return job ? job->spec.plan : nullptr;
+}
+
+std::optional<JobProgress> BakeEngine::Progress(const std::string& job_id) const {
+  absl::MutexLock lock(&mu_);
+  const JobPtr job = FindJob(job_id);
+  if (!job) return std::nullopt;
+  return job->progress;
+}
+
+EngineStats BakeEngine::Stats() const {
+  absl::MutexLock lock(&mu_);
+  const int64_t now = options_.now_ms();
+  EngineStats stats;
+  stats.scheduler = scheduler_.Stats(now);
+  for (const auto& [id, job] : jobs_) {
+    ++(job->progress.started ? stats.jobs_started : stats.jobs_waiting);
+  }
+  int64_t events = 0, results = 0;
+  for (const auto& [t, e] : recent_results_) {
+    if (t >= now - kRateWindowMs) events += e, ++results;
+  }
+  const double window_s =
+      static_cast<double>(std::clamp<int64_t>(now - started_ms_, 1, kRateWindowMs)) / 1000.0;
+  stats.tasks_per_second = static_cast<double>(results) / window_s;
+  stats.events_per_second = static_cast<double>(events) / window_s;
+  return stats;
+}
+
+void BakeEngine::ForgetOldRates(int64_t now_ms) {
+  while (!recent_results_.empty() && recent_results_.front().first < now_ms - kRateWindowMs) {
+    recent_results_.pop_front();
+  }
+}
+
+}  // namespace pdsm

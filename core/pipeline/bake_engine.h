@@ -1,0 +1,197 @@
+// The bake as a service, in one piece of code: the jobs in progress, their tasks
+// (scheduler.h: leases, retries, priorities, adaptive stages), the batches workers return,
+// the stage rule (stage_rule.h), tile assembly (tile_assembly.h) and where finished tiles go
+// (a JobOutput). The coordinator (server/) drives it from remote workers over gRPC; the local
+// bake (worker/local_bake.h) from N task runners in one process. Same plan, same scheduler,
+// same rule, same assembly: the same bytes, by construction.
+//
+//   AddJob ─► Lease ─► (a worker runs the task) ─► Report ─┐ a tile's stage complete:
+//                ▲                                          ▼ (executor) JudgeStage
+//                └──── next adaptive stage ◄──── not done ──┤
+//                                                     done ─► AssemblePlanTile ─► StoreTile
+//                                          every tile stored ─► Finish ─► Ended(kSucceeded)
+//
+// Thread-safe. Bookkeeping (Lease, Extend, Report, ReportFailure, Tick) holds one mutex
+// briefly; heavy work (merging, judging, assembling, storing a tile, writing the file) goes
+// through EngineOptions::executor and never runs under the mutex. JobOutput calls are made
+// without the mutex held.
+#ifndef PDSM_CORE_PIPELINE_BAKE_ENGINE_H_
+#define PDSM_CORE_PIPELINE_BAKE_ENGINE_H_
+
+#include <atomic>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "absl/base/thread_annotations.h"
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
+#include "absl/time/time.h"
+#include "core/bake/bake_plan.h"
+#include "core/events/event.h"
+#include "core/pdsm/pdsm_image.h"
+#include "core/pipeline/scheduler.h"
+#include "core/pipeline/stage_rule.h"
+#include "core/pipeline/tile_assembly.h"
+
+namespace pdsm {
+
+enum class JobEnd { kSucceeded, kFailed, kCancelled };
+
+// Where a job stands. Samples are counted over tiles (a tile of n samples counts n).
+struct JobProgress {
+  bool started = false;  // a task has been leased
+  int tiles_total = 0;
+  int tiles_done = 0;
+  int tiles_all_lit = 0;   // stored with no vertex at all (no caster reaches their rays)
+  int64_t tasks_done = 0;  // accepted results
+  int64_t tasks_total = 0; // known so far: adaptive stages add theirs as tiles need them
+  int64_t samples_total = 0;
+  int64_t samples_done = 0;
+  int64_t samples_at_add = 0;  // samples_done when AddJob ran (a resumed job starts > 0)
+  int64_t added_ms = 0;        // now_ms() at AddJob: with the two above, this run's rate
+  int64_t tile_samples_total = 0;  // samples behind the stored tiles (adaptive: < maximum)
+  AssemblyStats assembly;
+};
+
+// Where a job's results go: the local bake writes the PDSM as tiles come; the coordinator
+// keeps each tile on disk and in its job store, then writes the PDSM from them.
+class JobOutput {
+ public:
+  virtual ~JobOutput() = default;
+
+  // The job's first task was leased. At most once, on the leasing thread.
+  virtual void Started() {}
+  // A finished tile. Once per tile, from the executor; different tiles may be stored at the
+  // same time. An error fails the job.
+  virtual absl::Status StoreTile(const PdsmTile& tile) = 0;
+  // Every tile is stored: produce the PDSM. Once, from the executor, unless the job ended
+  // first. An error fails the job.
+  virtual absl::Status Finish() = 0;
+  // Exactly once, when the job leaves the engine: kSucceeded after Finish() returned OK,
+  // kFailed with the reason, kCancelled with Cancel()'s status; `progress` as it was then.
+  // Always after every Started, StoreTile and Finish call of the job has returned, and none
+  // starts after it.
+  virtual void Ended(JobEnd end, const absl::Status& status, const JobProgress& progress) = 0;
+};
+
+struct EngineOptions {
+  SchedulerOptions scheduler;
+  // Runs heavy work: inline on the reporting thread (the local bake, whose task threads are
+  // the pool) or on a pool (the coordinator, whose reporting threads are gRPC's). Required.
+  std::function<void(std::function<void()>)> executor;
+  // A task failure that is not handed back ends its job at once, with the task's own status,
+  // instead of counting towards scheduler.max_task_failures: right in one process, where every
+  // thread runs the same build on the same machine and a retry would fail the same way.
+  bool task_failure_ends_job = false;
+  // Milliseconds on any monotonic scale: lease deadlines and rates. Default: a steady clock.
+  std::function<int64_t()> now_ms;
+};
+
+// A job to run.
+struct EngineJob {
+  std::string job_id;
+  int priority = 0;
+  int64_t sequence = 0;  // submission order, ascending
+  std::shared_ptr<const BakePlan> plan;
+  int samples_per_task = 0;     // light samples per task; 0: a whole stage in one task
+  std::vector<int> done_tiles;  // tiles stored already (a resumed job): no work for them
+  bool started = false;         // a task went out before (a resumed job): no Started() call
+  std::shared_ptr<JobOutput> output;
+};
+
+struct EngineStats {
+  SchedulerStats scheduler;
+  int jobs_started = 0;  // with a task leased
+  int jobs_waiting = 0;  // not yet
+  // Over the last minute (or since the engine started, when younger).
+  double tasks_per_second = 0;
+  double events_per_second = 0;
+};
+
+class BakeEngine {
+ public:
+  explicit BakeEngine(EngineOptions options);
+  ~BakeEngine();
+  BakeEngine(const BakeEngine&) = delete;
+  BakeEngine& operator=(const BakeEngine&) = delete;
+
+  // Starts scheduling the job. A job with every tile done goes straight to Finish (through the
+  // executor). ALREADY_EXISTS when a job of that id is in progress; INVALID_ARGUMENT without a
+  // plan or an output.
+  absl::Status AddJob(EngineJob job);
+
+  // The next task for `worker_id`. When none can go out now, waits up to `wait` for one
+  // (results coming back open tiles and stages) and returns nullopt at the deadline or as soon
+  // as no job is in progress.
+  std::optional<TaskLease> Lease(const std::string& worker_id,
+                                 absl::Duration wait = absl::ZeroDuration());
+
+  // As Scheduler::Extend / FindLease.
+  absl::StatusOr<int64_t> Extend(const std::string& worker_id, uint64_t lease_id);
+  std::optional<TaskLease> FindLease(uint64_t lease_id) const;
+
+  // A worker's events for its lease. REQUIRES: `events` fit the lease's tile (the coordinator
+  // checks a remote worker's with rpc/tile_events_codec.h). False when the result was dropped
+  // (late after expiry, duplicate, job ended). When it completes a tile's stage, the stage's
+  // judgement, assembly and storage run through the executor before or after this returns.
+  bool Report(const std::string& worker_id, uint64_t lease_id, TileEvents events);
+
+  // The worker could not do the task (handed_back: it gave it up undone, e.g. stopping; it
+  // counts against nobody). See EngineOptions::task_failure_ends_job.
+  void ReportFailure(const std::string& worker_id, uint64_t lease_id, const absl::Status& status,
+                     bool handed_back);
+
+  // Expires overdue leases and fails jobs no active worker can run (Scheduler::Tick).
+  void Tick();
+
+  // End the job as kCancelled or kFailed with `status` (a cancel by request; a failure found
+  // outside the tasks, e.g. a local task runner that cannot start). False when the job is not
+  // in progress.
+  bool Cancel(const std::string& job_id, const absl::Status& status);
+  bool Fail(const std::string& job_id, const absl::Status& status);
+
+  // The job's plan, or null when it is not in progress.
+  std::shared_ptr<const BakePlan> Plan(const std::string& job_id) const;
+  // nullopt when the job is not in progress (never added, or ended).
+  std::optional<JobProgress> Progress(const std::string& job_id) const;
+  EngineStats Stats() const;
+
+ private:
+  struct Job;
+  using JobPtr = std::shared_ptr<Job>;
+
+  void CompleteStage(const JobPtr& job, int tile_index, TileStageState state,
+                     std::vector<StageBatch> batches);
+  void StoreTile(const JobPtr& job, int tile_index, StageVerdict verdict);
+  void FinishJob(const JobPtr& job);
+  // Ends the job once; defers JobOutput::Ended until its output calls in flight return.
+  void End(const JobPtr& job, JobEnd end, const absl::Status& status);
+  bool EndById(const std::string& job_id, JobEnd end, const absl::Status& status);
+  JobPtr FindJob(const std::string& job_id) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  // Brackets a JobOutput call; false (no call) when the job has ended.
+  bool BeginOutputCall(const JobPtr& job);
+  void EndOutputCall(const JobPtr& job);
+  int64_t TasksTotal(const Job& job) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  void ForgetOldRates(int64_t now_ms) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+
+  const EngineOptions options_;
+  const int64_t started_ms_;
+
+  mutable absl::Mutex mu_;
+  absl::CondVar changed_;  // signalled when work may have become available or a job ended
+  Scheduler scheduler_ ABSL_GUARDED_BY(mu_);
+  std::map<std::string, JobPtr> jobs_ ABSL_GUARDED_BY(mu_);
+  std::deque<std::pair<int64_t, int64_t>> recent_results_ ABSL_GUARDED_BY(mu_);  // (ms, events)
+};
+
+}  // namespace pdsm
+
+#endif  // PDSM_CORE_PIPELINE_BAKE_ENGINE_H_

@@ -1,0 +1,93 @@
+#include "server/job_admission.h"
+
+#include <random>
+
+#include "absl/base/thread_annotations.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/synchronization/mutex.h"
+#include "core/scene/scene_loader.h"
+
+namespace pdsm {
+
+absl::Status CheckSubmitRequest(const pdsm::v1::SubmitBakeRequest& request) {
+  const std::string& key = request.idempotency_key();
+  if (key.empty() || key.size() > 128) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "idempotency_key: must have 1 to 128 characters (got ", key.size(), ")"));
+  }
+  for (char c : key) {
+    if (c < 0x21 || c > 0x7e) {
+      return absl::InvalidArgumentError("idempotency_key: must be printable ASCII, no spaces");
+    }
+  }
+  if (request.priority() < -1000 || request.priority() > 1000) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("priority: must be in [-1000, 1000] (got ", request.priority(), ")"));
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<BakePlan> PlanJobScene(const pdsm::v1::Scene& scene, const std::string& label,
+                                      const CoordinatorAssets& assets,
+                                      const AdmissionLimits* limits) {
+  // Asset triangles are counted as they decode, to stop early on a huge scene; the final
+  // check counts every mesh (inline ones too) once.
+  int64_t asset_triangles = 0;
+  absl::StatusOr<Scene> loaded =
+      SceneFromProto(scene, label, /*base_dir=*/"",
+                     assets.Resolver(limits ? limits->max_triangles : 0, &asset_triangles));
+  if (!loaded.ok()) return loaded.status();
+  if (limits != nullptr) {
+    int64_t triangles = 0;
+    for (const TriangleMesh& m : loaded->meshes) triangles += m.indices.size() / 3;
+    const int64_t pixels = int64_t{loaded->bake.width} * loaded->bake.height;
+    if (pixels > limits->max_job_pixels) {
+      return absl::ResourceExhaustedError(absl::StrFormat(
+          "%s: bake.resolution: %dx%d is %d pixels, above this coordinator's limit of %d",
+          label, loaded->bake.width, loaded->bake.height, pixels, limits->max_job_pixels));
+    }
+    if (loaded->bake.samples > limits->max_samples) {
+      return absl::ResourceExhaustedError(
+          absl::StrFormat("%s: bake.samples: %d is above this coordinator's limit of %d", label,
+                          loaded->bake.samples, limits->max_samples));
+    }
+    if (triangles > limits->max_triangles) {
+      return absl::ResourceExhaustedError(
+          absl::StrFormat("%s: meshes: %d triangles, above this coordinator's limit of %d",
+                          label, triangles, limits->max_triangles));
+    }
+  }
+  return PlanBake(*loaded);
+}
+
+absl::StatusOr<JobRecord> NewJobRecord(const pdsm::v1::SubmitBakeRequest& request,
+                                       const BakePlan& plan, int64_t now_unix_ms) {
+  JobRecord record;
+  record.job_id = RandomHex(8);
+  record.idempotency_key = request.idempotency_key();
+  record.scene_name = request.scene().name();
+  record.state = pdsm::v1::QUEUED;
+  record.priority = request.priority();
+  record.tiles_total = static_cast<int>(plan.tiles.size());
+  record.samples_total = int64_t{plan.header.samples} * record.tiles_total;
+  record.created_unix_ms = record.updated_unix_ms = now_unix_ms;
+  record.width = plan.geometry().width;
+  record.height = plan.geometry().height;
+  record.samples = plan.header.samples;
+  if (!request.scene().SerializeToString(&record.scene)) {
+    return absl::InternalError("cannot serialize the scene");
+  }
+  return record;
+}
+
+std::string RandomHex(int bytes) {
+  static absl::Mutex mu(absl::kConstInit);
+  static std::random_device device ABSL_GUARDED_BY(mu);
+  absl::MutexLock lock(&mu);
+  std::string out;
+  for (int i = 0; i < bytes; ++i) out += absl::StrFormat("%02x", device() & 0xff);
+  return out;
+}
+
+}  // namespace pdsm

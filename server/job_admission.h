@@ -1,0 +1,45 @@
+// Which bakes the coordinator takes: a submitted request's own fields checked, its scene
+// loaded from the uploaded assets and planned, within the coordinator's limits
+// (RESOURCE_EXHAUSTED above them, naming the field). A resumed job is planned the same way
+// without the limits: it was admitted once.
+#ifndef PDSM_SERVER_JOB_ADMISSION_H_
+#define PDSM_SERVER_JOB_ADMISSION_H_
+
+#include <cstdint>
+#include <string>
+
+#include "absl/status/statusor.h"
+#include "core/bake/bake_plan.h"
+#include "pdsm/v1/jobs.pb.h"
+#include "server/coordinator_assets.h"
+#include "server/job_store.h"
+
+namespace pdsm {
+
+struct AdmissionLimits {
+  int64_t max_job_pixels = int64_t{8192} * 8192;
+  int max_samples = 65536;
+  int64_t max_triangles = 20'000'000;
+};
+
+// INVALID_ARGUMENT naming the field: the idempotency key (1 to 128 printable ASCII
+// characters, no spaces) or the priority (within [-1000, 1000]).
+absl::Status CheckSubmitRequest(const pdsm::v1::SubmitBakeRequest& request);
+
+// Loads and plans `scene` (meshes from `assets`); `label` prefixes errors. `limits` null:
+// none are checked.
+absl::StatusOr<BakePlan> PlanJobScene(const pdsm::v1::Scene& scene, const std::string& label,
+                                      const CoordinatorAssets& assets,
+                                      const AdmissionLimits* limits);
+
+// The record of a new job: a fresh random id, QUEUED, sizes from the plan, the scene
+// serialized.
+absl::StatusOr<JobRecord> NewJobRecord(const pdsm::v1::SubmitBakeRequest& request,
+                                       const BakePlan& plan, int64_t now_unix_ms);
+
+// `bytes` random bytes in lowercase hex (std::random_device).
+std::string RandomHex(int bytes);
+
+}  // namespace pdsm
+
+#endif  // PDSM_SERVER_JOB_ADMISSION_H_

@@ -1,0 +1,52 @@
+#include "worker/local_output.h"
+
+#include <utility>
+
+namespace pdsm {
+
+LocalOutput::LocalOutput(const BakePlan& plan, PdsmWriter* writer, std::string preview_path)
+    : plan_(plan),
+      preview_path_(std::move(preview_path)),
+      receiver_depth_(has_preview() ? plan.tiles.size() : 0),
+      preview_(has_preview() ? plan.geometry().width : 0,
+               has_preview() ? plan.geometry().height : 0),
+      writer_(writer) {}
+
+void LocalOutput::SetReceiverDepth(int tile_index, std::vector<float> depth) {
+  receiver_depth_.at(tile_index) = std::move(depth);
+}
+
+absl::Status LocalOutput::StoreTile(const PdsmTile& tile) {
+  if (has_preview()) {
+    preview_.ShadeTile(tile, receiver_depth_.at(plan_.TileIndexAt(tile.x0, tile.y0)));
+  }
+  absl::MutexLock lock(&writer_mu_);
+  return writer_->WriteTile(tile);
+}
+
+absl::Status LocalOutput::Finish() {
+  if (has_preview()) {
+    if (absl::Status s = preview_.Write(preview_path_); !s.ok()) return s;
+  }
+  absl::MutexLock lock(&writer_mu_);
+  return writer_->Finish();
+}
+
+void LocalOutput::Ended(JobEnd end, const absl::Status& status, const JobProgress& progress) {
+  absl::MutexLock lock(&end_mu_);
+  status_ = end == JobEnd::kSucceeded ? absl::OkStatus() : status;
+  progress_ = progress;
+  ended_ = true;
+}
+
+absl::Status LocalOutput::status() const {
+  absl::MutexLock lock(&end_mu_);
+  return status_;
+}
+
+JobProgress LocalOutput::progress() const {
+  absl::MutexLock lock(&end_mu_);
+  return progress_;
+}
+
+}  // namespace pdsm
