@@ -1,0 +1,448 @@
+#include "core/pipeline/bake_engine.h"
+
+#include <algorithm>
+#include <map>
+#include <optional>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "absl/synchronization/notification.h"
+#include "core/pdsm/attenuation_function.h"
+#include "core/util/work_queue.h"
+#include "tests/test_support.h"
+
+namespace pdsm {
+namespace {
+
+// A plan of `tiles_x` x 1 tiles of 2x1 pixels, without geometry: the engine only reads the
+// header and the tile grid.
+std::shared_ptr<const BakePlan> SmallPlan(int tiles_x, int samples, double adaptive_tolerance = 0,
+                                          int adaptive_min_samples = 0) {
+  auto plan = std::make_shared<BakePlan>();
+  PdsmHeader& h = plan->header;
+  h.samples = samples;
+  h.tile_size = 2;
+  h.epsilon = 0;
+  h.geometry.width = 2 * tiles_x;
+  h.geometry.height = 1;
+  h.geometry.z_near = 1;
+  h.geometry.z_far = 10;
+  h.adaptive_tolerance = adaptive_tolerance;
+  h.adaptive_min_samples = adaptive_min_samples;
+  plan->tiles_x = tiles_x;
+  plan->tiles_y = 1;
+  for (int t = 0; t < tiles_x; ++t) {
+    plan->tiles.push_back(TileRect{.index = t, .x0 = 2 * t, .y0 = 0, .width = 2, .height = 1});
+  }
+  return plan;
+}
+
+// The events of samples [begin, end) of tile `tile`: in pixel 0 sample k is in shadow from
+// depth 2 + k % 3 to 8 (so the answer depends on every sample); pixel 1 is lit.
+TileEvents BatchEvents(const BakePlan& plan, int tile, int begin, int end) {
+  const TileRect& r = plan.tiles.at(tile);
+  TileEvents out{.tile_index = tile, .x0 = r.x0, .y0 = r.y0, .width = r.width, .height = r.height};
+  std::vector<Event> pixel;
+  for (int k = begin; k < end; ++k) {
+    pixel.push_back({static_cast<float>(2 + k % 3 + tile), +1});
+    pixel.push_back({8.0f, -1});
+  }
+  NormalizeEvents(&pixel);
+  out.events = pixel;
+  out.offsets = {0, pixel.size(), pixel.size()};
+  return out;
+}
+
+// Records what the engine asks of an output; StoreTile can be held to race a cancel.
+class RecordingOutput : public JobOutput {
+ public:
+  void Started() override {
+    absl::MutexLock lock(&mu_);
+    ++started_;
+  }
+  absl::Status StoreTile(const PdsmTile& tile) override {
+    if (hold_store_) {
+      store_entered_.Notify();
+      release_store_.WaitForNotification();
+    }
+    absl::MutexLock lock(&mu_);
+    EXPECT_EQ(ended_, 0) << "StoreTile after Ended";
+    tiles_[tile.x0 / 2] = tile;
+    return store_error_;
+  }
+  absl::Status Finish() override {
+    absl::MutexLock lock(&mu_);
+    EXPECT_EQ(ended_, 0) << "Finish after Ended";
+    ++finished_;
+    return absl::OkStatus();
+  }
+  void Ended(JobEnd end, const absl::Status& status, const JobProgress& progress) override {
+    absl::MutexLock lock(&mu_);
+    ++ended_;
+    end_ = end;
+    status_ = status;
+    progress_ = progress;
+    ended_note_.Notify();
+  }
+
+  int started() { absl::MutexLock lock(&mu_); return started_; }
+  int finished() { absl::MutexLock lock(&mu_); return finished_; }
+  int ended() { absl::MutexLock lock(&mu_); return ended_; }
+  JobEnd end() { absl::MutexLock lock(&mu_); return end_; }
+  absl::Status status() { absl::MutexLock lock(&mu_); return status_; }
+  JobProgress progress() { absl::MutexLock lock(&mu_); return progress_; }
+  std::map<int, PdsmTile> tiles() { absl::MutexLock lock(&mu_); return tiles_; }
+
+  bool hold_store_ = false;
+  absl::Notification store_entered_, release_store_, ended_note_;
+  absl::Status store_error_;
+
+ private:
+  absl::Mutex mu_;
+  int started_ = 0, finished_ = 0, ended_ = 0;
+  JobEnd end_ = JobEnd::kFailed;
+  absl::Status status_;
+  JobProgress progress_;
+  std::map<int, PdsmTile> tiles_;
+};
+
+EngineOptions InlineOptions() {
+  EngineOptions options;
+  options.executor = [](std::function<void()> work) { work(); };
+  options.scheduler.lease_ms = 1000;
+  return options;
+}
+
+EngineJob Job(std::shared_ptr<const BakePlan> plan, std::shared_ptr<JobOutput> output,
+              int samples_per_task) {
+  EngineJob job;
+  job.job_id = "j";
+  job.plan = std::move(plan);
+  job.samples_per_task = samples_per_task;
+  job.output = std::move(output);
+  return job;
+}
+
+// Leases every task the engine hands out to one worker and reports it, in a shuffled order
+// when `seed` is set. Returns the number of tasks run.
+int RunAll(BakeEngine& engine, const BakePlan& plan, std::optional<unsigned> seed = {}) {
+  int tasks = 0;
+  std::mt19937 rng(seed.value_or(0));
+  for (;;) {
+    std::vector<TaskLease> leases;
+    while (std::optional<TaskLease> lease = engine.Lease("w")) leases.push_back(*lease);
+    if (leases.empty()) return tasks;
+    if (seed) std::shuffle(leases.begin(), leases.end(), rng);
+    for (const TaskLease& l : leases) {
+      EXPECT_TRUE(engine.Report("w", l.lease_id,
+                                BatchEvents(plan, l.tile_index, l.sample_begin, l.sample_end)));
+      ++tasks;
+    }
+  }
+}
+
+TEST(BakeEngine, FixedCountJobStoresEveryTileFinishesAndEndsOnce) {
+  const auto plan = SmallPlan(3, 8);
+  auto output = std::make_shared<RecordingOutput>();
+  BakeEngine engine(InlineOptions());
+  ASSERT_TRUE(engine.AddJob(Job(plan, output, 3)).ok());
+  EXPECT_EQ(engine.Progress("j")->tasks_total, 9);  // 3 tiles x batches [0,3) [3,6) [6,8)
+  EXPECT_EQ(RunAll(engine, *plan), 9);
+  EXPECT_EQ(output->started(), 1);
+  EXPECT_EQ(output->finished(), 1);
+  EXPECT_EQ(output->ended(), 1);
+  EXPECT_EQ(output->end(), JobEnd::kSucceeded);
+  EXPECT_EQ(output->tiles().size(), 3u);
+  const JobProgress p = output->progress();
+  EXPECT_EQ(p.tiles_done, 3);
+  EXPECT_EQ(p.tasks_done, 9);
+  EXPECT_EQ(p.samples_done, p.samples_total);
+  EXPECT_EQ(p.tile_samples_total, 24);
+  EXPECT_FALSE(engine.Progress("j"));  // left the engine
+  // Pixel 0 of tile 0: samples 0..7 enter at 2 + k % 3 and leave at 8. Between 4 and 8 all
+  // eight are in shadow; between 2 and 3, the three with k % 3 == 0.
+  const PdsmTile tile = output->tiles().at(0);
+  EXPECT_FLOAT_EQ(EvaluateAttenuation(tile.Function(0, 0), 2.5), 3.0f / 8);
+  EXPECT_FLOAT_EQ(EvaluateAttenuation(tile.Function(0, 0), 5.0), 1.0f);
+  EXPECT_FLOAT_EQ(EvaluateAttenuation(tile.Function(0, 0), 9.0), 0.0f);
+  EXPECT_TRUE(tile.Function(1, 0).empty());
+}
+
+TEST(BakeEngine, TilesDoNotDependOnBatchesOrArrivalOrder) {
+  const auto plan = SmallPlan(2, 7);
+  std::vector<std::map<int, PdsmTile>> results;
+  for (const auto& [batch, seed] : std::vector<std::pair<int, std::optional<unsigned>>>{
+           {0, std::nullopt}, {1, 5u}, {2, 9u}, {4, 1u}}) {
+    auto output = std::make_shared<RecordingOutput>();
+    BakeEngine engine(InlineOptions());
+    ASSERT_TRUE(engine.AddJob(Job(plan, output, batch)).ok());
+    RunAll(engine, *plan, seed);
+    ASSERT_EQ(output->end(), JobEnd::kSucceeded);
+    results.push_back(output->tiles());
+  }
+  for (size_t r = 1; r < results.size(); ++r) {
+    for (int t = 0; t < 2; ++t) {
+      EXPECT_EQ(results[r].at(t).vertices, results[0].at(t).vertices) << "run " << r;
+      EXPECT_EQ(results[r].at(t).offsets, results[0].at(t).offsets) << "run " << r;
+    }
+  }
+}
+
+TEST(BakeEngine, AdaptiveTileTakesStagesUntilItConverges) {
+  // Tolerance 0: only the last stage ends a tile whose halves differ, so all 16 samples run.
+  const auto plan = SmallPlan(1, 16, /*adaptive_tolerance=*/1e-9, /*adaptive_min_samples=*/2);
+  auto output = std::make_shared<RecordingOutput>();
+  BakeEngine engine(InlineOptions());
+  ASSERT_TRUE(engine.AddJob(Job(plan, output, 0)).ok());
+  // Pilot: [0,1) and [1,2); the next stage is not out before the pilot is judged.
+  std::vector<TaskLease> pilot;
+  while (std::optional<TaskLease> lease = engine.Lease("w")) pilot.push_back(*lease);
+  ASSERT_EQ(pilot.size(), 2u);
+  for (const TaskLease& l : pilot) {
+    engine.Report("w", l.lease_id, BatchEvents(*plan, 0, l.sample_begin, l.sample_end));
+  }
+  std::vector<std::pair<int, int>> ranges;
+  while (std::optional<TaskLease> lease = engine.Lease("w")) {
+    ranges.emplace_back(lease->sample_begin, lease->sample_end);
+    engine.Report("w", lease->lease_id,
+                  BatchEvents(*plan, 0, lease->sample_begin, lease->sample_end));
+  }
+  EXPECT_EQ(ranges, (std::vector<std::pair<int, int>>{{2, 4}, {4, 8}, {8, 16}}));
+  ASSERT_EQ(output->end(), JobEnd::kSucceeded);
+  EXPECT_EQ(output->tiles().at(0).samples, 16);
+  EXPECT_EQ(output->progress().samples_done, 16);
+}
+
+TEST(BakeEngine, ConvergedAdaptiveTileStopsEarlyAndCountsItsSkippedSamples) {
+  // Every sample alike (the lit pixel, and a tile offset that makes the shadow identical):
+  // the pilot's halves agree, so the tile is done after 2 of 64 samples.
+  const auto plan = SmallPlan(1, 64, /*adaptive_tolerance=*/0.01, /*adaptive_min_samples=*/2);
+  auto output = std::make_shared<RecordingOutput>();
+  BakeEngine engine(InlineOptions());
+  ASSERT_TRUE(engine.AddJob(Job(plan, output, 0)).ok());
+  while (std::optional<TaskLease> lease = engine.Lease("w")) {
+    // Samples 0 and 1 both in shadow over [2, 8).
+    TileEvents events = BatchEvents(*plan, 0, 0, 1);
+    engine.Report("w", lease->lease_id, std::move(events));
+  }
+  ASSERT_EQ(output->end(), JobEnd::kSucceeded);
+  EXPECT_EQ(output->tiles().at(0).samples, 2);
+  const JobProgress p = output->progress();
+  EXPECT_EQ(p.tile_samples_total, 2);
+  EXPECT_EQ(p.samples_done, p.samples_total);  // the skipped 62 count as done
+}
+
+TEST(BakeEngine, CancelWhileATileIsStoredEndsOnlyAfterTheStoreReturns) {
+  const auto plan = SmallPlan(2, 2);
+  auto output = std::make_shared<RecordingOutput>();
+  output->hold_store_ = true;
+  WorkQueue pool(2);
+  EngineOptions options = InlineOptions();
+  options.executor = [&pool](std::function<void()> work) { pool.Post(std::move(work)); };
+  BakeEngine engine(std::move(options));
+  ASSERT_TRUE(engine.AddJob(Job(plan, output, 0)).ok());
+  const std::optional<TaskLease> lease = engine.Lease("w");
+  ASSERT_TRUE(lease);
+  ASSERT_TRUE(engine.Report("w", lease->lease_id,
+                            BatchEvents(*plan, lease->tile_index, 0, plan->header.samples)));
+  output->store_entered_.WaitForNotification();
+  EXPECT_TRUE(engine.Cancel("j", absl::CancelledError("by request")));
+  EXPECT_FALSE(engine.Cancel("j", absl::CancelledError("twice")));
+  EXPECT_FALSE(engine.Lease("w"));  // its other tile's task is gone
+  EXPECT_EQ(output->ended(), 0);    // the store is still running
+  output->release_store_.Notify();
+  output->ended_note_.WaitForNotification();
+  pool.Wait();
+  EXPECT_EQ(output->ended(), 1);
+  EXPECT_EQ(output->end(), JobEnd::kCancelled);
+  EXPECT_EQ(output->status().message(), "by request");
+  EXPECT_EQ(output->finished(), 0);
+}
+
+TEST(BakeEngine, StoreErrorFailsTheJobNamingTheTile) {
+  const auto plan = SmallPlan(2, 1);
+  auto output = std::make_shared<RecordingOutput>();
+  output->store_error_ = absl::ResourceExhaustedError("disk full");
+  BakeEngine engine(InlineOptions());
+  ASSERT_TRUE(engine.AddJob(Job(plan, output, 0)).ok());
+  const std::optional<TaskLease> first = engine.Lease("w");
+  const std::optional<TaskLease> second = engine.Lease("w");
+  ASSERT_TRUE(first && second);
+  EXPECT_TRUE(engine.Report("w", first->lease_id, BatchEvents(*plan, first->tile_index, 0, 1)));
+  EXPECT_FALSE(engine.Report("w", second->lease_id, BatchEvents(*plan, second->tile_index, 0, 1)))
+      << "a failed job takes no more results";
+  EXPECT_EQ(output->end(), JobEnd::kFailed);
+  EXPECT_EQ(output->status().code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_EQ(output->status().message(), "storing tile 0: disk full");
+  EXPECT_EQ(output->finished(), 0);
+  EXPECT_EQ(output->ended(), 1);
+}
+
+TEST(BakeEngine, TaskFailureEndsTheJobWithItsOwnStatusWhenAsked) {
+  const auto plan = SmallPlan(2, 4);
+  auto output = std::make_shared<RecordingOutput>();
+  EngineOptions options = InlineOptions();
+  options.task_failure_ends_job = true;
+  BakeEngine engine(std::move(options));
+  ASSERT_TRUE(engine.AddJob(Job(plan, output, 0)).ok());
+  const std::optional<TaskLease> lease = engine.Lease("w");
+  ASSERT_TRUE(lease);
+  engine.ReportFailure("w", lease->lease_id, absl::ResourceExhaustedError("map too large"),
+                       /*handed_back=*/false);
+  EXPECT_EQ(output->end(), JobEnd::kFailed);
+  EXPECT_EQ(output->status(), absl::ResourceExhaustedError("map too large"));
+}
+
+TEST(BakeEngine, TaskFailuresOnDistinctWorkersFailTheJobOtherwise) {
+  const auto plan = SmallPlan(1, 4);
+  auto output = std::make_shared<RecordingOutput>();
+  EngineOptions options = InlineOptions();
+  options.scheduler.max_task_failures = 2;
+  BakeEngine engine(std::move(options));
+  ASSERT_TRUE(engine.AddJob(Job(plan, output, 0)).ok());
+  std::optional<TaskLease> lease = engine.Lease("a");
+  ASSERT_TRUE(lease);
+  engine.ReportFailure("a", lease->lease_id, absl::InternalError("gl"), false);
+  EXPECT_EQ(output->ended(), 0);  // re-queued for another worker
+  EXPECT_FALSE(engine.Lease("a"));
+  lease = engine.Lease("b");
+  ASSERT_TRUE(lease);
+  engine.ReportFailure("b", lease->lease_id, absl::InternalError("gl"), false);
+  EXPECT_EQ(output->end(), JobEnd::kFailed);
+  EXPECT_EQ(output->status().code(), absl::StatusCode::kAborted);
+  EXPECT_NE(output->status().message().find("failed on 2 workers"), std::string::npos)
+      << output->status();
+}
+
+TEST(BakeEngine, HandedBackTaskGoesToTheNextWorker) {
+  const auto plan = SmallPlan(1, 4);
+  auto output = std::make_shared<RecordingOutput>();
+  EngineOptions options = InlineOptions();
+  options.task_failure_ends_job = true;
+  BakeEngine engine(std::move(options));
+  ASSERT_TRUE(engine.AddJob(Job(plan, output, 0)).ok());
+  std::optional<TaskLease> lease = engine.Lease("a");
+  engine.ReportFailure("a", lease->lease_id, absl::CancelledError("stopping"), true);
+  EXPECT_EQ(output->ended(), 0);
+  EXPECT_EQ(RunAll(engine, *plan), 1);
+  EXPECT_EQ(output->end(), JobEnd::kSucceeded);
+}
+
+TEST(BakeEngine, ResumedJobRunsOnlyItsMissingTiles) {
+  const auto plan = SmallPlan(3, 2);
+  auto output = std::make_shared<RecordingOutput>();
+  BakeEngine engine(InlineOptions());
+  EngineJob job = Job(plan, output, 0);
+  job.done_tiles = {0, 2};
+  job.started = true;
+  ASSERT_TRUE(engine.AddJob(std::move(job)).ok());
+  EXPECT_EQ(engine.Progress("j")->tiles_done, 2);
+  const std::optional<TaskLease> lease = engine.Lease("w");
+  ASSERT_TRUE(lease);
+  EXPECT_EQ(lease->tile_index, 1);
+  engine.Report("w", lease->lease_id, BatchEvents(*plan, 1, 0, 2));
+  EXPECT_EQ(output->started(), 0);  // it had started before the restart
+  EXPECT_EQ(output->end(), JobEnd::kSucceeded);
+  EXPECT_EQ(output->tiles().size(), 1u);
+}
+
+TEST(BakeEngine, JobWithEveryTileDoneFinishesAtOnce) {
+  const auto plan = SmallPlan(2, 2);
+  auto output = std::make_shared<RecordingOutput>();
+  BakeEngine engine(InlineOptions());
+  EngineJob job = Job(plan, output, 0);
+  job.done_tiles = {0, 1};
+  ASSERT_TRUE(engine.AddJob(std::move(job)).ok());
+  EXPECT_EQ(output->finished(), 1);
+  EXPECT_EQ(output->end(), JobEnd::kSucceeded);
+}
+
+TEST(BakeEngine, RefusesADuplicateJobAndOneWithoutPlanOrOutput) {
+  const auto plan = SmallPlan(1, 2);
+  BakeEngine engine(InlineOptions());
+  ASSERT_TRUE(engine.AddJob(Job(plan, std::make_shared<RecordingOutput>(), 0)).ok());
+  EXPECT_EQ(engine.AddJob(Job(plan, std::make_shared<RecordingOutput>(), 0)).code(),
+            absl::StatusCode::kAlreadyExists);
+  EXPECT_EQ(engine.AddJob(Job(nullptr, std::make_shared<RecordingOutput>(), 0)).code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(engine.AddJob(Job(plan, nullptr, 0)).code(), absl::StatusCode::kInvalidArgument);
+}
+
+TEST(BakeEngine, WaitingLeaseReturnsWhenTheJobEnds) {
+  const auto plan = SmallPlan(1, 2);
+  auto output = std::make_shared<RecordingOutput>();
+  BakeEngine engine(InlineOptions());
+  ASSERT_TRUE(engine.AddJob(Job(plan, output, 0)).ok());
+  const std::optional<TaskLease> only = engine.Lease("a");
+  ASSERT_TRUE(only);
+  std::optional<TaskLease> got;
+  absl::Notification returned;
+  std::thread waiter([&] {
+    got = engine.Lease("b", absl::Seconds(60));
+    returned.Notify();
+  });
+  EXPECT_FALSE(returned.WaitForNotificationWithTimeout(absl::Milliseconds(50)));
+  engine.Fail("j", absl::InternalError("runner could not start"));
+  EXPECT_TRUE(returned.WaitForNotificationWithTimeout(absl::Seconds(10)));
+  waiter.join();
+  EXPECT_FALSE(got);
+  EXPECT_EQ(output->end(), JobEnd::kFailed);
+  EXPECT_FALSE(engine.Report("a", only->lease_id, BatchEvents(*plan, 0, 0, 2)));  // stale
+}
+
+TEST(BakeEngine, ManyThreadsBakeTheSameTilesAsOne) {
+  const auto plan = SmallPlan(16, 12);
+  std::map<int, PdsmTile> single;
+  {
+    auto output = std::make_shared<RecordingOutput>();
+    BakeEngine engine(InlineOptions());
+    ASSERT_TRUE(engine.AddJob(Job(plan, output, 5)).ok());
+    RunAll(engine, *plan);
+    single = output->tiles();
+  }
+  auto output = std::make_shared<RecordingOutput>();
+  EngineOptions options = InlineOptions();
+  options.scheduler.max_open_tiles = 3;
+  BakeEngine engine(std::move(options));
+  ASSERT_TRUE(engine.AddJob(Job(plan, output, 5)).ok());
+  WorkQueue threads(4);
+  for (int t = 0; t < 4; ++t) {
+    threads.Post([&, t] {
+      const std::string id = "w" + std::to_string(t);
+      while (std::optional<TaskLease> l = engine.Lease(id, absl::Seconds(5))) {
+        engine.Report(id, l->lease_id, BatchEvents(*plan, l->tile_index, l->sample_begin,
+                                                   l->sample_end));
+      }
+    });
+  }
+  threads.Wait();
+  ASSERT_EQ(output->end(), JobEnd::kSucceeded);
+  ASSERT_EQ(output->tiles().size(), single.size());
+  for (const auto& [t, tile] : single) EXPECT_EQ(output->tiles().at(t).vertices, tile.vertices);
+}
+
+TEST(BakeEngine, StatsCountJobsAndRecentResults) {
+  const auto plan = SmallPlan(2, 2);
+  int64_t now = 1'000'000;
+  EngineOptions options = InlineOptions();
+  options.now_ms = [&now] { return now; };
+  BakeEngine engine(std::move(options));
+  ASSERT_TRUE(engine.AddJob(Job(plan, std::make_shared<RecordingOutput>(), 0)).ok());
+  EXPECT_EQ(engine.Stats().jobs_waiting, 1);
+  now += 10'000;
+  const std::optional<TaskLease> lease = engine.Lease("w");
+  ASSERT_TRUE(lease);
+  engine.Report("w", lease->lease_id, BatchEvents(*plan, lease->tile_index, 0, 2));
+  EngineStats stats = engine.Stats();
+  EXPECT_EQ(stats.jobs_started, 1);
+  EXPECT_EQ(stats.scheduler.results_accepted, 1);
+  EXPECT_DOUBLE_EQ(stats.tasks_per_second, 1 / 10.0);   // one result in the 10 s so far
+  EXPECT_DOUBLE_EQ(stats.events_per_second, 3 / 10.0);  // two entries and their shared exit
+}
+
+}  // namespace
+}  // namespace pdsm
