@@ -310,7 +310,7 @@ absl::StatusOr<JobRecord> JobStore::CreateJob(const JobRecord& record, bool* cre
   if (record.job_id.empty() || record.idempotency_key.empty()) {
     return absl::InvalidArgumentError("CreateJob: job_id and idempotency_key must not be empty");
   }
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   Transaction txn(db_, db_path_);
   if (absl::Status s = txn.Begin(); !s.ok()) return s;
 
@@ -369,7 +369,7 @@ absl::StatusOr<JobRecord> JobStore::CreateJob(const JobRecord& record, bool* cre
 }
 
 absl::StatusOr<JobRecord> JobStore::GetJob(const std::string& job_id) {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   absl::StatusOr<Statement> stmt = Statement::Prepare(
       db_, db_path_,
       absl::StrCat("SELECT ", kJobColumns, ", scene", " FROM jobs WHERE job_id = ?1"));
@@ -382,7 +382,7 @@ absl::StatusOr<JobRecord> JobStore::GetJob(const std::string& job_id) {
 }
 
 absl::StatusOr<std::vector<JobRecord>> JobStore::ListJobs(int limit) {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   absl::StatusOr<Statement> stmt = Statement::Prepare(
       db_, db_path_,
       absl::StrCat("SELECT ", kJobColumns, " FROM jobs ORDER BY sequence DESC LIMIT ?1"));
@@ -392,7 +392,7 @@ absl::StatusOr<std::vector<JobRecord>> JobStore::ListJobs(int limit) {
 }
 
 absl::StatusOr<std::vector<JobRecord>> JobStore::UnfinishedJobs() {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   absl::StatusOr<Statement> stmt =
       Statement::Prepare(db_, db_path_,
                          absl::StrCat("SELECT ", kJobColumns, ", scene",
@@ -409,7 +409,7 @@ absl::Status JobStore::SetState(const std::string& job_id, pdsm::v1::JobState st
     return absl::InvalidArgumentError(
         absl::StrCat("SetState(", job_id, "): invalid state ", static_cast<int>(state)));
   }
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   absl::StatusOr<Statement> stmt = Statement::Prepare(
       db_, db_path_,
       "UPDATE jobs SET state = ?1, error = ?2, updated_unix_ms = ?3 WHERE job_id = ?4");
@@ -425,7 +425,7 @@ absl::Status JobStore::SetState(const std::string& job_id, pdsm::v1::JobState st
 
 absl::Status JobStore::SetSucceeded(const std::string& job_id, uint64_t pdsm_bytes,
                                     int64_t now_ms) {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   absl::StatusOr<Statement> stmt = Statement::Prepare(db_, db_path_, R"sql(
       UPDATE jobs SET state = ?1, error = '', pdsm_bytes = ?2, updated_unix_ms = ?3
       WHERE job_id = ?4)sql");
@@ -440,7 +440,7 @@ absl::Status JobStore::SetSucceeded(const std::string& job_id, uint64_t pdsm_byt
 }
 
 absl::Status JobStore::MarkTileDone(const std::string& job_id, int tile_index, int64_t now_ms) {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   Transaction txn(db_, db_path_);
   if (absl::Status s = txn.Begin(); !s.ok()) return s;
 
@@ -478,7 +478,7 @@ absl::Status JobStore::MarkTileDone(const std::string& job_id, int tile_index, i
 }
 
 absl::StatusOr<std::vector<int>> JobStore::DoneTiles(const std::string& job_id) {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   absl::StatusOr<Statement> exists =
       Statement::Prepare(db_, db_path_, "SELECT 1 FROM jobs WHERE job_id = ?1");
   if (!exists.ok()) return exists.status();

@@ -8,13 +8,14 @@
 
 #include <cstdint>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "absl/base/thread_annotations.h"
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
 #include "pdsm/v1/jobs.pb.h"
 
 struct sqlite3;
@@ -98,8 +99,8 @@ class JobStore {
  private:
   JobStore(sqlite3* db, std::string db_path) : db_(db), db_path_(std::move(db_path)) {}
 
-  std::mutex mu_;
-  sqlite3* const db_;  // guarded by mu_; closed by the destructor
+  absl::Mutex mu_;
+  sqlite3* const db_ ABSL_PT_GUARDED_BY(mu_);  // closed by the destructor
   const std::string db_path_;
 };
 

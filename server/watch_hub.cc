@@ -28,8 +28,9 @@ class WatchHub::Watcher final : public grpc::ServerWriteReactor<pdsm::v1::Job> {
  public:
   Watcher(WatchHub* hub, std::string job_id) : hub_(hub), job_id_(std::move(job_id)) {}
 
-  // Called by the hub with its mutex held.
+  // REQUIRES: the hub's mutex held (asserted: the analysis cannot see that hub_ is the hub).
   void Poll(std::chrono::steady_clock::time_point now) {
+    hub_->mu_.AssertHeld();
     if (writing_ || finished_) return;
     if (sent_any_ && Ended(sent_)) return Finish(grpc::Status::OK);  // the last word was said
     absl::StatusOr<pdsm::v1::Job> job = hub_->coordinator_->GetJob(job_id_);
@@ -42,13 +43,15 @@ class WatchHub::Watcher final : public grpc::ServerWriteReactor<pdsm::v1::Job> {
     StartWrite(&sent_);
   }
 
+  // REQUIRES: the hub's mutex held.
   void Finish(const grpc::Status& status) {
+    hub_->mu_.AssertHeld();
     finished_ = true;
     grpc::ServerWriteReactor<pdsm::v1::Job>::Finish(status);
   }
 
   void OnWriteDone(bool ok) override {
-    std::lock_guard<std::mutex> lock(hub_->mu_);
+    absl::MutexLock lock(&hub_->mu_);
     writing_ = false;
     if (finished_) return;
     if (!ok) return Finish(grpc::Status(grpc::StatusCode::UNAVAILABLE, "write failed"));
@@ -59,17 +62,26 @@ class WatchHub::Watcher final : public grpc::ServerWriteReactor<pdsm::v1::Job> {
 
   void OnDone() override {
     {
-      std::lock_guard<std::mutex> lock(hub_->mu_);
+      absl::MutexLock lock(&hub_->mu_);
       hub_->watchers_.erase(this);
     }
     delete this;
   }
 
-  bool writing_ = false;
-  bool finished_ = false;
+  // The hub is stopping: ends the call unless a write is in flight (OnWriteDone ends it).
+  // REQUIRES: the hub's mutex held.
+  void FinishIfIdle() {
+    hub_->mu_.AssertHeld();
+    if (!finished_ && !writing_) {
+      Finish(grpc::Status(grpc::StatusCode::UNAVAILABLE, "the coordinator is stopping"));
+    }
+  }
+
 
  private:
-  WatchHub* hub_;
+  WatchHub* const hub_;
+  bool writing_ ABSL_GUARDED_BY(hub_->mu_) = false;
+  bool finished_ ABSL_GUARDED_BY(hub_->mu_) = false;
   const std::string job_id_;
   pdsm::v1::Job sent_;
   bool sent_any_ = false;
@@ -85,7 +97,7 @@ WatchHub::~WatchHub() {
 
 grpc::ServerWriteReactor<pdsm::v1::Job>* WatchHub::Watch(const std::string& job_id) {
   auto* watcher = new Watcher(this, job_id);
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   if (stopping_) {
     watcher->Finish(grpc::Status(grpc::StatusCode::UNAVAILABLE, "the coordinator is stopping"));
   } else {
@@ -96,9 +108,9 @@ grpc::ServerWriteReactor<pdsm::v1::Job>* WatchHub::Watch(const std::string& job_
 }
 
 void WatchHub::Loop() {
-  std::unique_lock<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   while (!stopping_) {
-    cv_.wait_for(lock, kPollPeriod);
+    cv_.WaitWithTimeout(&mu_, absl::FromChrono(kPollPeriod));
     if (stopping_) break;
     const auto now = std::chrono::steady_clock::now();
     for (Watcher* w : watchers_) w->Poll(now);
@@ -107,16 +119,12 @@ void WatchHub::Loop() {
 
 void WatchHub::Shutdown() {
   {
-    std::lock_guard<std::mutex> lock(mu_);
+    absl::MutexLock lock(&mu_);
     if (stopping_) return;
     stopping_ = true;
-    for (Watcher* w : watchers_) {
-      if (!w->finished_ && !w->writing_) {
-        w->Finish(grpc::Status(grpc::StatusCode::UNAVAILABLE, "the coordinator is stopping"));
-      }
-    }
+    for (Watcher* w : watchers_) w->FinishIfIdle();
   }
-  cv_.notify_all();
+  cv_.SignalAll();
   if (thread_.joinable()) thread_.join();
 }
 

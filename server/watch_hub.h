@@ -4,14 +4,14 @@
 #ifndef PDSM_SERVER_WATCH_HUB_H_
 #define PDSM_SERVER_WATCH_HUB_H_
 
-#include <condition_variable>
-#include <mutex>
 #include <set>
 #include <string>
 #include <thread>
 
 #include <grpcpp/grpcpp.h>
 
+#include "absl/base/thread_annotations.h"
+#include "absl/synchronization/mutex.h"
 #include "pdsm/v1/jobs.pb.h"
 #include "server/coordinator.h"
 
@@ -33,10 +33,10 @@ class WatchHub {
   void Loop();
 
   Coordinator* coordinator_;
-  std::mutex mu_;
-  std::condition_variable cv_;
-  std::set<Watcher*> watchers_;
-  bool stopping_ = false;
+  absl::Mutex mu_;  // also guards each watcher's write state (watch_hub.cc)
+  absl::CondVar cv_;
+  std::set<Watcher*> watchers_ ABSL_GUARDED_BY(mu_);
+  bool stopping_ ABSL_GUARDED_BY(mu_) = false;
   std::thread thread_;
 };
 

@@ -1,4 +1,4 @@
-// Adaptive sampling end to end (core/bake/adaptive_sampling.h, worker/adaptive_bake.h): on
+// Adaptive sampling end to end (core/bake/adaptive_sampling.h, core/pipeline/stage_rule.h): on
 // examples/plates, tiles outside the penumbrae stop at the first batch while penumbra tiles
 // take more; the result stays within the tolerance's promise against the exact reference
 // and a fixed-count bake; and the file is byte-identical whatever the threads and batches.
@@ -26,7 +26,13 @@ using testing::TempDir;
 
 constexpr int kMaxSamples = 128;
 constexpr int kMinSamples = 16;
-constexpr double kTolerance = 0.06;
+// The bake's tolerance: large enough that penumbra tiles stop early too (at 0.03 every
+// penumbra tile runs to kMaxSamples and the adaptive file equals the fixed one, which would
+// test nothing).
+constexpr double kBakeTolerance = 0.06;
+// What the result must meet, measured (p95 vs the fixed bake 0.0070, mean vs exact +0.0002):
+// the bound the test had when it baked at 0.03, independent of the bake's setting.
+constexpr double kPassBound = 0.03;
 
 Scene PlatesScene(bool adaptive) {
   pdsm::v1::BakeParams overrides;
@@ -38,7 +44,7 @@ Scene PlatesScene(bool adaptive) {
   overrides.set_epsilon(0);
   overrides.set_sampling(pdsm::v1::SOBOL);
   if (adaptive) {
-    overrides.set_adaptive_tolerance(kTolerance);
+    overrides.set_adaptive_tolerance(kBakeTolerance);
     overrides.set_adaptive_min_samples(kMinSamples);
   }
   absl::StatusOr<Scene> scene = LoadSceneFile(ExamplePath("plates"), overrides);
@@ -190,9 +196,10 @@ TEST_F(AdaptiveBakeTest, ErrorStaysWithinTheTolerance) {
       "fixed mean %.4f p95 %.4f\n",
       vs_fixed.mean, vs_fixed.p95, adaptive_error.mean, adaptive_error.p95, fixed_error.mean,
       fixed_error.p95);
-  EXPECT_LT(vs_fixed.p95, kTolerance);
-  EXPECT_LT(adaptive_error.mean, fixed_error.mean + kTolerance / 4);
-  EXPECT_LT(adaptive_error.p95, fixed_error.p95 + kTolerance);
+  EXPECT_GT(vs_fixed.mean, 0) << "no tile stopped early: the test would test nothing";
+  EXPECT_LT(vs_fixed.p95, kPassBound);
+  EXPECT_LT(adaptive_error.mean, fixed_error.mean + kPassBound / 4);
+  EXPECT_LT(adaptive_error.p95, fixed_error.p95 + kPassBound);
 }
 
 TEST_F(AdaptiveBakeTest, BytesDoNotDependOnThreadsOrBatches) {

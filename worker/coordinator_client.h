@@ -1,5 +1,9 @@
 // The worker's side of the worker API: one stub, every call with the worker token and a
 // deadline. Statuses come back as absl::Status (UNAVAILABLE when the coordinator is away).
+//
+// Thread-safe: the worker's task threads and its lease keeper share one client. Every call
+// makes its own grpc::ClientContext, and the stub and channel are safe for concurrent calls;
+// the members are set once by the constructor.
 #ifndef PDSM_WORKER_COORDINATOR_CLIENT_H_
 #define PDSM_WORKER_COORDINATOR_CLIENT_H_
 

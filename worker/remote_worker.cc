@@ -11,6 +11,7 @@
 #include "core/assets/mesh_asset.h"
 #include "core/bake/plan_fingerprint.h"
 #include "core/scene/scene_loader.h"
+#include "core/util/work_queue.h"
 #include "worker/bake_task.h"
 
 namespace pdsm {
@@ -44,13 +45,11 @@ absl::StatusOr<std::unique_ptr<RemoteWorker>> RemoteWorker::Create(
 RemoteWorker::~RemoteWorker() = default;
 
 absl::Status RemoteWorker::Run(const std::atomic<bool>& stop) {
-  std::thread keeper([&] { KeepLeases(stop); });
-  std::vector<std::thread> threads;
-  for (int t = 0; t < std::max(1, options_.threads); ++t) {
-    threads.emplace_back([&] { ThreadLoop(stop); });
-  }
-  for (std::thread& t : threads) t.join();
-  keeper.join();
+  const int threads = std::max(1, options_.threads);
+  WorkQueue queue(threads + 1);  // the task threads and the lease keeper
+  queue.Post([&] { KeepLeases(stop); });
+  for (int t = 0; t < threads; ++t) queue.Post([&] { ThreadLoop(stop); });
+  queue.Wait();
   return absl::OkStatus();
 }
 
@@ -58,7 +57,7 @@ absl::Status RemoteWorker::Run(const std::atomic<bool>& stop) {
 
 absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::Context(
     const std::string& job_id) {
-  std::lock_guard<std::mutex> lock(jobs_mu_);
+  absl::MutexLock lock(&jobs_mu_);
   auto it = jobs_.find(job_id);
   if (it != jobs_.end()) return it->second;
   absl::StatusOr<std::shared_ptr<const JobContext>> context = LoadContext(job_id);
@@ -110,7 +109,7 @@ void RemoteWorker::KeepLeases(const std::atomic<bool>& stop) {
     int64_t lease_ms;
     std::vector<std::pair<uint64_t, std::shared_ptr<RunningLease>>> current;
     {
-      std::lock_guard<std::mutex> lock(leases_mu_);
+      absl::MutexLock lock(&leases_mu_);
       lease_ms = lease_ms_;
       current.assign(leases_.begin(), leases_.end());
     }
@@ -159,12 +158,12 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
 
     auto lease = std::make_shared<RunningLease>();
     {
-      std::lock_guard<std::mutex> lock(leases_mu_);
+      absl::MutexLock lock(&leases_mu_);
       leases_[task.lease_id()] = lease;
       lease_ms_ = task.lease_ms();
     }
     const auto forget_lease = [&] {
-      std::lock_guard<std::mutex> lock(leases_mu_);
+      absl::MutexLock lock(&leases_mu_);
       leases_.erase(task.lease_id());
     };
 

@@ -1,5 +1,5 @@
-// pdsm-worker's main loop: N threads, each with its own OSMesa context, pull tasks from the
-// coordinator, run them (bake_task.h) and report the events. A lease keeper thread extends
+// pdsm-worker's main loop: N threads of a WorkQueue, each with its own OSMesa context, pull
+// tasks from the coordinator, run them (bake_task.h) and report the events. A lease keeper thread extends
 // the leases of running tasks; a lost lease (expired, cancelled job) stops its task at the
 // next light sample. Scenes and mesh assets are fetched once per job and cached on disk by
 // content hash.
@@ -9,10 +9,11 @@
 #include <atomic>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <string>
 
+#include "absl/base/thread_annotations.h"
 #include "absl/status/status.h"
+#include "absl/synchronization/mutex.h"
 #include "core/assets/asset_store.h"
 #include "core/bake/bake_plan.h"
 #include "worker/coordinator_client.h"
@@ -51,18 +52,19 @@ class RemoteWorker {
   void ThreadLoop(const std::atomic<bool>& stop);
   void KeepLeases(const std::atomic<bool>& stop);
   absl::StatusOr<std::shared_ptr<const JobContext>> Context(const std::string& job_id);
-  absl::StatusOr<std::shared_ptr<const JobContext>> LoadContext(const std::string& job_id);
+  absl::StatusOr<std::shared_ptr<const JobContext>> LoadContext(const std::string& job_id)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(jobs_mu_);
 
   CoordinatorClient* client_;
   const RemoteWorkerOptions options_;
   std::unique_ptr<AssetStore> assets_;
 
-  std::mutex jobs_mu_;  // held while a job's context loads: one download per job
-  std::map<std::string, std::shared_ptr<const JobContext>> jobs_;
+  absl::Mutex jobs_mu_;  // held while a job's context loads: one download per job
+  std::map<std::string, std::shared_ptr<const JobContext>> jobs_ ABSL_GUARDED_BY(jobs_mu_);
 
-  std::mutex leases_mu_;
-  std::map<uint64_t, std::shared_ptr<RunningLease>> leases_;
-  int64_t lease_ms_ = 30'000;  // the coordinator's, from the latest task
+  absl::Mutex leases_mu_;
+  std::map<uint64_t, std::shared_ptr<RunningLease>> leases_ ABSL_GUARDED_BY(leases_mu_);
+  int64_t lease_ms_ ABSL_GUARDED_BY(leases_mu_) = 30'000;  // the coordinator's, latest task
 };
 
 }  // namespace pdsm

@@ -140,7 +140,7 @@ void JobFollower::Start(int interval_ms) {
     while (!stop_) {
       absl::StatusOr<JobSnapshot> snapshot = Poll();
       {
-        std::lock_guard<std::mutex> lock(mu_);
+        absl::MutexLock lock(&mu_);
         if (!snapshot.ok()) {
           error_ = snapshot.status();
           return;
@@ -160,14 +160,14 @@ void JobFollower::Start(int interval_ms) {
 }
 
 std::optional<JobSnapshot> JobFollower::Take() {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   std::optional<JobSnapshot> out = std::move(latest_);
   latest_.reset();
   return out;
 }
 
 absl::Status JobFollower::error() {
-  std::lock_guard<std::mutex> lock(mu_);
+  absl::MutexLock lock(&mu_);
   return error_;
 }
 

@@ -11,14 +11,15 @@
 #include <atomic>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "absl/base/thread_annotations.h"
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
 #include "client/service/service_connection.h"
 #include "core/bake/bake_plan.h"
 #include "core/pdsm/pdsm_image.h"
@@ -78,9 +79,9 @@ class JobFollower {
 
   std::thread thread_;
   std::atomic<bool> stop_{false};
-  std::mutex mu_;
-  std::optional<JobSnapshot> latest_;  // guarded by mu_
-  absl::Status error_;                 // guarded by mu_
+  absl::Mutex mu_;
+  std::optional<JobSnapshot> latest_ ABSL_GUARDED_BY(mu_);
+  absl::Status error_ ABSL_GUARDED_BY(mu_);
 };
 
 }  // namespace pdsm::view
