@@ -16,8 +16,8 @@
 #include "client/view/shadow_maps.h"
 #include "client/view/view_mode.h"
 #include "client/view/view_scene.h"
-#include "worker/gl/gl_functions.h"
-#include "worker/gl/gl_objects.h"
+#include "gl/gl_functions.h"
+#include "gl/gl_objects.h"
 
 namespace pdsm::view {
 

@@ -9,13 +9,13 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
-#include "worker/gl/gl_functions.h"
-#include "worker/gl/gl_objects.h"
-#include "worker/gl/gl_program.h"
+#include "gl/gl_functions.h"
+#include "gl/gl_objects.h"
+#include "gl/gl_program.h"
 
 namespace pdsm::view {
 
-// The GL layer's program building and error checks (worker/gl/gl_program.h).
+// The GL layer's program building and error checks (gl/gl_program.h).
 using gl::BuildProgram;
 using gl::CheckGlError;
 

@@ -1,4 +1,4 @@
-#include "worker/gl/gl_program.h"
+#include "gl/gl_program.h"
 
 #include <algorithm>
 #include <string>

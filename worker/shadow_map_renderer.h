@@ -4,8 +4,8 @@
 // (x - a z, y - b z) (sun, sample direction (a, b, 1)), and its depth is the same light-space
 // z as the PDSM's. Each texel stores the biased light-space depth of the nearest caster, or
 // +infinity where there is none.
-#ifndef PDSM_WORKER_GL_SHADOW_MAP_RENDERER_H_
-#define PDSM_WORKER_GL_SHADOW_MAP_RENDERER_H_
+#ifndef PDSM_WORKER_SHADOW_MAP_RENDERER_H_
+#define PDSM_WORKER_SHADOW_MAP_RENDERER_H_
 
 #include <cstdint>
 #include <glm/glm.hpp>
@@ -69,4 +69,4 @@ class ShadowMapRenderer {
 
 }  // namespace pdsm
 
-#endif  // PDSM_WORKER_GL_SHADOW_MAP_RENDERER_H_
+#endif  // PDSM_WORKER_SHADOW_MAP_RENDERER_H_

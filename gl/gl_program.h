@@ -1,14 +1,14 @@
 // Building GLSL programs and checking GL errors: one place for the shadow-map
 // renderer and the viewer, so a driver's compile or link log always reaches the
 // caller the same way.
-#ifndef PDSM_WORKER_GL_GL_PROGRAM_H_
-#define PDSM_WORKER_GL_GL_PROGRAM_H_
+#ifndef PDSM_GL_GL_PROGRAM_H_
+#define PDSM_GL_GL_PROGRAM_H_
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
-#include "worker/gl/gl_functions.h"
-#include "worker/gl/gl_objects.h"
+#include "gl/gl_functions.h"
+#include "gl/gl_objects.h"
 
 namespace pdsm::gl {
 
@@ -23,4 +23,4 @@ absl::StatusOr<Program> BuildProgram(const GlFunctions &gl, const char *vertex_s
 
 }  // namespace pdsm::gl
 
-#endif  // PDSM_WORKER_GL_GL_PROGRAM_H_
+#endif  // PDSM_GL_GL_PROGRAM_H_
