@@ -27,7 +27,7 @@ struct ShadowMapCamera {
   ShadowMapWindow window;  // the texels to render
   double z_clip_near = 0;  // light-space depth; nearer geometry is clipped
   double z_clip_far = 0;   // sun only: farther geometry is clipped
-  // Bias (one function: BiasedDepth in shadow_map.frag): stored depth =
+  // Bias (one function: BiasedDepth, shaders/common/shadow_bias.glsl): stored depth =
   //   z + depth_bias + slope_bias * footprint_scale * (|dz/dx| + |dz/dy|) per texel.
   double depth_bias = 0;
   double slope_bias = 0;

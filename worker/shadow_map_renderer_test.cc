@@ -10,8 +10,12 @@
 #include <functional>
 #include <limits>
 #include <random>
+#include <regex>
+#include <string>
 #include <thread>
 #include <vector>
+
+#include "worker/shadow_map_shaders.h"  // generated: the embedded GLSL sources
 
 namespace pdsm {
 namespace {
@@ -504,6 +508,17 @@ TEST_F(ShadowMapRendererTest, RejectsBadInput) {
   ShadowMapRenderer::Options options;
   options.max_piece_size = 1;
   EXPECT_EQ(ShadowMapRenderer::Create(options).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
+// The bias chunk is embedded with the shader (GLSL has no #include): no #include line is left
+// for the driver, and BiasedDepth is defined once.
+TEST(ShadowMapShadersTest, BiasChunkIsIncludedAtBuildTime) {
+  const std::string fragment = kShadowMapFragmentShader;
+  EXPECT_FALSE(std::regex_search(fragment, std::regex("(^|\n)[ \t]*#[ \t]*include")))
+      << fragment;
+  const size_t definition = fragment.find("float BiasedDepth(");
+  ASSERT_NE(definition, std::string::npos) << fragment;
+  EXPECT_EQ(fragment.find("float BiasedDepth(", definition + 1), std::string::npos);
 }
 
 // Not a test: a timing probe (run with --gtest_also_run_disabled_tests). A 512x512 shadow map

@@ -259,6 +259,12 @@ absl::Status FrameRenderer::EnsureShadowMaps(ViewMode mode) {
   const gl::UniformSetter u(gl_, im.depth.name());
   u.Float("depth_bias", static_cast<float>(header.depth_bias));
   u.Float("slope_bias", static_cast<float>(header.slope_bias));
+  // The bake widens the slope bias to a PDSM pixel (footprint_scale = PDSM pixel / texel)
+  // because its bilinear lookup reads neighbouring rays, up to a pixel away. These maps are
+  // looked up where the receiver itself projects into them, within a texel of their own
+  // lattice (PCF/PCSS/VSM filter around that point with their own kernels), so one texel is
+  // the step to cover: 1, and the comparison modes keep the bias a plain shadow map has.
+  u.Float("footprint_scale", 1.0f);
   u.Float("z_near", static_cast<float>(header.geometry.z_near));
   u.Float("z_far", static_cast<float>(header.geometry.z_far));
   const ShadowClipRange clip = ShadowClipRangeOf(header.geometry);
