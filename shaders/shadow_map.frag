@@ -14,14 +14,7 @@ uniform float z_clip_far;       // orthographic only
 
 layout(location = 0) out float biased_depth;
 
-// The one bias function (ShadowMapCamera's contract). The slope term is how much the caster's
-// depth changes across one texel (|dz/dx| + |dz/dy| over screen pixels = lattice texels), so a
-// tilted receiver that looks itself up a texel away from where it was rasterised still sits
-// behind its own stored depth; footprint_scale widens that step when lookups can land farther.
-float BiasedDepth(float z) {
-  float depth_change_per_texel = abs(dFdx(z)) + abs(dFdy(z));
-  return z + depth_bias + slope_bias * footprint_scale * depth_change_per_texel;
-}
+#include "common/shadow_bias.glsl"  // BiasedDepth
 
 // Reversed depth in [0, 1]: larger is nearer, 0 (the clear value) is beyond everything.
 float ReversedDepth(float z) {
@@ -30,7 +23,7 @@ float ReversedDepth(float z) {
 }
 
 void main() {
-  float z_biased = BiasedDepth(z_light);
+  float z_biased = BiasedDepth(z_light, depth_bias, slope_bias, footprint_scale);
   biased_depth = z_biased;
   gl_FragDepth = ReversedDepth(z_biased);
 }

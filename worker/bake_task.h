@@ -13,7 +13,7 @@
 #include "core/bake/bake_plan.h"
 #include "core/bake/tile_reach.h"
 #include "core/events/event.h"
-#include "worker/gl/shadow_map_renderer.h"
+#include "worker/shadow_map_renderer.h"
 
 namespace pdsm {
 

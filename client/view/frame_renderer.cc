@@ -8,9 +8,9 @@
 
 #include "absl/strings/str_cat.h"
 #include "client/view/cpu_attenuation.h"
-#include "client/view/gl_program.h"
 #include "client/view/view_shaders.h"  // generated: the embedded GLSL sources
 #include "core/sampling/light_samples.h"
+#include "gl/gl_program.h"
 #include "spdlog/spdlog.h"
 
 namespace pdsm::view {
@@ -130,15 +130,15 @@ absl::StatusOr<std::unique_ptr<FrameRenderer>> FrameRenderer::Create(
 absl::Status FrameRenderer::Init() {
   Impl& im = *impl_;
   absl::StatusOr<gl::Program> shade =
-      BuildProgram(gl_, kSceneVertexShader, kShadeFragmentShader, "shade");
+      gl::BuildProgram(gl_, kSceneVertexShader, kShadeFragmentShader, "shade");
   if (!shade.ok()) return shade.status();
   im.shade = *std::move(shade);
   absl::StatusOr<gl::Program> gbuffer =
-      BuildProgram(gl_, kSceneVertexShader, kGbufferFragmentShader, "gbuffer");
+      gl::BuildProgram(gl_, kSceneVertexShader, kGbufferFragmentShader, "gbuffer");
   if (!gbuffer.ok()) return gbuffer.status();
   im.gbuffer = *std::move(gbuffer);
   absl::StatusOr<gl::Program> depth =
-      BuildProgram(gl_, kSceneVertexShader, kShadowDepthFragmentShader, "shadow_depth");
+      gl::BuildProgram(gl_, kSceneVertexShader, kShadowDepthFragmentShader, "shadow_depth");
   if (!depth.ok()) return depth.status();
   im.depth = *std::move(depth);
 
@@ -168,13 +168,13 @@ absl::Status FrameRenderer::Init() {
   gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
 
   gl_.UseProgram(im.shade.name());
-  const UniformSetter u(gl_, im.shade.name());
+  const gl::UniformSetter u(gl_, im.shade.name());
   u.Int("pdsm_index", kUnitPdsmIndex);
   u.Int("cpu_attenuation", kUnitCpuAttenuation);
   u.Int("shadow_map", kUnitShadowMap);
   u.Int("shadow_maps", kUnitShadowMaps);
   gl_.UseProgram(0);
-  return CheckGlError(gl_, "uploading the scene");
+  return gl::CheckGlError(gl_, "uploading the scene");
 }
 
 const PdsmGpu& FrameRenderer::pdsm_gpu() const { return impl_->pdsm; }
@@ -224,10 +224,10 @@ absl::Status FrameRenderer::EnsureTarget(int width, int height) {
   if (absl::Status s = check("G-buffer"); !s.ok()) return s;
   im.width = width;
   im.height = height;
-  return CheckGlError(gl_, absl::StrCat("allocating a ", width, "x", height, " frame"));
+  return gl::CheckGlError(gl_, absl::StrCat("allocating a ", width, "x", height, " frame"));
 }
 
-void FrameRenderer::DrawScene(const UniformSetter& u, bool casters_only) const {
+void FrameRenderer::DrawScene(const gl::UniformSetter& u, bool casters_only) const {
   const Impl& im = *impl_;
   const auto draw = [&](const MeshGpu& mesh, const glm::dmat4& light_from_object) {
     u.Mat4("light_from_object", glm::mat4(light_from_object));
@@ -256,9 +256,15 @@ absl::Status FrameRenderer::EnsureShadowMaps(ViewMode mode) {
   const auto start = Clock::now();
   const PdsmHeader& header = scene_->pdsm.header;
   gl_.UseProgram(im.depth.name());
-  const UniformSetter u(gl_, im.depth.name());
+  const gl::UniformSetter u(gl_, im.depth.name());
   u.Float("depth_bias", static_cast<float>(header.depth_bias));
   u.Float("slope_bias", static_cast<float>(header.slope_bias));
+  // The bake widens the slope bias to a PDSM pixel (footprint_scale = PDSM pixel / texel)
+  // because its bilinear lookup reads neighbouring rays, up to a pixel away. These maps are
+  // looked up where the receiver itself projects into them, within a texel of their own
+  // lattice (PCF/PCSS/VSM filter around that point with their own kernels), so one texel is
+  // the step to cover: 1, and the comparison modes keep the bias a plain shadow map has.
+  u.Float("footprint_scale", 1.0f);
   u.Float("z_near", static_cast<float>(header.geometry.z_near));
   u.Float("z_far", static_cast<float>(header.geometry.z_far));
   const ShadowClipRange clip = ShadowClipRangeOf(header.geometry);
@@ -294,7 +300,7 @@ absl::Status FrameRenderer::RenderCpuAttenuation(const glm::mat4& clip_from_ligh
   gl_.ClearBufferfv(GL_COLOR, 0, no_surface);
   gl_.ClearBufferfv(GL_DEPTH, 0, &far_depth);
   gl_.UseProgram(im.gbuffer.name());
-  const UniformSetter u(gl_, im.gbuffer.name());
+  const gl::UniformSetter u(gl_, im.gbuffer.name());
   u.Mat4("clip_from_light", clip_from_light);
   DrawScene(u, false);
   std::vector<float> gbuffer(static_cast<size_t>(im.width) * im.height * 4);
@@ -309,11 +315,11 @@ absl::Status FrameRenderer::RenderCpuAttenuation(const glm::mat4& clip_from_ligh
   gl_.TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, im.width, im.height, GL_RED, GL_FLOAT,
                     attenuation.data());
   timings_.cpu_seconds = SecondsSince(start);
-  return CheckGlError(gl_, "evaluating the PDSM on the CPU");
+  return gl::CheckGlError(gl_, "evaluating the PDSM on the CPU");
 }
 
 void FrameRenderer::SetShadeUniforms(ViewMode mode, const Camera& camera,
-                                     const UniformSetter& u) const {
+                                     const gl::UniformSetter& u) const {
   const Impl& im = *impl_;
   const PdsmHeader& header = scene_->pdsm.header;
   const PdsmGeometry& g = header.geometry;
@@ -362,7 +368,7 @@ absl::Status FrameRenderer::Render(ViewMode mode, const Camera& camera, int widt
   gl_.ClearBufferfv(GL_COLOR, 1, no_attenuation);
   gl_.ClearBufferfv(GL_DEPTH, 0, &far_depth);
   gl_.UseProgram(im.shade.name());
-  const UniformSetter u(gl_, im.shade.name());
+  const gl::UniformSetter u(gl_, im.shade.name());
   u.Mat4("clip_from_light", clip_from_light);
   SetShadeUniforms(mode, camera, u);
   gl_.ActiveTexture(GL_TEXTURE0 + kUnitPdsmIndex);
@@ -379,7 +385,7 @@ absl::Status FrameRenderer::Render(ViewMode mode, const Camera& camera, int widt
   DrawScene(u, false);
   gl_.Finish();
   timings_.shade_seconds = SecondsSince(start);
-  return CheckGlError(gl_, absl::StrCat("rendering mode ", ModeName(mode)));
+  return gl::CheckGlError(gl_, absl::StrCat("rendering mode ", ModeName(mode)));
 }
 
 absl::StatusOr<Frame> FrameRenderer::ReadFrame() {
@@ -396,7 +402,7 @@ absl::StatusOr<Frame> FrameRenderer::ReadFrame() {
   gl_.ReadPixels(0, 0, im.width, im.height, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
   gl_.ReadBuffer(GL_COLOR_ATTACHMENT1);
   gl_.ReadPixels(0, 0, im.width, im.height, GL_RED, GL_FLOAT, attenuation.data());
-  if (absl::Status s = CheckGlError(gl_, "reading the frame back"); !s.ok()) return s;
+  if (absl::Status s = gl::CheckGlError(gl_, "reading the frame back"); !s.ok()) return s;
   // GL's row 0 is the bottom; images start at the top.
   frame.rgb.resize(pixels * 3);
   frame.attenuation.resize(pixels);

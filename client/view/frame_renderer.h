@@ -16,12 +16,11 @@
 #include "client/view/shadow_maps.h"
 #include "client/view/view_mode.h"
 #include "client/view/view_scene.h"
-#include "worker/gl/gl_functions.h"
-#include "worker/gl/gl_objects.h"
+#include "gl/gl_functions.h"
+#include "gl/gl_objects.h"
+#include "gl/gl_program.h"
 
 namespace pdsm::view {
-
-class UniformSetter;  // gl_program.h
 
 struct RenderSettings {
   bool bilinear = true;     // PDSM: blend 4 pixels (thesis 4.2); off: nearest pixel
@@ -86,8 +85,8 @@ class FrameRenderer {
   absl::Status EnsureTarget(int width, int height);
   absl::Status EnsureShadowMaps(ViewMode mode);
   absl::Status RenderCpuAttenuation(const glm::mat4& clip_from_light);
-  void DrawScene(const UniformSetter& u, bool casters_only) const;
-  void SetShadeUniforms(ViewMode mode, const Camera& camera, const UniformSetter& u) const;
+  void DrawScene(const gl::UniformSetter& u, bool casters_only) const;
+  void SetShadeUniforms(ViewMode mode, const Camera& camera, const gl::UniformSetter& u) const;
 
   const gl::GlFunctions& gl_;
   const ViewScene* scene_;

@@ -5,8 +5,8 @@
 
 #include "absl/strings/str_cat.h"
 #include "client/view/view_app.h"
-#include "worker/gl/gl_functions.h"
-#include "worker/gl/osmesa_context.h"
+#include "gl/gl_functions.h"
+#include "gl/platform/osmesa_context.h"
 
 namespace pdsm::view {
 namespace {

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
-#include "client/view/gl_program.h"
+#include "gl/gl_program.h"
 
 namespace pdsm::view {
 
@@ -58,7 +58,7 @@ absl::StatusOr<PdsmGpu> UploadPdsm(const gl::GlFunctions& gl, const PdsmImage& p
                 GL_STATIC_DRAW);
   gl.BindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
   gl.Finish();
-  if (absl::Status s = CheckGlError(gl, "uploading the PDSM"); !s.ok()) return s;
+  if (absl::Status s = gl::CheckGlError(gl, "uploading the PDSM"); !s.ok()) return s;
   gpu.index_bytes = index.size() * sizeof(uint32_t);
   gpu.vertex_bytes = vertex_bytes;
   gpu.upload_seconds =

@@ -3,7 +3,7 @@
 #include <algorithm>
 
 #include "absl/strings/str_cat.h"
-#include "client/view/gl_program.h"
+#include "gl/gl_program.h"
 
 namespace pdsm::view {
 namespace {
@@ -128,7 +128,7 @@ absl::Status ShadowMapTargets::RenderSingle(const PdsmHeader& header,
   if (absl::Status s = Bind(single_.name(), -1, layout.size); !s.ok()) return s;
   Clear(header);
   draw(ShadowClipFromLight(header, layout, glm::dvec2(0.0)));
-  return CheckGlError(gl, "rendering the shadow map");
+  return gl::CheckGlError(gl, "rendering the shadow map");
 }
 
 absl::Status ShadowMapTargets::RenderLayers(const PdsmHeader& header,
@@ -162,7 +162,7 @@ absl::Status ShadowMapTargets::RenderLayers(const PdsmHeader& header,
     Clear(header);
     draw(ShadowClipFromLight(header, layout, samples[k]));
   }
-  return CheckGlError(gl, "rendering the multi-sm shadow maps");
+  return gl::CheckGlError(gl, "rendering the multi-sm shadow maps");
 }
 
 void ShadowMapTargets::Clear(const PdsmHeader& header) {

@@ -16,8 +16,8 @@
 
 #include "absl/status/statusor.h"
 #include "core/pdsm/pdsm_image.h"
-#include "worker/gl/gl_functions.h"
-#include "worker/gl/gl_objects.h"
+#include "gl/gl_functions.h"
+#include "gl/gl_objects.h"
 
 namespace pdsm::view {
 

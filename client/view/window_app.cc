@@ -1,6 +1,8 @@
 // Window runs: GLFW context (GL 4.5 core), orbit camera, keys to switch modes,
 // toggle bilinear filtering and move the dynamic objects. Keys: docs/viewer.md.
-#define GLFW_INCLUDE_NONE  // GL declarations come from worker/gl (glcorearb.h)
+// The window is the viewer's own platform part (only it opens one); the headless context is
+// gl/platform/osmesa_context.h. Either way GL is called through gl::GlFunctions.
+#define GLFW_INCLUDE_NONE  // GL declarations come from gl/ (glcorearb.h)
 #include <GLFW/glfw3.h>
 
 #include <chrono>
@@ -12,8 +14,8 @@
 #include "client/view/image_io.h"
 #include "client/view/job_follower.h"
 #include "client/view/view_app.h"
+#include "gl/gl_functions.h"
 #include "spdlog/spdlog.h"
-#include "worker/gl/gl_functions.h"
 
 namespace pdsm::view {
 namespace {

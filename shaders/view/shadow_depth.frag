@@ -8,23 +8,21 @@
 in vec3 position_light;
 in vec3 normal_light;
 
-uniform float depth_bias;  // light-space units, the bake's (PDSM header)
-uniform float slope_bias;  // multiples of the depth change across one texel
-uniform float z_near;      // the bake's depth range: VSM's normalisation
+uniform float depth_bias;       // light-space units, the bake's (PDSM header)
+uniform float slope_bias;       // multiples of the depth change across one texel
+uniform float footprint_scale;  // 1 (FrameRenderer::EnsureShadowMaps says why)
+uniform float z_near;           // the bake's depth range: VSM's normalisation
 uniform float z_far;
-uniform float clip_near;   // the shadow maps' clip range (ShadowClipRangeOf), wider than the
-uniform float clip_far;    // bake's so that dynamic objects beyond it still cast
+uniform float clip_near;        // the shadow maps' clip range (ShadowClipRangeOf), wider than
+uniform float clip_far;         // the bake's so that dynamic objects beyond it still cast
 uniform int orthographic;
 
 layout(location = 0) out vec2 depth_moments;
 
-// The same bias rule as the bake's shadow maps (shaders/shadow_map.frag, BiasedDepth).
-float BiasedDepth(float z) {
-  return z + depth_bias + slope_bias * (abs(dFdx(z)) + abs(dFdy(z)));
-}
+#include "common/shadow_bias.glsl"  // BiasedDepth: the bake's bias rule
 
 void main() {
-  float z = BiasedDepth(position_light.z);
+  float z = BiasedDepth(position_light.z, depth_bias, slope_bias, footprint_scale);
   float d = (z - z_near) / (z_far - z_near);
   depth_moments = vec2(z, d * d);
   gl_FragDepth = orthographic != 0 ? clamp((clip_far - z) / (clip_far - clip_near), 0.0, 1.0)

@@ -1,7 +1,10 @@
 // pdsm-view --server --job: waits for a job on a real coordinator and worker, fetches its PDSM
 // and shows the same image as the local bake of the same scene.
-#include <csignal>
+#include <chrono>
+#include <set>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -12,6 +15,8 @@
 
 namespace pdsm::testing {
 namespace {
+
+constexpr char kHolder[] = "view-server-test-holder";  // TaskHolder's worker id
 
 // examples/plates with a bake small enough for a test (48x48 pixels, 8 samples).
 std::string WriteSmallPlates(const TempDir& dir) {
@@ -70,12 +75,76 @@ TEST(ViewServer, JobOnTheServiceLooksLikeTheLocalBake) {
   EXPECT_FALSE(std::filesystem::exists(cluster.dir().File("refused.png")));
 }
 
+// A worker that never works: it leases tasks of a job and sits on them.
+class TaskHolder {
+ public:
+  explicit TaskHolder(ServiceCluster* cluster) : cluster_(cluster) {}
+
+  // Leases tasks until it holds one of every tile in `tiles`, then hands the others back. The
+  // coordinator has tasks only once the job is planned: until the first one it asks again.
+  // False if the queue runs dry first, or after a minute.
+  bool HoldOneTaskOfEach(const std::string& job_id, std::set<int> tiles) {
+    std::vector<pdsm::v1::Task> others;
+    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (!tiles.empty() && std::chrono::steady_clock::now() < end) {
+      grpc::ClientContext context;
+      PrepareCall(&context, "", std::chrono::seconds(10));
+      pdsm::v1::LeaseTaskRequest request;
+      request.set_worker_id(kHolder);
+      pdsm::v1::LeaseTaskResponse response;
+      const grpc::Status status = cluster_->WorkersStub()->LeaseTask(&context, request, &response);
+      if (!status.ok() || !response.has_task()) {
+        if (!held_.empty() || !others.empty()) break;  // leased some, and now none is left
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        continue;
+      }
+      EXPECT_EQ(response.task().job_id(), job_id);
+      if (tiles.erase(response.task().tile_index()) > 0) {
+        held_.push_back(response.task());
+      } else {
+        others.push_back(response.task());
+      }
+    }
+    for (const pdsm::v1::Task& task : others) HandBack(task);
+    return tiles.empty();
+  }
+
+  // Returns every held task to the queue (not a failure: nothing is held against anyone).
+  void HandBackAll() {
+    for (const pdsm::v1::Task& task : held_) HandBack(task);
+    held_.clear();
+  }
+
+ private:
+  void HandBack(const pdsm::v1::Task& task) {
+    grpc::ClientContext context;
+    PrepareCall(&context, "", std::chrono::seconds(10));
+    pdsm::v1::ReportFailureRequest request;
+    request.set_worker_id(kHolder);
+    request.set_lease_id(task.lease_id());
+    request.set_reason("view_server_test: held to keep the job running");
+    request.set_handed_back(true);
+    pdsm::v1::ReportFailureResponse response;
+    EXPECT_TRUE(cluster_->WorkersStub()->ReportFailure(&context, request, &response).ok());
+  }
+
+  ServiceCluster* cluster_;
+  std::vector<pdsm::v1::Task> held_;
+};
+
 // --partial: a running job's finished tiles are shown (the rest flagged pending) and they are
 // already the final PDSM's pixels.
+//
+// The job is kept from finishing without racing the worker: before any worker starts, the
+// test itself leases one task of each of five tiles in a checkerboard (0, 2, 4, 6, 8 of the
+// 3x3) and sits on them (leases of 10 minutes, longer than the test), so those tiles cannot
+// complete, nor the job, until the test hands the tasks back. The worker bakes the four other
+// tiles and then has nothing to lease: the partial state is fixed (4 of 9 tiles, RUNNING)
+// while the viewer looks at it, and the view has baked and pending tiles side by side.
 TEST(ViewServer, RunningJobShowsItsFinishedTilesAsTheyWillBe) {
-  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "4"}));
+  ServiceCluster cluster(
+      CoordinatorArgs({"--samples-per-task", "4", "--lease-seconds", "600"}));
   ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
-  cluster.AddWorker();
   // 96x96 pixels in tiles of 32: 9 tiles of 8 tasks each.
   std::string text = ReadBytes(WriteSmallPlates(cluster.dir()));
   const std::string from = "\"resolution\": [48,48], \"samples\": 8";
@@ -86,15 +155,18 @@ TEST(ViewServer, RunningJobShowsItsFinishedTilesAsTheyWillBe) {
   WriteText(scene, text);
   const std::string job_id = cluster.Submit(scene);
   ASSERT_EQ(job_id.size(), 16u);
-  pdsm::v1::Job job = cluster.WaitUntil(job_id, std::chrono::seconds(60), [](const pdsm::v1::Job& j) {
-    return j.tiles_done() >= 1 || j.state() == pdsm::v1::SUCCEEDED;
-  });
-  cluster.worker(0).Signal(SIGSTOP);  // the job stays RUNNING with some tiles done
-  ASSERT_TRUE(cluster.GetJob(job_id, &job).ok());
-  if (job.state() == pdsm::v1::SUCCEEDED) {
-    cluster.worker(0).Signal(SIGCONT);
-    GTEST_SKIP() << "the job finished before the worker could be stopped";
-  }
+  TaskHolder holder(&cluster);
+  ASSERT_TRUE(holder.HoldOneTaskOfEach(job_id, {0, 2, 4, 6, 8}))
+      << "could not lease the tasks to hold" << cluster.Log("coordinator.log");
+  cluster.AddWorker();
+  pdsm::v1::Job job =
+      cluster.WaitUntil(job_id, std::chrono::seconds(120), [](const pdsm::v1::Job& j) {
+        return j.tiles_done() >= 4 || j.state() == pdsm::v1::SUCCEEDED ||
+               j.state() == pdsm::v1::FAILED || j.state() == pdsm::v1::CANCELLED;
+      });
+  ASSERT_EQ(job.state(), pdsm::v1::RUNNING) << cluster.Log("coordinator.log");
+  ASSERT_EQ(job.tiles_total(), 9);
+  ASSERT_EQ(job.tiles_done(), 4) << cluster.Log("coordinator.log");
   const std::string view = std::string(PDSM_VIEW) + " " + scene + " --server " +
                            cluster.address() + " --job " + job_id +
                            " --headless --size 128x96 --camera 4,7,6,0,1,0,40 --screenshot ";
@@ -107,10 +179,15 @@ TEST(ViewServer, RunningJobShowsItsFinishedTilesAsTheyWillBe) {
                                              " --partial --mode cpu --save-attenuation " +
                                              cluster.dir().File("partial_cpu.pfm"),
                                          cluster.dir());
-  cluster.worker(0).Signal(SIGCONT);
   ASSERT_EQ(partial.exit_code, 0) << partial.err;
   ASSERT_EQ(partial_cpu.exit_code, 0) << partial_cpu.err;
   EXPECT_NE(partial.err.find("RUNNING"), std::string::npos) << partial.err;
+  // Nothing moved while the viewer looked: the held tile is still the one missing.
+  pdsm::v1::Job after;
+  ASSERT_TRUE(cluster.GetJob(job_id, &after).ok());
+  EXPECT_EQ(after.state(), pdsm::v1::RUNNING);
+  EXPECT_EQ(after.tiles_done(), job.tiles_done());
+  holder.HandBackAll();  // the worker does the held tasks and the job ends
   ASSERT_EQ(cluster.WaitForEnd(job_id).state(), pdsm::v1::SUCCEEDED);
   CommandResult final_run = RunCommand(view + cluster.dir().File("final.png") +
                                            " --save-attenuation " + cluster.dir().File("final.pfm"),

@@ -2,8 +2,8 @@
 // caller-given loader (OSMesaGetProcAddress for the headless worker; glfwGetProcAddress for a
 // windowed client), because core-profile entry points past GL 1.x are not exported by libGL /
 // libOSMesa and libepoxy aborts under OSMesa. Only the functions listed below are loaded.
-#ifndef PDSM_WORKER_GL_GL_FUNCTIONS_H_
-#define PDSM_WORKER_GL_GL_FUNCTIONS_H_
+#ifndef PDSM_GL_GL_FUNCTIONS_H_
+#define PDSM_GL_GL_FUNCTIONS_H_
 
 #include <GL/glcorearb.h>
 
@@ -99,4 +99,4 @@ struct GlFunctions {
 
 }  // namespace pdsm::gl
 
-#endif  // PDSM_WORKER_GL_GL_FUNCTIONS_H_
+#endif  // PDSM_GL_GL_FUNCTIONS_H_

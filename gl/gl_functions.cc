@@ -1,4 +1,4 @@
-#include "worker/gl/gl_functions.h"
+#include "gl/gl_functions.h"
 
 #include "absl/strings/str_cat.h"
 

@@ -2,12 +2,12 @@
 // shaders, programs). Each keeps a pointer to the function table it was made with; the table
 // and the context that made the object must outlive it, and that context must be current when
 // it is destroyed (the owner of the context arranges both).
-#ifndef PDSM_WORKER_GL_GL_OBJECTS_H_
-#define PDSM_WORKER_GL_GL_OBJECTS_H_
+#ifndef PDSM_GL_GL_OBJECTS_H_
+#define PDSM_GL_GL_OBJECTS_H_
 
 #include <utility>
 
-#include "worker/gl/gl_functions.h"
+#include "gl/gl_functions.h"
 
 namespace pdsm::gl {
 
@@ -100,4 +100,4 @@ inline Program MakeProgram(const GlFunctions& gl) { return Program(&gl, gl.Creat
 
 }  // namespace pdsm::gl
 
-#endif  // PDSM_WORKER_GL_GL_OBJECTS_H_
+#endif  // PDSM_GL_GL_OBJECTS_H_

@@ -1,4 +1,4 @@
-#include "worker/gl/osmesa_context.h"
+#include "gl/platform/osmesa_context.h"
 
 #include <GL/osmesa.h>
 

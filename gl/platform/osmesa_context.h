@@ -1,15 +1,15 @@
 // A headless OpenGL core-profile context from OSMesa (Mesa's llvmpipe), as a move-only RAII
 // owner. The context renders into framebuffer objects only; OSMesaMakeCurrent still needs a
 // client colour buffer, so the context owns a 1x1 one that is never drawn to.
-#ifndef PDSM_WORKER_GL_OSMESA_CONTEXT_H_
-#define PDSM_WORKER_GL_OSMESA_CONTEXT_H_
+#ifndef PDSM_GL_PLATFORM_OSMESA_CONTEXT_H_
+#define PDSM_GL_PLATFORM_OSMESA_CONTEXT_H_
 
 #include <cstdint>
 #include <memory>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
-#include "worker/gl/gl_functions.h"
+#include "gl/gl_functions.h"
 
 struct osmesa_context;  // <GL/osmesa.h>'s OSMesaContext is `osmesa_context*`
 
@@ -55,4 +55,4 @@ class OsMesaContext {
 
 }  // namespace pdsm::gl
 
-#endif  // PDSM_WORKER_GL_OSMESA_CONTEXT_H_
+#endif  // PDSM_GL_PLATFORM_OSMESA_CONTEXT_H_

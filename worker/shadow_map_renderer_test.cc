@@ -1,6 +1,5 @@
-#include "worker/gl/shadow_map_renderer.h"
+#include "worker/shadow_map_renderer.h"
 
-#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -11,12 +10,12 @@
 #include <functional>
 #include <limits>
 #include <random>
+#include <regex>
 #include <string>
 #include <thread>
 #include <vector>
 
-#include "worker/gl/gl_functions.h"
-#include "worker/gl/osmesa_context.h"
+#include "worker/shadow_map_shaders.h"  // generated: the embedded GLSL sources
 
 namespace pdsm {
 namespace {
@@ -511,33 +510,15 @@ TEST_F(ShadowMapRendererTest, RejectsBadInput) {
   EXPECT_EQ(ShadowMapRenderer::Create(options).status().code(), absl::StatusCode::kInvalidArgument);
 }
 
-// A loader that lacks one entry point: Load names it.
-gl::GlProc LoaderWithoutClipControl(const char* name) {
-  if (std::string(name) == "glClipControl") return nullptr;
-  return reinterpret_cast<gl::GlProc>(&LoaderWithoutClipControl);  // any non-null pointer
-}
-
-TEST(ShadowMapGlFunctionsTest, MissingEntryPointIsNamed) {
-  absl::StatusOr<gl::GlFunctions> gl = gl::GlFunctions::Load(&LoaderWithoutClipControl);
-  ASSERT_FALSE(gl.ok());
-  EXPECT_EQ(gl.status().code(), absl::StatusCode::kNotFound);
-  EXPECT_THAT(std::string(gl.status().message()), ::testing::HasSubstr("glClipControl"));
-}
-
-TEST(ShadowMapGlFunctionsTest, OsMesaContextIsCurrentAndMovable) {
-  absl::StatusOr<gl::OsMesaContext> context = gl::OsMesaContext::Create();
-  ASSERT_TRUE(context.ok()) << context.status();
-  EXPECT_TRUE(context->IsCurrent());
-  EXPECT_EQ(context->major_version(), 4);  // Mesa 22 llvmpipe: 4.5 core
-  gl::OsMesaContext moved = *std::move(context);
-  EXPECT_TRUE(moved.IsCurrent());
-  EXPECT_FALSE(context->IsCurrent());
-  EXPECT_EQ(context->MakeCurrent().code(), absl::StatusCode::kFailedPrecondition);
-  absl::StatusOr<gl::GlFunctions> gl = gl::GlFunctions::Load(&gl::OsMesaContext::GetProcAddress);
-  ASSERT_TRUE(gl.ok()) << gl.status();
-  GLint major = 0;
-  gl->GetIntegerv(GL_MAJOR_VERSION, &major);
-  EXPECT_EQ(major, moved.major_version());
+// The bias chunk is embedded with the shader (GLSL has no #include): no #include line is left
+// for the driver, and BiasedDepth is defined once.
+TEST(ShadowMapShadersTest, BiasChunkIsIncludedAtBuildTime) {
+  const std::string fragment = kShadowMapFragmentShader;
+  EXPECT_FALSE(std::regex_search(fragment, std::regex("(^|\n)[ \t]*#[ \t]*include")))
+      << fragment;
+  const size_t definition = fragment.find("float BiasedDepth(");
+  ASSERT_NE(definition, std::string::npos) << fragment;
+  EXPECT_EQ(fragment.find("float BiasedDepth(", definition + 1), std::string::npos);
 }
 
 // Not a test: a timing probe (run with --gtest_also_run_disabled_tests). A 512x512 shadow map

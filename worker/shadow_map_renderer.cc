@@ -1,4 +1,4 @@
-#include "worker/gl/shadow_map_renderer.h"
+#include "worker/shadow_map_renderer.h"
 
 #include <algorithm>
 #include <array>
@@ -11,12 +11,12 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/string_view.h"
+#include "gl/gl_functions.h"
+#include "gl/gl_objects.h"
+#include "gl/gl_program.h"
+#include "gl/platform/osmesa_context.h"
 #include "spdlog/spdlog.h"
-#include "worker/gl/gl_functions.h"
-#include "worker/gl/gl_objects.h"
-#include "worker/gl/gl_program.h"
-#include "worker/gl/osmesa_context.h"
-#include "worker/gl/shadow_map_shaders.h"  // generated: the embedded GLSL sources
+#include "worker/shadow_map_shaders.h"  // generated: the embedded GLSL sources
 
 namespace pdsm {
 namespace {
@@ -33,7 +33,7 @@ spdlog::logger& Logger() {
 }
 
 absl::StatusOr<gl::Program> LinkShadowMapProgram(const GlFunctions& gl) {
-  return gl::BuildProgram(gl, gl::kShadowMapVertexShader, gl::kShadowMapFragmentShader,
+  return gl::BuildProgram(gl, kShadowMapVertexShader, kShadowMapFragmentShader,
                           "the shadow-map program (shadow_map.vert, shadow_map.frag)");
 }
 

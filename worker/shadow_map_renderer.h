@@ -4,8 +4,8 @@
 // (x - a z, y - b z) (sun, sample direction (a, b, 1)), and its depth is the same light-space
 // z as the PDSM's. Each texel stores the biased light-space depth of the nearest caster, or
 // +infinity where there is none.
-#ifndef PDSM_WORKER_GL_SHADOW_MAP_RENDERER_H_
-#define PDSM_WORKER_GL_SHADOW_MAP_RENDERER_H_
+#ifndef PDSM_WORKER_SHADOW_MAP_RENDERER_H_
+#define PDSM_WORKER_SHADOW_MAP_RENDERER_H_
 
 #include <cstdint>
 #include <glm/glm.hpp>
@@ -27,7 +27,7 @@ struct ShadowMapCamera {
   ShadowMapWindow window;  // the texels to render
   double z_clip_near = 0;  // light-space depth; nearer geometry is clipped
   double z_clip_far = 0;   // sun only: farther geometry is clipped
-  // Bias (one function: BiasedDepth in shadow_map.frag): stored depth =
+  // Bias (one function: BiasedDepth, shaders/common/shadow_bias.glsl): stored depth =
   //   z + depth_bias + slope_bias * footprint_scale * (|dz/dx| + |dz/dy|) per texel.
   double depth_bias = 0;
   double slope_bias = 0;
@@ -69,4 +69,4 @@ class ShadowMapRenderer {
 
 }  // namespace pdsm
 
-#endif  // PDSM_WORKER_GL_SHADOW_MAP_RENDERER_H_
+#endif  // PDSM_WORKER_SHADOW_MAP_RENDERER_H_
