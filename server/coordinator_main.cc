@@ -13,6 +13,7 @@
 #include <spdlog/spdlog.h>
 
 #include "absl/strings/str_cat.h"
+#include "core/util/atomic_file.h"
 #include "rpc/grpc_support.h"
 #include "server/caller_auth.h"
 #include "server/coordinator.h"
@@ -120,20 +121,24 @@ int Run(Flags& flags, const sigset_t& signals) {
       absl::StrCat(flags.listen.substr(0, flags.listen.rfind(':')), ":", port);
   spdlog::info("listening on {} ({}), data in {}", address,
                flags.tls_cert.empty() ? "plaintext" : "TLS", flags.options.data_dir);
+  int exit_code = 0;
   if (!flags.ready_file.empty()) {
-    // Written then renamed, so a reader never sees half an address.
-    const std::string temp = flags.ready_file + ".tmp";
-    std::ofstream(temp) << address << "\n";
-    std::rename(temp.c_str(), flags.ready_file.c_str());
+    // Atomically, so a reader never sees half an address. A service whose readiness cannot be
+    // announced is of no use to whoever waits for it: stop.
+    if (absl::Status s = WriteFileAtomically(flags.ready_file, absl::StrCat(address, "\n"));
+        !s.ok()) {
+      spdlog::error("--ready-file: {}", std::string(s.message()));
+      exit_code = 1;
+    }
   }
 
-  WaitForStopSignal(signals);
+  if (exit_code == 0) WaitForStopSignal(signals);
   jobs.Shutdown();
   server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(5));
   server->Wait();
   coordinator->reset();
   spdlog::info("stopped");
-  return 0;
+  return exit_code;
 }
 
 }  // namespace

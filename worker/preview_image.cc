@@ -30,8 +30,8 @@ void PreviewImage::ShadeTile(const PdsmTile& tile, std::span<const float> receiv
   }
 }
 
-absl::Status PreviewImage::Write(const std::string& path) const {
-  return WriteRgbPng(path, width_, height_, rgb_);
+absl::Status PreviewImage::Write(const std::string& path, FileSystem* fs) const {
+  return WriteRgbPng(path, width_, height_, rgb_, fs);
 }
 
 }  // namespace pdsm

@@ -10,6 +10,7 @@
 
 #include "absl/status/status.h"
 #include "core/pdsm/pdsm_image.h"
+#include "core/util/file_system.h"
 
 namespace pdsm {
 
@@ -22,7 +23,9 @@ class PreviewImage {
   // Thread-safe for distinct tiles.
   void ShadeTile(const PdsmTile& tile, std::span<const float> receiver_depth);
 
-  absl::Status Write(const std::string& path) const;
+  // A PNG through WriteRgbPng (core/util/png_writer.h): `path` is replaced whole or left as it
+  // was, with no temporary file left. `fs` null means FileSystem::Default().
+  absl::Status Write(const std::string& path, FileSystem* fs = nullptr) const;
 
  private:
   int width_, height_;

@@ -54,7 +54,7 @@ absl::StatusOr<BakeErrors> AccuracyProbe::Measure(const std::string& pdsm_path) 
   return errors;
 }
 
-absl::Status AccuracyProbe::WriteReferenceCsv(const std::string& path) const {
+absl::Status AccuracyProbe::WriteReferenceCsv(const std::string& path, FileSystem* fs) const {
   std::string csv = "kind,x,y,z,attenuation\n";
   auto append = [&](const char* kind, const std::vector<glm::dvec3>& points,
                     const std::vector<double>& reference) {
@@ -65,7 +65,7 @@ absl::Status AccuracyProbe::WriteReferenceCsv(const std::string& path) const {
   };
   append("surface", points_.surface, surface_reference_);
   append("free", points_.free_space, free_space_reference_);
-  return WriteFileAtomically(path, csv);
+  return WriteFileAtomically(path, csv, fs);
 }
 
 }  // namespace pdsm

@@ -11,6 +11,7 @@
 #include "core/reference/accuracy_points.h"
 #include "core/reference/reference_attenuation.h"
 #include "core/scene/scene.h"
+#include "core/util/file_system.h"
 
 namespace pdsm {
 
@@ -31,8 +32,9 @@ class AccuracyProbe {
   absl::StatusOr<BakeErrors> Measure(const std::string& pdsm_path) const;
 
   // Writes "kind,x,y,z,attenuation" lines (kind: surface or free) with the reference values,
-  // under a temporary name then renamed.
-  absl::Status WriteReferenceCsv(const std::string& path) const;
+  // through WriteFileAtomically (core/util/atomic_file.h): on failure `path` is left as it
+  // was. `fs` null means FileSystem::Default().
+  absl::Status WriteReferenceCsv(const std::string& path, FileSystem* fs = nullptr) const;
 
   const AccuracyPoints& points() const { return points_; }
   double reference_seconds() const { return reference_seconds_; }

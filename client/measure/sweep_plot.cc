@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <vector>
 
 #include "absl/strings/numbers.h"
@@ -12,7 +13,9 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
+#include "client/measure/gnuplot.h"
 #include "client/measure/sweep_report.h"
+#include "core/util/atomic_file.h"
 
 namespace pdsm {
 namespace {
@@ -48,12 +51,6 @@ std::string GnuplotQuote(const std::string& s) {
       out += static_cast<unsigned char>(c) < 0x20 || c == 0x7f ? ' ' : c;
     }
   }
-  return out + "'";
-}
-
-std::string ShellQuote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
   return out + "'";
 }
 
@@ -110,8 +107,9 @@ std::vector<std::string> Labels(const std::vector<CsvRow>& rows, std::string* le
   return labels;
 }
 
-void WriteScript(const std::vector<CsvRow>& rows, const std::string& temp_png,
-                 const std::string& title, std::ofstream& script) {
+// The gnuplot script; the PNG goes to gnuplot's stdout.
+std::string Script(const std::vector<CsvRow>& rows, const std::string& title) {
+  std::ostringstream script;
   std::string legend;
   const std::vector<std::string> labels = Labels(rows, &legend);
   script << "$all << EOD\n";
@@ -132,7 +130,7 @@ void WriteScript(const std::vector<CsvRow>& rows, const std::string& temp_png,
   // Log-log: error and time both follow power laws of the knobs.
   script << "EOD\n"
          << "set terminal png size 900,600\n"
-         << "set output " << GnuplotQuote(temp_png) << "\n"
+         << "set output\n"  // stdout
          << "set key top right\n"
          << "set logscale xy\n"
          << "set grid\n"
@@ -142,38 +140,19 @@ void WriteScript(const std::vector<CsvRow>& rows, const std::string& temp_png,
          << "plot $all using 1:2 with points pt 7 ps 1.2 title 'configurations', \\\n"
          << "     $front using 1:2 with linespoints lw 2 pt 6 ps 2 title 'Pareto front', \\\n"
          << "     $all using 1:2:3 with labels offset 0,1 font ',8' noenhanced notitle\n";
+  return script.str();
 }
 
 }  // namespace
 
 absl::Status PlotSweep(const std::string& csv_path, const std::string& png_path,
-                       const std::string& title) {
+                       const std::string& title, FileSystem* fs) {
   if (!OnPath("gnuplot")) return absl::NotFoundError("gnuplot is not installed");
   absl::StatusOr<std::vector<CsvRow>> rows = ReadSweepCsv(csv_path);
   if (!rows.ok()) return rows.status();
-  const std::string temp_png = png_path + ".tmp";
-  const std::string script_path = png_path + ".gp";
-  absl::Status status = [&]() -> absl::Status {
-    {
-      std::ofstream script(script_path, std::ios::trunc);
-      WriteScript(*rows, temp_png, title, script);
-      script.flush();
-      if (!script) return absl::InternalError(absl::StrCat("writing \"", script_path, "\" failed"));
-    }
-    const std::string command = absl::StrCat("gnuplot ", ShellQuote(script_path), " 1>&2");
-    if (const int code = std::system(command.c_str()); code != 0) {
-      return absl::InternalError(absl::StrFormat("gnuplot %s failed (status %d)", script_path, code));
-    }
-    std::error_code ec;
-    std::filesystem::rename(temp_png, png_path, ec);
-    if (ec) return absl::InternalError(absl::StrFormat("%s: %s", png_path, ec.message()));
-    return absl::OkStatus();
-  }();
-  // Nothing of a failed plot stays beside the PNG.
-  std::error_code ec;
-  std::filesystem::remove(script_path, ec);
-  std::filesystem::remove(temp_png, ec);
-  return status;
+  absl::StatusOr<std::string> png = RunGnuplot(Script(*rows, title));
+  if (!png.ok()) return png.status();
+  return WriteFileAtomically(png_path, *png, fs);
 }
 
 }  // namespace pdsm

@@ -7,14 +7,18 @@
 #include <string>
 
 #include "absl/status/status.h"
+#include "core/util/file_system.h"
 
 namespace pdsm {
 
-// Writes `png_path` (under a temporary name first) from the CSV WriteSweepCsv wrote.
+// Writes `png_path` from the CSV WriteSweepCsv wrote: gnuplot reads its script from a pipe and
+// prints the PNG, which goes through WriteFileAtomically (core/util/atomic_file.h), so nothing
+// but the PNG is ever written and a failed plot leaves `png_path` as it was.
 // NOT_FOUND when gnuplot is not installed; INVALID_ARGUMENT naming the file when the CSV is
-// not a sweep's; INTERNAL when gnuplot fails.
+// not a sweep's; INTERNAL when gnuplot fails; the FileSystem's errors when writing fails.
+// `fs` null means FileSystem::Default().
 absl::Status PlotSweep(const std::string& csv_path, const std::string& png_path,
-                       const std::string& title);
+                       const std::string& title, FileSystem* fs = nullptr);
 
 }  // namespace pdsm
 

@@ -1,6 +1,5 @@
 #include "client/measure/sweep_report.h"
 
-
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
@@ -48,10 +47,11 @@ void MarkParetoFront(std::vector<SweepRow>* rows) {
   }
 }
 
-absl::Status WriteSweepCsv(const std::string& path, const std::vector<SweepRow>& rows) {
+absl::Status WriteSweepCsv(const std::string& path, const std::vector<SweepRow>& rows,
+                           FileSystem* fs) {
   std::string csv = SweepCsvHeader() + "\n";
   for (const SweepRow& row : rows) absl::StrAppend(&csv, RowCells(row), "\n");
-  return WriteFileAtomically(path, csv);
+  return WriteFileAtomically(path, csv, fs);
 }
 
 }  // namespace pdsm

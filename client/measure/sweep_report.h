@@ -9,6 +9,7 @@
 #include "client/measure/accuracy_probe.h"
 #include "client/measure/bake_knobs.h"
 #include "client/measure/child_bake.h"
+#include "core/util/file_system.h"
 
 namespace pdsm {
 
@@ -25,8 +26,10 @@ std::string SweepCsvHeader();
 // Sets `pareto` on every row: minimal in (seconds, errors.all.mean).
 void MarkParetoFront(std::vector<SweepRow>* rows);
 
-// Writes the CSV under a temporary name and renames it: never half-written.
-absl::Status WriteSweepCsv(const std::string& path, const std::vector<SweepRow>& rows);
+// Writes the CSV through WriteFileAtomically (core/util/atomic_file.h): never half-written; on
+// failure `path` is left as it was. `fs` null means FileSystem::Default().
+absl::Status WriteSweepCsv(const std::string& path, const std::vector<SweepRow>& rows,
+                           FileSystem* fs = nullptr);
 
 }  // namespace pdsm
 

@@ -1,9 +1,7 @@
-// `pdsm fetch JOB -o OUT.exr`: downloads a finished job's PDSM. Written under a temporary
-// name and renamed when complete, so an interrupted download leaves nothing at OUT.
+// `pdsm fetch JOB -o OUT.exr`: downloads a finished job's PDSM. Written through an AtomicFile
+// (DownloadPdsm), so an interrupted or failed download leaves OUT as it was.
 #include <cstdio>
-#include <filesystem>
 
-#include "absl/strings/str_cat.h"
 #include "client/cli_common.h"
 #include "client/commands.h"
 #include "client/service/service_connection.h"
@@ -17,27 +15,19 @@ struct FetchFlags {
   ServiceFlags service;
 };
 
-absl::Status Fetch(const FetchFlags& flags, const std::string& temp) {
+absl::Status Fetch(const FetchFlags& flags) {
   absl::StatusOr<ServiceConnection> c = Connect(flags.service);
   if (!c.ok()) return c.status();
-  absl::StatusOr<uint64_t> received = DownloadPdsm(*c, flags.service, flags.job_id, temp);
+  absl::StatusOr<uint64_t> received =
+      DownloadPdsm(*c, flags.service, flags.job_id, flags.output_path);
   if (!received.ok()) return received.status();
-  std::error_code ec;
-  std::filesystem::rename(temp, flags.output_path, ec);
-  if (ec) return absl::InternalError(absl::StrCat("-o: ", flags.output_path, ": ", ec.message()));
   std::printf("pdsm: %s (%llu bytes)\n", flags.output_path.c_str(),
               static_cast<unsigned long long>(*received));
   return absl::OkStatus();
 }
 
 int RunFetch(const FetchFlags& flags) {
-  const std::string temp = flags.output_path + ".part";
-  absl::Status s = Fetch(flags, temp);
-  if (!s.ok()) {
-    std::error_code ec;
-    std::filesystem::remove(temp, ec);
-    return ReportError(s);
-  }
+  if (absl::Status s = Fetch(flags); !s.ok()) return ReportError(s);
   return kExitOk;
 }
 

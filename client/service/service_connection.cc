@@ -1,8 +1,9 @@
 #include "client/service/service_connection.h"
 
-#include <fstream>
+#include <memory>
 
 #include "absl/strings/str_cat.h"
+#include "core/util/atomic_file.h"
 #include "rpc/grpc_support.h"
 
 namespace pdsm {
@@ -55,30 +56,47 @@ absl::Status CallError(const std::string& what, const grpc::Status& status,
 }
 
 absl::StatusOr<uint64_t> DownloadPdsm(const ServiceConnection& c, const ServiceFlags& service,
-                                      const std::string& job_id, const std::string& path) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) return absl::InvalidArgumentError(absl::StrCat("cannot write \"", path, "\""));
+                                      const std::string& job_id, const std::string& path,
+                                      FileSystem* fs) {
   pdsm::v1::GetJobRequest request;
   request.set_job_id(job_id);
   auto context = c.Call(std::chrono::hours(1));
   auto reader = c.stub->FetchPdsm(context.get(), request);
+  return ReceivePdsm(context.get(), reader.get(), job_id, service.server, path, fs);
+}
+
+absl::StatusOr<uint64_t> ReceivePdsm(grpc::ClientContext* context,
+                                     grpc::ClientReaderInterface<pdsm::v1::PdsmChunk>* reader,
+                                     const std::string& job_id, const std::string& server,
+                                     const std::string& path, FileSystem* fs) {
+  absl::StatusOr<std::unique_ptr<AtomicFile>> file = AtomicFile::Create(path, fs);
+  if (!file.ok()) {
+    // Nothing to write to: end the call rather than let the coordinator stream into the void.
+    context->TryCancel();
+    static_cast<void>(reader->Finish());  // CANCELLED: the error to report is ours
+    return file.status();
+  }
   pdsm::v1::PdsmChunk chunk;
   uint64_t total = 0, received = 0;
   bool first = true;
   while (reader->Read(&chunk)) {
     if (first) total = chunk.total_bytes(), first = false;
-    out.write(chunk.data().data(), static_cast<std::streamsize>(chunk.data().size()));
+    const absl::string_view data(chunk.data().data(), chunk.data().size());
+    if (absl::Status s = (*file)->Append(data); !s.ok()) {
+      context->TryCancel();
+      static_cast<void>(reader->Finish());
+      return s;
+    }
     received += chunk.data().size();
   }
   if (grpc::Status s = reader->Finish(); !s.ok()) {
-    return CallError("fetching job " + job_id, s, service.server);
+    return CallError("fetching job " + job_id, s, server);
   }
-  out.close();
-  if (!out) return absl::InternalError(absl::StrCat("writing \"", path, "\" failed"));
   if (received != total) {
     return absl::DataLossError(
         absl::StrCat("fetching job ", job_id, ": got ", received, " of ", total, " bytes"));
   }
+  if (absl::Status s = (*file)->Commit(); !s.ok()) return s;
   return received;
 }
 

@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 
 #include "absl/status/statusor.h"
+#include "core/util/file_system.h"
 #include "pdsm/v1/jobs.grpc.pb.h"
 
 namespace pdsm {
@@ -39,12 +40,23 @@ absl::StatusOr<ServiceConnection> Connect(const ServiceFlags& flags);
 absl::Status CallError(const std::string& what, const grpc::Status& status,
                        const std::string& server);
 
-// Streams a finished job's PDSM (FetchPdsm) into the file at `path`, created or truncated.
-// DATA_LOSS when fewer bytes arrive than announced; the file is then incomplete, and removing
-// or renaming it is the caller's business.
-// Returns the bytes received.
+// Streams a finished job's PDSM (FetchPdsm) into `path` through an AtomicFile
+// (core/util/atomic_file.h): the file appears at `path` only once every announced byte has
+// arrived and is synced; on any failure `path` is left as it was and no temporary file
+// remains. Errors: the call's (CallError), DATA_LOSS when fewer bytes arrive than announced,
+// the FileSystem's when writing fails (RESOURCE_EXHAUSTED for a full disk; the call is then
+// cancelled). `fs` null means FileSystem::Default(). Returns the bytes received.
 absl::StatusOr<uint64_t> DownloadPdsm(const ServiceConnection& c, const ServiceFlags& service,
-                                      const std::string& job_id, const std::string& path);
+                                      const std::string& job_id, const std::string& path,
+                                      FileSystem* fs = nullptr);
+
+// DownloadPdsm's second half, from an open FetchPdsm stream (a seam for tests): reads every
+// chunk of `reader`, cancelling `context` if writing fails, and finishes the call. `server`
+// goes into error hints.
+absl::StatusOr<uint64_t> ReceivePdsm(grpc::ClientContext* context,
+                                     grpc::ClientReaderInterface<pdsm::v1::PdsmChunk>* reader,
+                                     const std::string& job_id, const std::string& server,
+                                     const std::string& path, FileSystem* fs = nullptr);
 
 }  // namespace pdsm
 

@@ -3,11 +3,9 @@
 #include <png.h>
 
 #include <algorithm>
-#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <memory>
 #include <sstream>
 
 #include "absl/strings/str_cat.h"
@@ -15,28 +13,9 @@
 #include "core/util/png_writer.h"
 
 namespace pdsm::view {
-namespace {
 
-absl::Status RenameIntoPlace(const std::string& temp, const std::string& path) {
-  std::error_code ec;
-  std::filesystem::rename(temp, path, ec);
-  if (ec) {
-    std::filesystem::remove(temp, ec);
-    return absl::UnavailableError(absl::StrCat("cannot write ", path, ": ", ec.message()));
-  }
-  return absl::OkStatus();
-}
-
-}  // namespace
-
-absl::Status WritePng(const std::string& path, const RgbImage& image) {
-  const std::string temp = path + ".part";
-  if (absl::Status s = WriteRgbPng(temp, image.width, image.height, image.rgb); !s.ok()) {
-    std::error_code ec;
-    std::filesystem::remove(temp, ec);
-    return s;
-  }
-  return RenameIntoPlace(temp, path);
+absl::Status WritePng(const std::string& path, const RgbImage& image, FileSystem* fs) {
+  return WriteRgbPng(path, image.width, image.height, image.rgb, fs);
 }
 
 absl::StatusOr<RgbImage> ReadPng(const std::string& path) {
@@ -59,13 +38,19 @@ absl::StatusOr<RgbImage> ReadPng(const std::string& path) {
   return out;
 }
 
-absl::Status WritePfm(const std::string& path, const FloatImage& image) {
+absl::Status WritePfm(const std::string& path, const FloatImage& image, FileSystem* fs) {
+  if (image.width < 0 || image.height < 0 ||
+      image.values.size() != static_cast<size_t>(image.width) * image.height) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": a ", image.width, "x", image.height,
+                                                   " PFM needs as many values, got ",
+                                                   image.values.size()));
+  }
   std::string bytes = absl::StrCat("Pf\n", image.width, " ", image.height, "\n-1.0\n");  // LE
   for (int y = image.height - 1; y >= 0; --y) {
     bytes.append(reinterpret_cast<const char*>(&image.values[static_cast<size_t>(y) * image.width]),
                  static_cast<size_t>(image.width) * sizeof(float));
   }
-  return WriteFileAtomically(path, bytes);
+  return WriteFileAtomically(path, bytes, fs);
 }
 
 absl::StatusOr<FloatImage> ReadPfm(const std::string& path) {

@@ -1,6 +1,7 @@
 // Images the viewer writes and its tests read: 8-bit RGB PNG (screenshots, composites, diff
 // images) and single-channel float32 PFM (the attenuation each pixel was shaded with). Writes
-// go to a temporary name and are renamed into place, so a failed write leaves nothing behind.
+// go through WriteFileAtomically (core/util/atomic_file.h): a failed write leaves the target
+// as it was and no temporary file. `fs` null means FileSystem::Default().
 #ifndef PDSM_CLIENT_VIEW_IMAGE_IO_H_
 #define PDSM_CLIENT_VIEW_IMAGE_IO_H_
 
@@ -10,6 +11,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "core/util/file_system.h"
 
 namespace pdsm::view {
 
@@ -23,12 +25,13 @@ struct FloatImage {
   std::vector<float> values;  // row 0 at the top
 };
 
-absl::Status WritePng(const std::string& path, const RgbImage& image);
+absl::Status WritePng(const std::string& path, const RgbImage& image, FileSystem* fs = nullptr);
 // NOT_FOUND (no file), DATA_LOSS (not a PNG); any PNG is converted to 8-bit RGB.
 absl::StatusOr<RgbImage> ReadPng(const std::string& path);
 
 // PFM "Pf" (greyscale, little-endian, rows stored bottom to top as the format says).
-absl::Status WritePfm(const std::string& path, const FloatImage& image);
+// INVALID_ARGUMENT when `values` does not hold width * height floats.
+absl::Status WritePfm(const std::string& path, const FloatImage& image, FileSystem* fs = nullptr);
 absl::StatusOr<FloatImage> ReadPfm(const std::string& path);
 
 // Tiles equally sized images left to right, `columns` per row (rows of tiles top to bottom),

@@ -1,26 +1,20 @@
 #include "core/assets/asset_store.h"
 
 #include <fcntl.h>
-#include <stdlib.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
-#include <cstdio>
 #include <filesystem>
 #include <system_error>
 
 #include "absl/strings/escaping.h"
 #include "absl/strings/str_cat.h"
 #include "core/assets/mesh_asset.h"
+#include "core/util/atomic_file.h"
 
 namespace pdsm {
 namespace {
-
-absl::Status ErrnoStatus(int error_number, absl::string_view message) {
-  return error_number != 0 ? absl::ErrnoToStatus(error_number, message)
-                           : absl::UnknownError(message);
-}
 
 // For messages: a hash as the client sent it, escaped and cut short.
 std::string Quoted(const std::string& text) {
@@ -35,31 +29,6 @@ absl::Status CheckHash(const std::string& sha256) {
       absl::StrCat("asset ", Quoted(sha256), ": not a SHA-256 (64 lowercase hex digits)"));
 }
 
-// Syncs a folder, so that an entry renamed or created in it survives a crash.
-absl::Status SyncDir(const std::string& dir) {
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) return ErrnoStatus(errno, absl::StrCat("cannot open folder ", dir, " to sync it"));
-  absl::Status status;
-  if (::fsync(fd) != 0) status = ErrnoStatus(errno, absl::StrCat("cannot sync folder ", dir));
-  ::close(fd);
-  return status;
-}
-
-// Writes all of `bytes` to `fd` and syncs it to the disk.
-absl::Status WriteSynced(int fd, std::string_view bytes, const std::string& path) {
-  while (!bytes.empty()) {
-    const ssize_t written = ::write(fd, bytes.data(), bytes.size());
-    if (written < 0) {
-      if (errno == EINTR) continue;
-      return ErrnoStatus(errno, absl::StrCat("cannot write ", path));
-    }
-    bytes.remove_prefix(static_cast<size_t>(written));
-  }
-  // Before the rename: a crash must not leave a renamed file with missing bytes.
-  if (::fsync(fd) != 0) return ErrnoStatus(errno, absl::StrCat("cannot sync ", path));
-  return absl::OkStatus();
-}
-
 // Reads the whole open file, whose size fstat gave as `size`.
 absl::StatusOr<std::string> ReadAll(int fd, size_t size, const std::string& path) {
   std::string bytes(size, '\0');
@@ -67,8 +36,9 @@ absl::StatusOr<std::string> ReadAll(int fd, size_t size, const std::string& path
   while (done < size) {
     const ssize_t got = ::read(fd, bytes.data() + done, size - done);
     if (got < 0) {
-      if (errno == EINTR) continue;
-      return ErrnoStatus(errno, absl::StrCat("cannot read ", path));
+      const int error_number = errno;
+      if (error_number == EINTR) continue;
+      return ErrnoStatus(error_number, absl::StrCat("cannot read ", path));
     }
     if (got == 0) break;  // shorter than fstat said: the hash check reports it
     done += static_cast<size_t>(got);
@@ -79,7 +49,8 @@ absl::StatusOr<std::string> ReadAll(int fd, size_t size, const std::string& path
 
 }  // namespace
 
-absl::StatusOr<std::unique_ptr<AssetStore>> AssetStore::Open(const std::string& dir) {
+absl::StatusOr<std::unique_ptr<AssetStore>> AssetStore::Open(const std::string& dir,
+                                                              FileSystem* fs) {
   if (dir.empty()) return absl::InvalidArgumentError("asset store: the folder name is empty");
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
@@ -91,7 +62,7 @@ absl::StatusOr<std::unique_ptr<AssetStore>> AssetStore::Open(const std::string& 
     return absl::FailedPreconditionError(
         absl::StrCat("asset store ", dir, ": exists and is not a folder"));
   }
-  return std::unique_ptr<AssetStore>(new AssetStore(dir));
+  return std::unique_ptr<AssetStore>(new AssetStore(dir, fs ? fs : FileSystem::Default()));
 }
 
 std::string AssetStore::PathFor(const std::string& sha256) const {
@@ -119,29 +90,15 @@ absl::Status AssetStore::Put(const std::string& sha256, std::string_view bytes) 
     return ErrnoStatus(ec.value(), absl::StrCat("asset ", sha256, ": cannot create folder ", shard,
                                                 ": ", ec.message()));
   }
-  // mkostemp creates the file exclusively under a fresh name: concurrent writers of the same
-  // blob, in threads or processes, never share a temporary file.
-  std::string temp = absl::StrCat(shard, "/.", sha256, ".tmp-XXXXXX");
-  const int fd = ::mkostemp(temp.data(), O_CLOEXEC);
-  if (fd < 0) {
-    return ErrnoStatus(errno, absl::StrCat("asset ", sha256, ": cannot create a file in ", shard));
+  // A unique temporary name: concurrent writers of the same blob, in threads or processes,
+  // never share a temporary file; rename() replaces an existing blob atomically, so a reader
+  // sees the old file or the new one, both complete and with the same bytes.
+  const absl::string_view contents(bytes.data(), bytes.size());
+  if (absl::Status s = WriteFileAtomically(PathFor(sha256), contents, fs_); !s.ok()) {
+    return absl::Status(s.code(), absl::StrCat("asset ", sha256, ": ", s.message()));
   }
-  absl::Status status = WriteSynced(fd, bytes, temp);
-  if (::close(fd) != 0 && status.ok()) {
-    status = ErrnoStatus(errno, absl::StrCat("cannot close ", temp));
-  }
-  const std::string path = PathFor(sha256);
-  // rename() replaces an existing blob atomically; a reader sees the old file or the new one,
-  // both complete and with the same bytes.
-  if (status.ok() && std::rename(temp.c_str(), path.c_str()) != 0) {
-    status = ErrnoStatus(errno, absl::StrCat("cannot rename ", temp, " to ", path));
-  }
-  if (!status.ok()) {
-    ::unlink(temp.c_str());
-    return status;
-  }
-  if (absl::Status s = SyncDir(shard); !s.ok()) return s;
-  if (created_shard) return SyncDir(dir_);
+  // A new shard is an entry of the store's folder: durable once that is synced too.
+  if (created_shard) return fs_->SyncDir(dir_);
   return absl::OkStatus();
 }
 

@@ -10,18 +10,23 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "core/util/file_system.h"
 
 namespace pdsm {
 
 // Thread-safe, and safe to share one folder between processes: every operation is atomic on
-// the filesystem (a blob is written under a unique temporary name, synced, and renamed into
-// place), and the object holds no mutable state. Temporary files are named ".<sha>.tmp-*" in
-// the blob's folder; a crash can leave one behind, never a partial blob under its final name.
+// the filesystem (a blob is written by WriteFileAtomically, core/util/atomic_file.h: a unique
+// temporary name, synced, renamed into place, the folder synced), and the object holds no
+// mutable state. Temporary files are named "<sha>.tmp-XXXXXX" in the blob's folder (never a
+// valid hash, so never read as a blob); a crash can leave one behind, never a partial blob
+// under its final name.
 class AssetStore {
  public:
   // Creates `dir` (and its parents) if needed. Errors: the errno's code when it cannot be
-  // created, FAILED_PRECONDITION when it exists and is not a folder.
-  static absl::StatusOr<std::unique_ptr<AssetStore>> Open(const std::string& dir);
+  // created, FAILED_PRECONDITION when it exists and is not a folder. Blobs are written through
+  // `fs` (null: FileSystem::Default()), which must outlive the store.
+  static absl::StatusOr<std::unique_ptr<AssetStore>> Open(const std::string& dir,
+                                                          FileSystem* fs = nullptr);
 
   // Whether a blob is stored under `sha256` (false for a malformed hash). Does not read it.
   bool Has(const std::string& sha256) const;
@@ -43,9 +48,10 @@ class AssetStore {
   const std::string& dir() const { return dir_; }
 
  private:
-  explicit AssetStore(std::string dir) : dir_(std::move(dir)) {}
+  AssetStore(std::string dir, FileSystem* fs) : dir_(std::move(dir)), fs_(fs) {}
 
   std::string dir_;
+  FileSystem* fs_;
 };
 
 }  // namespace pdsm

@@ -12,7 +12,9 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "core/assets/mesh_asset.h"
+#include "core/util/fault_injecting_file_system.h"
 #include "tests/test_support.h"
+#include "tests/write_faults.h"
 
 namespace pdsm {
 namespace {
@@ -168,6 +170,44 @@ TEST_F(AssetStoreTest, TruncatedFileIsDataLoss) {
   std::filesystem::resize_file(store_->PathFor(sha), 10);
   EXPECT_EQ(store_->Get(sha).status().code(), absl::StatusCode::kDataLoss);
   EXPECT_FALSE(store_->Has(sha));
+}
+
+// A blob not stored yet, its shard folder already there: every failure of the write (each
+// create, write, sync, close, rename in turn, a full disk) leaves no blob and no temporary
+// file, and the blob is not reported as stored.
+TEST_F(AssetStoreTest, EveryFileSystemFailureLeavesNoBlob) {
+  const std::string bytes = Blob(5000, 11);
+  const std::string sha = Sha256Hex(bytes);
+  ASSERT_TRUE(store_->Put(sha, bytes).ok());
+  std::filesystem::remove(store_->PathFor(sha));  // keeps the shard folder
+  ::pdsm::testing::ExpectWriteFailuresLeaveTargetIntact(
+      store_->PathFor(sha), dir_, [&](FileSystem* fs) -> absl::Status {
+        absl::StatusOr<std::unique_ptr<AssetStore>> store = AssetStore::Open(dir_.string(), fs);
+        if (!store.ok()) return store.status();
+        absl::Status s = (*store)->Put(sha, bytes);
+        if (!s.ok() && (*store)->Has(sha)) return absl::InternalError("a failed Put stored it");
+        return s;
+      });
+  EXPECT_FALSE(store_->Has(sha));
+}
+
+// A Put that creates the blob's shard folder syncs the store's folder too, after the shard's.
+TEST_F(AssetStoreTest, NewShardIsSyncedIntoTheStoreFolder) {
+  FaultInjectingFileSystem faults;
+  absl::StatusOr<std::unique_ptr<AssetStore>> store = AssetStore::Open(dir_.string(), &faults);
+  ASSERT_TRUE(store.ok()) << store.status();
+  const std::string bytes = Blob(100, 12);
+  const std::string sha = Sha256Hex(bytes);
+  faults.FailNth(FileOp::kSyncDir, 2, EIO);  // the store's folder, after the shard's
+  const absl::Status s = (*store)->Put(sha, bytes);
+  EXPECT_FALSE(s.ok());
+  EXPECT_THAT(std::string(s.message()), HasSubstr(dir_.string()));
+  EXPECT_EQ(faults.op_count(FileOp::kSyncDir), 2);
+  // The blob itself is whole (the failure came after its rename).
+  EXPECT_EQ(store_->Get(sha).value_or("<error>"), bytes);
+  ASSERT_TRUE((*store)->Put(sha, bytes).ok());
+  EXPECT_EQ(faults.op_count(FileOp::kSyncDir), 3) << "an existing shard: one folder sync";
+  EXPECT_THAT(ListFiles(dir_), ::testing::ElementsAre(absl::StrCat(sha.substr(0, 2), "/", sha)));
 }
 
 // Several threads (standing in for processes: two store objects) uploading the same asset at

@@ -17,20 +17,16 @@
 #include <OpenEXR/ImfStringAttribute.h>
 #include <OpenEXR/ImfTileDescription.h>
 #include <OpenEXR/ImfVecAttribute.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <map>
 #include <new>
 #include <optional>
-#include <random>
 #include <string_view>
 #include <system_error>
 #include <utility>
@@ -43,6 +39,9 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/string_view.h"
+#include "core/pdsm/exr_output_stream.h"
+#include "core/util/atomic_file.h"
+#include "core/util/file_system.h"
 
 namespace pdsm {
 namespace {
@@ -397,83 +396,6 @@ absl::Status ValidateHeaderForWrite(const PdsmHeader& h, absl::string_view path)
 }
 
 // ---------------------------------------------------------------------------------------
-// Output stream over a FILE*, so that write errors (disk full) are seen: OpenEXR swallows
-// exceptions thrown while its destructor writes the tile offset table.
-
-class FileOStream final : public Imf::OStream {
- public:
-  FileOStream(std::FILE* file, const std::string& name)
-      : Imf::OStream(name.c_str()), file_(file), name_(name) {}
-  ~FileOStream() override {
-    if (file_ != nullptr) std::fclose(file_);
-  }
-
-  void write(const char c[], int n) override {
-    if (n > 0 && std::fwrite(c, 1, static_cast<size_t>(n), file_) != static_cast<size_t>(n)) {
-      Fail("cannot write");
-    }
-  }
-  // Does not throw: OpenEXR's destructor calls it outside its try block.
-  uint64_t tellp() override {
-    const off_t pos = ::ftello(file_);
-    if (pos < 0) {
-      SetError("cannot tell position in");
-      return 0;
-    }
-    return static_cast<uint64_t>(pos);
-  }
-  void seekp(uint64_t pos) override {
-    if (::fseeko(file_, static_cast<off_t>(pos), SEEK_SET) != 0) Fail("cannot seek in");
-  }
-
-  // Flushes to the disk and closes; the first error of the stream's life if any.
-  absl::Status Close() {
-    if (file_ == nullptr) return error_;
-    if (error_.ok() && std::fflush(file_) != 0) SetError("cannot flush");
-    // fsync before the rename: a crash must not leave a renamed file with missing bytes.
-    if (error_.ok() && ::fsync(::fileno(file_)) != 0) SetError("cannot sync");
-    if (std::fclose(file_) != 0 && error_.ok()) SetError("cannot close");
-    file_ = nullptr;
-    return error_;
-  }
-  const absl::Status& error() const { return error_; }
-
- private:
-  void SetError(absl::string_view action) {
-    const int error_number = errno;
-    if (!error_.ok()) return;
-    const std::string message = absl::StrCat(action, " ", name_);
-    error_ = error_number != 0 ? absl::ErrnoToStatus(error_number, message)
-                               : absl::UnknownError(message);
-  }
-  [[noreturn]] void Fail(absl::string_view action) {
-    SetError(action);
-    throw Iex::IoExc(std::string(error_.message()));
-  }
-
-  std::FILE* file_;
-  std::string name_;
-  absl::Status error_;
-};
-
-// Creates "<path>.tmp-<pid>-<random>" exclusively, in the folder of `path`.
-absl::StatusOr<std::pair<std::FILE*, std::string>> CreateTempFile(const std::string& path) {
-  std::random_device random;
-  for (int attempt = 0; attempt < 8; ++attempt) {
-    const uint64_t r = (static_cast<uint64_t>(random()) << 32) ^ random();
-    std::string temp = absl::StrFormat("%s.tmp-%d-%016x", path, ::getpid(), r);
-    std::FILE* file = std::fopen(temp.c_str(), "wbx");  // x: O_EXCL, never reuse a name
-    if (file != nullptr) return std::make_pair(file, std::move(temp));
-    const int error_number = errno;
-    if (error_number != EEXIST) {
-      return absl::ErrnoToStatus(
-          error_number, absl::StrCat("cannot create ", temp, " (temporary file for ", path, ")"));
-    }
-  }
-  return absl::AlreadyExistsError(absl::StrCat("no free temporary name for ", path));
-}
-
-// ---------------------------------------------------------------------------------------
 // Tile grid.
 
 struct TileGrid {
@@ -566,21 +488,25 @@ struct DeepTileBuffers {
 
 class ExrPdsmWriter final : public PdsmWriter {
  public:
-  ExrPdsmWriter(std::string path, std::string temp_path, const PdsmHeader& header,
-                std::unique_ptr<FileOStream> stream, std::unique_ptr<Imf::DeepTiledOutputFile> exr)
+  ExrPdsmWriter(std::string path, FileSystem* fs, const PdsmHeader& header,
+                std::unique_ptr<AtomicFile> file, std::unique_ptr<ExrOutputStream> stream,
+                std::unique_ptr<Imf::DeepTiledOutputFile> exr)
       : path_(std::move(path)),
-        temp_path_(std::move(temp_path)),
+        fs_(fs),
         header_(header),
         grid_{header.geometry.width, header.geometry.height, header.tile_size},
+        file_(std::move(file)),
         stream_(std::move(stream)),
         exr_(std::move(exr)) {
     if (header_.adaptive()) header_.tile_samples.assign(grid_.Count(), 0);
   }
 
   ~ExrPdsmWriter() override {
+    // In this order: OpenEXR writes through the stream, the stream through the file; the
+    // file removes its temporary unless committed.
     exr_.reset();
     stream_.reset();
-    if (!finished_) std::remove(temp_path_.c_str());
+    file_.reset();
   }
 
   absl::Status WriteTile(const PdsmTile& tile) override {
@@ -611,17 +537,12 @@ class ExrPdsmWriter final : public PdsmWriter {
       return absl::FailedPreconditionError(absl::StrFormat(
           "%s: %d of %d tiles missing", path_, grid_.Count() - next_tile_, grid_.Count()));
     }
-    exr_.reset();  // writes the tile offset table
-    if (absl::Status s = stream_->Close(); !s.ok()) return Fail(s);
+    exr_.reset();  // writes the tile offset table; a failure shows in the file's status
+    if (!file_->status().ok()) return Fail(file_->status());
     if (header_.adaptive()) {
       if (absl::Status s = RewriteWithTileSamples(); !s.ok()) return Fail(s);
     }
-    std::error_code ec;
-    std::filesystem::rename(temp_path_, path_, ec);
-    if (ec) {
-      return Fail(absl::UnknownError(
-          absl::StrCat("cannot rename ", temp_path_, " to ", path_, ": ", ec.message())));
-    }
+    if (absl::Status s = file_->Commit(); !s.ok()) return Fail(s);
     finished_ = true;
     return absl::OkStatus();
   }
@@ -658,29 +579,27 @@ class ExrPdsmWriter final : public PdsmWriter {
 
   // The header went out before any tile, but an adaptive bake knows its tiles' sample counts
   // only at the end: copy the finished tiles' compressed bytes (no decoding) into a second
-  // file whose header carries them, and make that the one renamed into place.
+  // file whose header carries them, and make that the one committed. The first one is
+  // dropped (its temporary file removed) once the copy is whole.
   absl::Status RewriteWithTileSamples() {
-    absl::StatusOr<std::pair<std::FILE*, std::string>> temp = CreateTempFile(path_);
-    if (!temp.ok()) return temp.status();
-    FileOStream out(temp->first, temp->second);
-    try {
-      Imf::DeepTiledInputFile in(temp_path_.c_str(), Imf::globalThreadCount());
-      Imf::DeepTiledOutputFile copy(out, ExrHeaderFromPdsm(header_));
-      copy.copyPixels(in);
-    } catch (...) {
-      absl::Status status = out.error();
-      if (status.ok()) status = StatusFromCurrentException(temp->second, "rewriting");
-      out.Close().IgnoreError();
-      std::remove(temp->second.c_str());
-      return status;
+    if (absl::Status s = file_->Flush(); !s.ok()) return s;
+    absl::StatusOr<std::unique_ptr<AtomicFile>> copy_file = AtomicFile::Create(path_, fs_);
+    if (!copy_file.ok()) return copy_file.status();
+    {
+      ExrOutputStream out(copy_file->get());
+      try {
+        Imf::DeepTiledInputFile in(file_->temp_path().c_str(), Imf::globalThreadCount());
+        Imf::DeepTiledOutputFile copy(out, ExrHeaderFromPdsm(header_));
+        copy.copyPixels(in);
+      } catch (...) {
+        if (!out.error().ok()) return out.error();
+        return StatusFromCurrentException((*copy_file)->temp_path(), "rewriting");
+      }
     }
-    absl::Status closed = out.Close();
-    if (!closed.ok()) {
-      std::remove(temp->second.c_str());
-      return closed;
-    }
-    std::remove(temp_path_.c_str());
-    temp_path_ = temp->second;
+    // The copy's destructor wrote its offset table: a failure there shows only here.
+    if (!(*copy_file)->status().ok()) return (*copy_file)->status();
+    stream_.reset();
+    file_ = *std::move(copy_file);
     return absl::OkStatus();
   }
 
@@ -699,23 +618,30 @@ class ExrPdsmWriter final : public PdsmWriter {
     } catch (...) {
       if (!stream_->error().ok()) return Fail(stream_->error());
       return Fail(absl::InternalError(absl::StrCat(
-          StatusFromCurrentException(temp_path_, "writing").message(), " (for ", path_, ")")));
+          StatusFromCurrentException(file_->temp_path(), "writing").message(), " (for ", path_,
+          ")")));
     }
     ++next_tile_;
     return absl::OkStatus();
   }
 
+  // Makes `status` sticky and drops the file at once: nothing of a failed writer stays on
+  // disk while its owner still holds it.
   absl::Status Fail(absl::Status status) {
     error_ = status;
+    exr_.reset();
+    stream_.reset();
+    file_.reset();
     return status;
   }
 
   const std::string path_;
-  std::string temp_path_;  // the rewritten file's once RewriteWithTileSamples() succeeded
-  PdsmHeader header_;      // tile_samples filled as tiles arrive (adaptive bakes)
+  FileSystem* const fs_;
+  PdsmHeader header_;  // tile_samples filled as tiles arrive (adaptive bakes)
   const TileGrid grid_;
-  std::unique_ptr<FileOStream> stream_;
-  std::unique_ptr<Imf::DeepTiledOutputFile> exr_;  // destroyed before stream_
+  std::unique_ptr<AtomicFile> file_;  // the rewritten one once RewriteWithTileSamples() ran
+  std::unique_ptr<ExrOutputStream> stream_;        // writes to *file_; null after a rewrite
+  std::unique_ptr<Imf::DeepTiledOutputFile> exr_;  // writes to *stream_; null once finished
   std::map<int64_t, PdsmTile> pending_;            // out-of-order tiles by index
   int64_t next_tile_ = 0;                          // all tiles before it are written
   DeepTileBuffers buffers_;
@@ -797,25 +723,22 @@ absl::Status CheckDepthOrder(const PdsmImage& image, absl::string_view path) {
 }  // namespace
 
 absl::StatusOr<std::unique_ptr<PdsmWriter>> PdsmWriter::Create(const std::string& path,
-                                                               const PdsmHeader& header) {
+                                                               const PdsmHeader& header,
+                                                               FileSystem* fs) {
   if (absl::Status s = ValidateHeaderForWrite(header, path); !s.ok()) return s;
-  absl::StatusOr<std::pair<std::FILE*, std::string>> temp = CreateTempFile(path);
-  if (!temp.ok()) return temp.status();
-  auto stream = std::make_unique<FileOStream>(temp->first, temp->second);
+  if (fs == nullptr) fs = FileSystem::Default();
+  absl::StatusOr<std::unique_ptr<AtomicFile>> file = AtomicFile::Create(path, fs);
+  if (!file.ok()) return file.status();
+  auto stream = std::make_unique<ExrOutputStream>(file->get());
   std::unique_ptr<Imf::DeepTiledOutputFile> exr;
   try {
     exr = std::make_unique<Imf::DeepTiledOutputFile>(*stream, ExrHeaderFromPdsm(header));
   } catch (...) {
-    absl::Status status = stream->error();
-    if (status.ok()) {
-      status =
-          absl::InternalError(StatusFromCurrentException(temp->second, "cannot start").message());
-    }
-    stream.reset();
-    std::remove(temp->second.c_str());
-    return status;
+    if (!stream->error().ok()) return stream->error();
+    return absl::InternalError(
+        StatusFromCurrentException((*file)->temp_path(), "cannot start").message());
   }
-  return std::make_unique<ExrPdsmWriter>(path, temp->second, header, std::move(stream),
+  return std::make_unique<ExrPdsmWriter>(path, fs, header, *std::move(file), std::move(stream),
                                          std::move(exr));
 }
 

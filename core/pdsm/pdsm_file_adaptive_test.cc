@@ -7,7 +7,9 @@
 #include <vector>
 
 #include "core/pdsm/pdsm_file.h"
+#include "core/util/file_system.h"
 #include "tests/test_support.h"
+#include "tests/write_faults.h"
 
 namespace pdsm {
 namespace {
@@ -46,8 +48,8 @@ std::vector<PdsmTile> Tiles(const PdsmHeader& h, const std::vector<int>& samples
 }
 
 absl::Status Write(const std::string& path, const PdsmHeader& h, const std::vector<PdsmTile>& tiles,
-                   bool reversed) {
-  absl::StatusOr<std::unique_ptr<PdsmWriter>> writer = PdsmWriter::Create(path, h);
+                   bool reversed, FileSystem* file_system = nullptr) {
+  absl::StatusOr<std::unique_ptr<PdsmWriter>> writer = PdsmWriter::Create(path, h, file_system);
   if (!writer.ok()) return writer.status();
   for (size_t k = 0; k < tiles.size(); ++k) {
     const PdsmTile& tile = tiles[reversed ? tiles.size() - 1 - k : k];
@@ -71,7 +73,8 @@ TEST(PdsmFileAdaptiveTest, RoundTripsPerTileSampleCounts) {
   EXPECT_EQ(image->header.tile_samples, counts);
   EXPECT_EQ(image->header.TileSamples(1), 64);
   EXPECT_EQ(image->Function(2, 0)[1].a, 1.0f / 64);
-  // Only the temporary files' rename leaves anything: nothing else in the folder.
+  // Two temporary files (the first pass, then the copy with the counts): only the copy's
+  // rename leaves anything.
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 1);
 
   // Byte-identical whatever the tile order.
@@ -91,6 +94,22 @@ TEST(PdsmFileAdaptiveTest, FixedBakesHaveNoTileCounts) {
   EXPECT_TRUE(image->header.tile_samples.empty());
   EXPECT_EQ(image->header.TileSamples(3), 64);
   EXPECT_EQ(testing::ReadBytes(path).find("pdsmTileSamples"), std::string::npos);
+}
+
+// The adaptive writer's second pass (read back the first temporary file, copy it into a
+// second one) fails cleanly too: at every write, flush, sync, rename and on a full disk.
+TEST(PdsmFileAdaptiveTest, EveryFileSystemFailureLeavesThePreviousPdsm) {
+  testing::TempDir dir;
+  PdsmHeader h = SmallHeader();
+  h.adaptive_tolerance = 0.02;
+  h.adaptive_min_samples = 16;
+  const std::string path = dir.File("a.exr");
+  ASSERT_TRUE(Write(path, h, Tiles(h, {16, 64, 32, 16, 64, 1}), false).ok());
+  const std::string previous = testing::ReadBytes(path);
+  testing::ExpectWriteFailuresLeaveTargetIntact(path, dir.path(), [&](FileSystem* file_system) {
+    return Write(path, h, Tiles(h, {64, 64, 32, 16, 64, 2}), true, file_system);
+  });
+  EXPECT_EQ(testing::ReadBytes(path), previous);
 }
 
 TEST(PdsmFileAdaptiveTest, TileCountOutOfRangeIsRejected) {

@@ -1,5 +1,8 @@
 #include "core/pdsm/pdsm_file.h"
+#include "core/util/fault_injecting_file_system.h"
+#include "core/util/file_system.h"
 #include "tests/test_support.h"
+#include "tests/write_faults.h"
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfDeepFrameBuffer.h>
@@ -159,8 +162,9 @@ std::vector<PdsmTile> CutTiles(const PdsmImage& image) {
 }
 
 absl::Status WriteTiles(const std::string& path, const PdsmHeader& header,
-                        const std::vector<PdsmTile>& tiles) {
-  absl::StatusOr<std::unique_ptr<PdsmWriter>> writer = PdsmWriter::Create(path, header);
+                        const std::vector<PdsmTile>& tiles, FileSystem* file_system = nullptr) {
+  absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
+      PdsmWriter::Create(path, header, file_system);
   if (!writer.ok()) return writer.status();
   for (const PdsmTile& tile : tiles) {
     if (absl::Status s = (*writer)->WriteTile(tile); !s.ok()) return s;
@@ -356,12 +360,51 @@ TEST_F(PdsmFileTest, TemporaryFileIsBesideTheTarget) {
       PdsmWriter::Create(Path("out.exr"), image.header);
   ASSERT_TRUE(writer.ok()) << writer.status();
   ASSERT_EQ(Files().size(), 1u);
-  EXPECT_THAT(Files()[0], ::testing::StartsWith("out.exr.tmp-" + std::to_string(::getpid())));
+  EXPECT_THAT(Files()[0], ::testing::MatchesRegex("out\\.exr\\.tmp-[A-Za-z0-9]{6}"));
   ASSERT_TRUE((*writer)->WriteTile(CutTile(image, 0, 0)).ok());
   ASSERT_TRUE((*writer)->Finish().ok());
   EXPECT_THAT(Files(), ::testing::ElementsAre("out.exr"));
   writer->reset();
   EXPECT_THAT(Files(), ::testing::ElementsAre("out.exr"));
+}
+
+// The PDSM streams through the one atomic-write path: whichever write, sync or rename fails
+// (OpenEXR's header, a tile, the offset table written by its destructor, a full disk at any
+// point), the previous PDSM stays byte for byte and no temporary file is left.
+TEST_F(PdsmFileTest, EveryFileSystemFailureLeavesThePreviousPdsm) {
+  const PdsmImage previous = RandomImage(FullHeader(24, 20, 8), 3);
+  const std::string path = Path("out.exr");
+  ASSERT_TRUE(WriteTiles(path, previous.header, CutTiles(previous)).ok());
+  const PdsmImage next = RandomImage(FullHeader(24, 20, 8), 4);
+  testing::ExpectWriteFailuresLeaveTargetIntact(path, dir_, [&](FileSystem* file_system) {
+    return WriteTiles(path, next.header, CutTiles(next), file_system);
+  });
+  absl::StatusOr<PdsmImage> read = ReadPdsm(path);
+  ASSERT_TRUE(read.ok()) << read.status();
+  ExpectImagesEqual(previous, *read);
+}
+
+// A full disk mid-bake: the error is sticky, names the file, and the temporary file is gone
+// at once, not only when the writer is destroyed.
+TEST_F(PdsmFileTest, FullDiskFailsTheWriterAndLeavesNothing) {
+  const PdsmImage image = RandomImage(FullHeader(64, 64, 16), 5);
+  const std::vector<PdsmTile> tiles = CutTiles(image);
+  FaultInjectingFileSystem faults;
+  absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
+      PdsmWriter::Create(Path("out.exr"), image.header, &faults);
+  ASSERT_TRUE(writer.ok()) << writer.status();
+  faults.SetDiskFullAfter(faults.bytes_written() + 100);
+  absl::Status s;
+  for (const PdsmTile& tile : tiles) {
+    s = (*writer)->WriteTile(tile);
+    if (!s.ok()) break;
+  }
+  if (s.ok()) s = (*writer)->Finish();  // the tiles may all fit in the write buffer
+  EXPECT_EQ(s.code(), absl::StatusCode::kResourceExhausted) << s;
+  EXPECT_THAT(std::string(s.message()), HasSubstr(Path("out.exr")));
+  EXPECT_THAT(Files(), ::testing::IsEmpty());
+  EXPECT_EQ((*writer)->Finish(), s);
+  EXPECT_THAT(Files(), ::testing::IsEmpty());
 }
 
 TEST_F(PdsmFileTest, CreateInMissingFolderNamesThePath) {

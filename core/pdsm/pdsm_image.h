@@ -22,13 +22,23 @@ struct PdsmHeader {
   int format_version = 1;  // MinimumFormatVersion(*this) for what a bake writes
   std::string scene_name;
   LightShape light_shape = LightShape::kRect;
+  // The light's size. Lengths are world units, which are also light-space units: the light
+  // frame (u, v, n) is orthonormal. Rect: half extents along u and v; disk: radius (0 for
+  // the other shapes); sun: tan of half its angular diameter (dimensionless, 0 otherwise).
   double light_half_width = 0, light_half_height = 0, light_radius = 0, tan_half_angle = 0;
   PdsmGeometry geometry;
   int samples = 0;
   int shadow_map_resolution = 0;
   double epsilon = 0;
   CompressionMetric compression_metric = CompressionMetric::kVertical;
-  double depth_bias = 0;   // world units, as applied
+  // Bias of the stored shadow-map depths, applied when the maps are rendered (one bias
+  // function: shaders/shadow_map.frag BiasedDepth):
+  //   z + depth_bias + slope_bias * footprint * (|dz/dx| + |dz/dy|)
+  // depth_bias: light-space depth, world units, as applied (scene value or DefaultDepthBias).
+  // slope_bias: dimensionless, a multiple of the caster's depth change across one shadow-map
+  // texel (the screen-space derivatives of z), widened by footprint = max(1, PDSM pixel pitch
+  // / shadow-map texel pitch) because a PDSM ray's lookups can land that far apart.
+  double depth_bias = 0;
   double slope_bias = 0;
   SamplingPattern sampling = SamplingPattern::kStratified;
   uint64_t seed = 0;

@@ -1,8 +1,6 @@
 #include "core/pipeline/tile_file.h"
 
-#include <fcntl.h>
 #include <sys/stat.h>
-#include <unistd.h>
 
 #include <bit>
 #include <cerrno>
@@ -10,12 +8,13 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <string_view>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/string_view.h"
+#include "core/util/atomic_file.h"
+#include "core/util/file_system.h"
 #include "core/util/little_endian.h"
 
 namespace pdsm {
@@ -41,18 +40,6 @@ uint64_t Checksum(std::string_view bytes) {
   return hash;
 }
 
-
-absl::Status ErrnoStatus(int error_number, absl::string_view message) {
-  return error_number != 0 ? absl::ErrnoToStatus(error_number, message)
-                           : absl::UnknownError(message);
-}
-
-// ErrnoStatus of the errno now: read before anything (such as building the message) can
-// change it.
-absl::Status LastErrnoStatus(const char* action, const std::string& name, const char* more = "") {
-  const int error_number = errno;
-  return ErrnoStatus(error_number, absl::StrCat(action, " ", name, more));
-}
 
 absl::Status CheckTileForWrite(const PdsmTile& tile, const std::string& path) {
   const auto bad = [&](absl::string_view what) {
@@ -102,37 +89,6 @@ std::string Encode(const PdsmTile& tile) {
   if (adaptive) out.I32(tile.samples);
   out.U64(Checksum(std::string_view(bytes).substr(0, size - kChecksumBytes)));
   return bytes;
-}
-
-// Writes `bytes` to a new file at `temp` and syncs it to the disk.
-absl::Status WriteSynced(const std::string& temp, const std::string& bytes) {
-  std::FILE* file = std::fopen(temp.c_str(), "wb");
-  if (file == nullptr) return LastErrnoStatus("cannot create", temp);
-  absl::Status status;
-  if (std::fwrite(bytes.data(), 1, bytes.size(), file) != bytes.size()) {
-    status = LastErrnoStatus("cannot write", temp);
-  } else if (std::fflush(file) != 0) {
-    status = LastErrnoStatus("cannot flush", temp);
-  } else if (::fsync(::fileno(file)) != 0) {
-    // Before the rename: a crash must not leave a renamed file with missing bytes.
-    status = LastErrnoStatus("cannot sync", temp);
-  }
-  if (std::fclose(file) != 0 && status.ok()) {
-    status = LastErrnoStatus("cannot close", temp);
-  }
-  return status;
-}
-
-// Syncs the folder holding `path`, so that a rename into it survives a crash.
-absl::Status SyncParentDir(const std::string& path) {
-  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
-  const std::string dir = parent.empty() ? std::string(".") : parent.string();
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) return LastErrnoStatus("cannot open folder", dir, " to sync it");
-  absl::Status status;
-  if (::fsync(fd) != 0) status = LastErrnoStatus("cannot sync folder", dir);
-  ::close(fd);
-  return status;
 }
 
 // The whole file. NOT_FOUND when there is none.
@@ -249,23 +205,9 @@ absl::StatusOr<PdsmTile> Decode(const std::string& bytes, const std::string& pat
 
 }  // namespace
 
-absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile) {
+absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile, FileSystem* fs) {
   if (absl::Status s = CheckTileForWrite(tile, path); !s.ok()) return s;
-  const std::string bytes = Encode(tile);
-  const std::string temp = path + ".tmp";
-  if (absl::Status s = WriteSynced(temp, bytes); !s.ok()) {
-    std::remove(temp.c_str());
-    return absl::Status(s.code(), absl::StrCat(s.message(), " (writing tile file ", path, ")"));
-  }
-  if (std::rename(temp.c_str(), path.c_str()) != 0) {
-    const int error_number = errno;
-    std::remove(temp.c_str());
-    return ErrnoStatus(error_number, absl::StrCat("cannot rename ", temp, " to ", path));
-  }
-  if (absl::Status s = SyncParentDir(path); !s.ok()) {
-    return absl::Status(s.code(), absl::StrCat(s.message(), " (after writing ", path, ")"));
-  }
-  return absl::OkStatus();
+  return WriteFileAtomically(path, Encode(tile), fs);
 }
 
 absl::StatusOr<PdsmTile> ReadTileFile(const std::string& path) {

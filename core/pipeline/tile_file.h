@@ -21,19 +21,23 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "core/pdsm/pdsm_image.h"
+#include "core/util/file_system.h"
 
 namespace pdsm {
 
 inline constexpr uint32_t kTileFileVersion = 2;
 
-// Writes `tile` to `path`, crash-safe: the bytes go to `path + ".tmp"`, are flushed and synced,
-// the file is renamed onto `path` and the folder is synced. So `path` holds either its old
-// content or the whole new tile, never part of one; a crash may leave the ".tmp" file behind,
-// which the next write to `path` replaces. On error nothing is left at the ".tmp" name.
+// Writes `tile` to `path`, crash-safe, through WriteFileAtomically (core/util/atomic_file.h):
+// the bytes go to a unique "<path>.tmp-XXXXXX", are synced, the file is renamed onto `path`
+// and the folder is synced. So `path` holds either its old content or the whole new tile,
+// never part of one, and concurrent writers of one tile never share a temporary file. On
+// error no temporary file is left; a crash can leave one, which no reader opens.
 // Errors: INVALID_ARGUMENT when the tile's offsets are not width * height + 1 nondecreasing
 // values from 0 to the vertex count, or width or height is negative; otherwise the errno
 // status of the failing step (e.g. RESOURCE_EXHAUSTED for a full disk), naming the path.
-absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile);
+// `fs` null means FileSystem::Default().
+absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile,
+                           FileSystem* fs = nullptr);
 
 // Reads a tile written by WriteTileFile. Sizes in the file are checked against the file's
 // length before anything is allocated from them, so a corrupt file costs no more memory than

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "tests/test_support.h"
+#include "tests/write_faults.h"
 
 namespace pdsm {
 
@@ -169,7 +170,6 @@ TEST(TileFileTest, RoundTripOfLargerTile) {
 TEST(TileFileTest, OverwritesAndLeavesNoTemporaryFile) {
   TempDir dir;
   const std::string path = dir.File("tile");
-  WriteText(path + ".tmp", "left over by a crash");
   PdsmTile first = SmallTile();
   ASSERT_TRUE(WriteTileFile(path, first).ok());
   PdsmTile second = SmallTile();
@@ -179,6 +179,35 @@ TEST(TileFileTest, OverwritesAndLeavesNoTemporaryFile) {
   absl::StatusOr<PdsmTile> read = ReadTileFile(path);
   ASSERT_TRUE(read.ok()) << read.status();
   ExpectTilesEqual(*read, second);
+}
+
+// A temporary file a crash left behind is another name: never read as the tile, never
+// written into by the next write (which makes its own).
+TEST(TileFileTest, TemporaryFileLeftByACrashIsNotTheTile) {
+  TempDir dir;
+  const std::string path = dir.File("tile");
+  const std::string crashed = path + ".tmp-AbC123";
+  WriteText(crashed, "left over by a crash");
+  EXPECT_EQ(ReadTileFile(path).status().code(), absl::StatusCode::kNotFound);
+  ASSERT_TRUE(WriteTileFile(path, SmallTile()).ok());
+  EXPECT_EQ(ReadBytes(crashed), "left over by a crash");
+  absl::StatusOr<PdsmTile> read = ReadTileFile(path);
+  ASSERT_TRUE(read.ok()) << read.status();
+  ExpectTilesEqual(*read, SmallTile());
+}
+
+TEST(TileFileTest, EveryFileSystemFailureLeavesThePreviousTile) {
+  TempDir dir;
+  const std::string path = dir.File("tile_3.tile");
+  ASSERT_TRUE(WriteTileFile(path, SmallTile()).ok());
+  PdsmTile next = SmallTile();
+  next.vertices[1].a = 0.125f;
+  next.samples = 12;
+  ::pdsm::testing::ExpectWriteFailuresLeaveTargetIntact(
+      path, dir.path(), [&](FileSystem* fs) { return WriteTileFile(path, next, fs); });
+  absl::StatusOr<PdsmTile> read = ReadTileFile(path);
+  ASSERT_TRUE(read.ok()) << read.status();
+  ExpectTilesEqual(*read, SmallTile());
 }
 
 TEST(TileFileTest, MissingFileIsNotFound) {
@@ -191,7 +220,7 @@ TEST(TileFileTest, MissingFileIsNotFound) {
 TEST(TileFileTest, WriteIntoMissingFolderFailsCleanly) {
   TempDir dir;
   const absl::Status s = WriteTileFile(dir.File("no/such/folder/tile"), SmallTile());
-  EXPECT_FALSE(s.ok());
+  EXPECT_EQ(s.code(), absl::StatusCode::kNotFound) << s;
   EXPECT_THAT(s.message(), HasSubstr("no/such/folder/tile"));
 }
 

@@ -1,57 +1,76 @@
 #include "core/util/atomic_file.h"
 
-#include <fcntl.h>
-#include <stdlib.h>
-#include <unistd.h>
-
-#include <cerrno>
-#include <cstring>
-#include <filesystem>
-#include <vector>
+#include <algorithm>
+#include <utility>
 
 #include "absl/strings/str_cat.h"
 
 namespace pdsm {
-namespace {
 
-// Writes all of `contents` to `fd` and syncs it; false (errno set) on failure.
-bool WriteAllSynced(int fd, absl::string_view contents) {
-  while (!contents.empty()) {
-    const ssize_t n = ::write(fd, contents.data(), contents.size());
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
-    contents.remove_prefix(static_cast<size_t>(n));
-  }
-  return ::fsync(fd) == 0;
+absl::StatusOr<std::unique_ptr<AtomicFile>> AtomicFile::Create(const std::string& path,
+                                                               FileSystem* fs) {
+  if (fs == nullptr) fs = FileSystem::Default();
+  absl::StatusOr<std::unique_ptr<WritableFile>> file = fs->NewTempFile(path);
+  if (!file.ok()) return file.status();
+  return std::unique_ptr<AtomicFile>(new AtomicFile(path, fs, *std::move(file)));
 }
 
-}  // namespace
+AtomicFile::AtomicFile(std::string path, FileSystem* fs, std::unique_ptr<WritableFile> file)
+    : path_(std::move(path)), temp_path_(file->path()), fs_(fs), file_(std::move(file)) {}
 
-absl::Status WriteFileAtomically(const std::string& path, absl::string_view contents) {
-  // mkstemp: a fresh name (O_EXCL) beside the target, so concurrent writers never share one.
-  std::string pattern = path + ".tmp-XXXXXX";
-  std::vector<char> name(pattern.begin(), pattern.end());
-  name.push_back('\0');
-  const int fd = ::mkstemp(name.data());
-  if (fd < 0) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("cannot write \"", path, "\": ", std::strerror(errno)));
+AtomicFile::~AtomicFile() {
+  if (!committed_ && status_.ok()) Fail(absl::CancelledError("abandoned")).IgnoreError();
+}
+
+absl::Status AtomicFile::Append(absl::string_view data) { return WriteAt(size_, data); }
+
+absl::Status AtomicFile::WriteAt(uint64_t offset, absl::string_view data) {
+  if (!status_.ok()) return status_;
+  if (committed_) return absl::FailedPreconditionError(path_ + ": already committed");
+  if (absl::Status s = file_->WriteAt(offset, data); !s.ok()) return Fail(s);
+  size_ = std::max(size_, offset + data.size());
+  return absl::OkStatus();
+}
+
+absl::Status AtomicFile::Flush() {
+  if (!status_.ok()) return status_;
+  if (committed_) return absl::FailedPreconditionError(path_ + ": already committed");
+  if (absl::Status s = file_->Flush(); !s.ok()) return Fail(s);
+  return absl::OkStatus();
+}
+
+absl::Status AtomicFile::Commit() {
+  if (!status_.ok()) return status_;
+  if (committed_) return absl::FailedPreconditionError(path_ + ": already committed");
+  // fsync before the rename: a crash must not leave a renamed file with missing bytes.
+  if (absl::Status s = file_->Sync(); !s.ok()) return Fail(s);
+  absl::Status closed = file_->Close();
+  file_.reset();
+  if (!closed.ok()) return Fail(closed);
+  if (absl::Status s = fs_->RenameFile(temp_path_, path_); !s.ok()) return Fail(s);
+  committed_ = true;
+  // The rename is in the folder's entries: durable only once the folder is synced.
+  if (absl::Status s = fs_->SyncDir(ParentDir(path_)); !s.ok()) {
+    status_ = absl::Status(
+        s.code(), absl::StrCat(s.message(), " (after renaming ", temp_path_, " to ", path_, ")"));
+    return status_;
   }
-  const std::string temp(name.data());
-  absl::Status status;
-  if (!WriteAllSynced(fd, contents)) {
-    status = absl::InternalError(absl::StrCat("writing \"", temp, "\": ", std::strerror(errno)));
-  }
-  if (::close(fd) != 0 && status.ok()) {
-    status = absl::InternalError(absl::StrCat("closing \"", temp, "\": ", std::strerror(errno)));
-  }
-  std::error_code ec;
-  if (status.ok()) {
-    std::filesystem::rename(temp, path, ec);
-    if (ec) status = absl::InternalError(absl::StrCat("\"", path, "\": ", ec.message()));
-  }
-  if (!status.ok()) std::filesystem::remove(temp, ec);
-  return status;
+  return absl::OkStatus();
+}
+
+absl::Status AtomicFile::Fail(absl::Status status) {
+  status_ = std::move(status);
+  file_.reset();  // closes; errors do not matter, the file goes
+  fs_->RemoveFile(temp_path_).IgnoreError();
+  return status_;
+}
+
+absl::Status WriteFileAtomically(const std::string& path, absl::string_view contents,
+                                 FileSystem* fs) {
+  absl::StatusOr<std::unique_ptr<AtomicFile>> file = AtomicFile::Create(path, fs);
+  if (!file.ok()) return file.status();
+  if (absl::Status s = (*file)->Append(contents); !s.ok()) return s;
+  return (*file)->Commit();
 }
 
 }  // namespace pdsm

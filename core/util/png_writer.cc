@@ -2,31 +2,39 @@
 
 #include <png.h>
 
-#include <cstdio>
-#include <memory>
-
 #include "absl/strings/str_cat.h"
+#include "core/util/atomic_file.h"
 
 namespace pdsm {
+namespace {
 
-absl::Status WriteRgbPng(const std::string& path, int width, int height,
-                         const std::vector<uint8_t>& rgb) {
-  if (rgb.size() != static_cast<size_t>(width) * height * 3) {
-    return absl::InvalidArgumentError("WriteRgbPng: pixel buffer size mismatch");
+// libpng's write callback: appends to the std::string behind the io pointer.
+void AppendToString(png_structp png, png_bytep data, png_size_t size) {
+  static_cast<std::string*>(png_get_io_ptr(png))->append(reinterpret_cast<const char*>(data), size);
+}
+
+void NoFlush(png_structp) {}
+
+}  // namespace
+
+absl::StatusOr<std::string> EncodeRgbPng(int width, int height, const std::vector<uint8_t>& rgb) {
+  if (width <= 0 || height <= 0 || rgb.size() != static_cast<size_t>(width) * height * 3) {
+    return absl::InvalidArgumentError(absl::StrCat("PNG: ", width, "x", height, " RGB pixels need ",
+                                                   static_cast<size_t>(width) * height * 3,
+                                                   " bytes, got ", rgb.size()));
   }
-  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "wb"), &std::fclose);
-  if (!file) return absl::UnavailableError(absl::StrCat("cannot write ", path));
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (png == nullptr || info == nullptr) {
     png_destroy_write_struct(&png, &info);
     return absl::InternalError("libpng: cannot allocate");
   }
+  std::string bytes;
   if (setjmp(png_jmpbuf(png))) {  // libpng reports errors by longjmp
     png_destroy_write_struct(&png, &info);
-    return absl::InternalError(absl::StrCat("libpng: failed writing ", path));
+    return absl::InternalError("libpng: cannot encode the image");
   }
-  png_init_io(png, file.get());
+  png_set_write_fn(png, &bytes, &AppendToString, &NoFlush);
   png_set_IHDR(png, info, width, height, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_write_info(png, info);
@@ -35,7 +43,16 @@ absl::Status WriteRgbPng(const std::string& path, int width, int height,
   }
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
-  return absl::OkStatus();
+  return bytes;
+}
+
+absl::Status WriteRgbPng(const std::string& path, int width, int height,
+                         const std::vector<uint8_t>& rgb, FileSystem* fs) {
+  absl::StatusOr<std::string> bytes = EncodeRgbPng(width, height, rgb);
+  if (!bytes.ok()) {
+    return absl::Status(bytes.status().code(), absl::StrCat(path, ": ", bytes.status().message()));
+  }
+  return WriteFileAtomically(path, *bytes, fs);
 }
 
 }  // namespace pdsm

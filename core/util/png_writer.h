@@ -1,4 +1,4 @@
-// Writing 8-bit RGB PNG images (previews, plots), via libpng.
+// Writing 8-bit RGB PNG images (previews, plots, screenshots), via libpng.
 #ifndef PDSM_CORE_UTIL_PNG_WRITER_H_
 #define PDSM_CORE_UTIL_PNG_WRITER_H_
 
@@ -7,12 +7,20 @@
 #include <vector>
 
 #include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "core/util/file_system.h"
 
 namespace pdsm {
 
-// `rgb` holds width * height * 3 bytes, row 0 at the top of the image.
+// The PNG file's bytes. `rgb` holds width * height * 3 bytes, row 0 at the top of the image.
+// INVALID_ARGUMENT when it does not; INTERNAL when libpng fails.
+absl::StatusOr<std::string> EncodeRgbPng(int width, int height, const std::vector<uint8_t>& rgb);
+
+// Encodes, then writes `path` through WriteFileAtomically (core/util/atomic_file.h): on any
+// failure `path` is left as it was and no temporary file remains. `fs` null means
+// FileSystem::Default().
 absl::Status WriteRgbPng(const std::string& path, int width, int height,
-                         const std::vector<uint8_t>& rgb);
+                         const std::vector<uint8_t>& rgb, FileSystem* fs = nullptr);
 
 }  // namespace pdsm
 

@@ -1,0 +1,103 @@
+// The one seam between the project and the file system for every file it writes (leveldb's
+// Env is the model): a FileSystem creates temporary files, renames them, syncs folders and
+// removes files; FileSystem::Default() does it with POSIX calls, and a FileSystemWrapper
+// forwards to another one so that a test double (fault_injecting_file_system.h) overrides
+// only what it breaks. Writers never call these directly: they go through AtomicFile
+// (atomic_file.h), which orders the steps so that a target is always whole.
+#ifndef PDSM_CORE_UTIL_FILE_SYSTEM_H_
+#define PDSM_CORE_UTIL_FILE_SYSTEM_H_
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+
+namespace pdsm {
+
+// The status of a failed system call: its code from the errno (ENOSPC → RESOURCE_EXHAUSTED,
+// ENOENT → NOT_FOUND, EACCES → PERMISSION_DENIED, …, as absl::ErrnoToStatus maps them), its
+// message "<message>: <strerror>". UNKNOWN for an errno of 0. Read errno before building
+// `message`: formatting can change it.
+absl::Status ErrnoStatus(int error_number, absl::string_view message);
+
+// A file open for writing. Not thread-safe; one owner writes it. Every error names the file.
+// After an error the file's content is unspecified.
+class WritableFile {
+ public:
+  WritableFile() = default;
+  WritableFile(const WritableFile&) = delete;
+  WritableFile& operator=(const WritableFile&) = delete;
+  // Closes the file if Close() was not called, ignoring errors.
+  virtual ~WritableFile() = default;
+
+  // Writes `data` at byte `offset` (pwrite): formats that patch bytes written earlier
+  // (OpenEXR's tile offset table) seek back. Writes may be buffered until Flush/Sync/Close.
+  virtual absl::Status WriteAt(uint64_t offset, absl::string_view data) = 0;
+  // Hands buffered bytes to the operating system: readable by name, not yet durable.
+  virtual absl::Status Flush() = 0;
+  // Flushes, then fsync: the bytes are on the disk.
+  virtual absl::Status Sync() = 0;
+  // Flushes and closes. REQUIRES: called at most once; no call but the destructor after it.
+  virtual absl::Status Close() = 0;
+
+  // The file's name as created.
+  virtual const std::string& path() const = 0;
+};
+
+// Thread-safe: every method may be called from any thread (the implementations hold no
+// mutable state, or lock it).
+class FileSystem {
+ public:
+  FileSystem() = default;
+  FileSystem(const FileSystem&) = delete;
+  FileSystem& operator=(const FileSystem&) = delete;
+  virtual ~FileSystem() = default;
+
+  // The real file system (POSIX). Never null, never destroyed.
+  static FileSystem* Default();
+
+  // Creates a new, empty file named "<target>.tmp-XXXXXX" (six random letters and digits,
+  // created exclusively: concurrent writers of one target never share a name) in the folder
+  // of `target`, with the mode a new file gets (0666 less the umask; not mkstemp's 0600).
+  // Errors: the errno's status (NOT_FOUND when the folder does not exist, PERMISSION_DENIED
+  // when it cannot be written), naming `target`.
+  virtual absl::StatusOr<std::unique_ptr<WritableFile>> NewTempFile(const std::string& target) = 0;
+
+  // rename(2): replaces `to` atomically; a reader sees the old file or the new one.
+  virtual absl::Status RenameFile(const std::string& from, const std::string& to) = 0;
+  // fsync of the folder `dir` ("" is "."): makes the entries renamed or created in it durable.
+  virtual absl::Status SyncDir(const std::string& dir) = 0;
+  // unlink(2). NOT_FOUND when there is no such file.
+  virtual absl::Status RemoveFile(const std::string& path) = 0;
+};
+
+// Forwards every call to `target` (leveldb's EnvWrapper): a subclass overrides only what it
+// changes. Does not own `target`, which must outlive it.
+class FileSystemWrapper : public FileSystem {
+ public:
+  explicit FileSystemWrapper(FileSystem* target) : target_(target) {}
+
+  FileSystem* target() const { return target_; }
+
+  absl::StatusOr<std::unique_ptr<WritableFile>> NewTempFile(const std::string& target) override {
+    return target_->NewTempFile(target);
+  }
+  absl::Status RenameFile(const std::string& from, const std::string& to) override {
+    return target_->RenameFile(from, to);
+  }
+  absl::Status SyncDir(const std::string& dir) override { return target_->SyncDir(dir); }
+  absl::Status RemoveFile(const std::string& path) override { return target_->RemoveFile(path); }
+
+ private:
+  FileSystem* const target_;
+};
+
+// The folder holding `path`, "." for a bare name: what SyncDir must sync after a rename.
+std::string ParentDir(const std::string& path);
+
+}  // namespace pdsm
+
+#endif  // PDSM_CORE_UTIL_FILE_SYSTEM_H_
