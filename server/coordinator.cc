@@ -63,7 +63,8 @@ absl::StatusOr<std::unique_ptr<Coordinator>> Coordinator::Start(
   if (!store.ok()) return store.status();
   c->store_ = *std::move(store);
   absl::StatusOr<std::unique_ptr<CoordinatorAssets>> assets = CoordinatorAssets::Open(
-      (std::filesystem::path(options.data_dir) / "assets").string(), options.max_asset_bytes);
+      (std::filesystem::path(options.data_dir) / "assets").string(), options.max_asset_bytes,
+      options.fs);
   if (!assets.ok()) return assets.status();
   c->assets_ = *std::move(assets);
   if (absl::Status s = c->Resume(); !s.ok()) return s;
@@ -117,7 +118,8 @@ absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<in
   auto shared_plan = std::make_shared<const BakePlan>(*std::move(plan));
   auto job = std::make_shared<StoredJob>(store_.get(), options_.data_dir, record,
                                          std::move(scene), shared_plan,
-                                         [this](const std::string& id) { Forget(id); });
+                                         [this](const std::string& id) { Forget(id); },
+                                         options_.fs);
   {
     absl::MutexLock lock(&mu_);
     active_[record.job_id] = job;

@@ -29,6 +29,7 @@
 #include "absl/synchronization/notification.h"
 #include "core/events/event.h"
 #include "core/pipeline/bake_engine.h"
+#include "core/util/file_system.h"
 #include "core/util/work_queue.h"
 #include "pdsm/v1/jobs.pb.h"
 #include "pdsm/v1/workers.pb.h"
@@ -50,6 +51,9 @@ struct CoordinatorOptions {
   int assembly_threads = 1;
   AdmissionLimits limits;         // RESOURCE_EXHAUSTED above them
   int64_t max_asset_bytes = int64_t{1} << 30;
+  // Where tiles, PDSMs and assets are written; null: the real file system. (jobs.db is
+  // SQLite's own.)
+  FileSystem* fs = nullptr;
 };
 
 class Coordinator {

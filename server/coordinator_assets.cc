@@ -6,8 +6,8 @@
 namespace pdsm {
 
 absl::StatusOr<std::unique_ptr<CoordinatorAssets>> CoordinatorAssets::Open(
-    const std::string& dir, int64_t max_asset_bytes) {
-  absl::StatusOr<std::unique_ptr<AssetStore>> store = AssetStore::Open(dir);
+    const std::string& dir, int64_t max_asset_bytes, FileSystem* fs) {
+  absl::StatusOr<std::unique_ptr<AssetStore>> store = AssetStore::Open(dir, fs);
   if (!store.ok()) return store.status();
   return std::unique_ptr<CoordinatorAssets>(
       new CoordinatorAssets(*std::move(store), max_asset_bytes));

@@ -20,7 +20,8 @@ class CoordinatorAssets {
  public:
   // Opens or creates the store in `dir`.
   static absl::StatusOr<std::unique_ptr<CoordinatorAssets>> Open(const std::string& dir,
-                                                                 int64_t max_asset_bytes);
+                                                                 int64_t max_asset_bytes,
+                                                                 FileSystem* fs = nullptr);
 
   int64_t max_asset_bytes() const { return max_asset_bytes_; }
   // The hashes of `sha256` not stored yet, in order.

@@ -44,14 +44,15 @@ std::string JobPaths::Tile(int tile_index) const {
 
 StoredJob::StoredJob(JobStore* store, const std::string& data_dir, JobRecord record,
                      pdsm::v1::Scene scene, std::shared_ptr<const BakePlan> plan,
-                     std::function<void(const std::string&)> on_ended)
+                     std::function<void(const std::string&)> on_ended, FileSystem* fs)
     : store_(store),
       record_(std::move(record)),
       scene_(std::move(scene)),
       plan_(std::move(plan)),
       fingerprint_(PlanFingerprint(*plan_)),
       paths_(data_dir, record_.job_id),
-      on_ended_(std::move(on_ended)) {}
+      on_ended_(std::move(on_ended)),
+      fs_(fs) {}
 
 std::vector<int> StoredJob::FinishedTiles() const {
   std::vector<int> done;
@@ -73,7 +74,7 @@ absl::Status StoredJob::StoreTile(const PdsmTile& tile) {
   const int index = plan_->TileIndexAt(tile.x0, tile.y0);
   std::error_code ec;
   std::filesystem::create_directories(paths_.tiles, ec);
-  if (absl::Status s = WriteTileFile(paths_.Tile(index), tile); !s.ok()) return s;
+  if (absl::Status s = WriteTileFile(paths_.Tile(index), tile, fs_); !s.ok()) return s;
   if (ended_) return absl::OkStatus();  // cancelled meanwhile: the file goes with the folder
   if (absl::Status s = store_->MarkTileDone(record_.job_id, index, UnixNowMs()); !s.ok()) {
     return s;
@@ -87,7 +88,7 @@ absl::Status StoredJob::Finish() {
   std::error_code ec;
   std::filesystem::create_directories(paths_.dir, ec);
   absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
-      PdsmWriter::Create(paths_.pdsm, plan_->header);
+      PdsmWriter::Create(paths_.pdsm, plan_->header, fs_);
   if (!writer.ok()) return writer.status();
   for (const TileRect& rect : plan_->tiles) {
     absl::StatusOr<PdsmTile> tile = ReadTileFile(paths_.Tile(rect.index));

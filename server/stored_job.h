@@ -19,6 +19,7 @@
 
 #include "core/bake/bake_plan.h"
 #include "core/pipeline/bake_engine.h"
+#include "core/util/file_system.h"
 #include "pdsm/v1/scene.pb.h"
 #include "server/job_store.h"
 
@@ -35,10 +36,11 @@ struct JobPaths {
 
 class StoredJob final : public JobOutput {
  public:
-  // `store` outlives this. `on_ended(job_id)` runs at the end of Ended().
+  // `store` outlives this. `on_ended(job_id)` runs at the end of Ended(). `fs`: where tile
+  // files and the PDSM are written (null: the real file system).
   StoredJob(JobStore* store, const std::string& data_dir, JobRecord record,
             pdsm::v1::Scene scene, std::shared_ptr<const BakePlan> plan,
-            std::function<void(const std::string&)> on_ended);
+            std::function<void(const std::string&)> on_ended, FileSystem* fs = nullptr);
 
   const JobRecord& record() const { return record_; }  // as it was when the job was activated
   const pdsm::v1::Scene& scene() const { return scene_; }
@@ -69,6 +71,7 @@ class StoredJob final : public JobOutput {
   const std::string fingerprint_;
   const JobPaths paths_;
   const std::function<void(const std::string&)> on_ended_;
+  FileSystem* const fs_;
   std::atomic<bool> ended_{false};  // set by RecordEnd: tiles finishing later are not recorded
 };
 

@@ -116,9 +116,10 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
   if (!planned.ok()) return planned.status();
   const auto plan = std::make_shared<const BakePlan>(*std::move(planned));
   absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
-      PdsmWriter::Create(options.output_path, plan->header);
+      PdsmWriter::Create(options.output_path, plan->header, options.fs);
   if (!writer.ok()) return writer.status();
-  auto output = std::make_shared<LocalOutput>(*plan, writer->get(), options.preview_path);
+  auto output =
+      std::make_shared<LocalOutput>(*plan, writer->get(), options.preview_path, options.fs);
 
   const int threads = ThreadCount(*plan, options);
   EngineOptions engine_options;

@@ -12,6 +12,7 @@
 #include "absl/status/statusor.h"
 #include "core/pipeline/tile_assembly.h"
 #include "core/scene/scene.h"
+#include "core/util/file_system.h"
 #include "worker/bake_task.h"
 
 namespace pdsm {
@@ -29,6 +30,7 @@ struct LocalBakeOptions {
   int samples_per_task = 0;  // light samples per task; 0: a tile's whole stage in one task
   // Called from worker threads, serialized, after each task.
   std::function<void(const BakeProgress&)> on_progress;
+  FileSystem* fs = nullptr;  // where the PDSM and the preview are written; null: the real one
 };
 
 struct BakeSummary {

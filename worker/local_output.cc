@@ -4,9 +4,11 @@
 
 namespace pdsm {
 
-LocalOutput::LocalOutput(const BakePlan& plan, PdsmWriter* writer, std::string preview_path)
+LocalOutput::LocalOutput(const BakePlan& plan, PdsmWriter* writer, std::string preview_path,
+                         FileSystem* fs)
     : plan_(plan),
       preview_path_(std::move(preview_path)),
+      fs_(fs),
       receiver_depth_(has_preview() ? plan.tiles.size() : 0),
       preview_(has_preview() ? plan.geometry().width : 0,
                has_preview() ? plan.geometry().height : 0),
@@ -26,7 +28,7 @@ absl::Status LocalOutput::StoreTile(const PdsmTile& tile) {
 
 absl::Status LocalOutput::Finish() {
   if (has_preview()) {
-    if (absl::Status s = preview_.Write(preview_path_); !s.ok()) return s;
+    if (absl::Status s = preview_.Write(preview_path_, fs_); !s.ok()) return s;
   }
   absl::MutexLock lock(&writer_mu_);
   return writer_->Finish();

@@ -20,8 +20,10 @@ namespace pdsm {
 
 class LocalOutput final : public JobOutput {
  public:
-  // `plan` and `writer` outlive this. `preview_path` empty: no preview.
-  LocalOutput(const BakePlan& plan, PdsmWriter* writer, std::string preview_path);
+  // `plan` and `writer` outlive this. `preview_path` empty: no preview. `fs`: where the
+  // preview is written (null: the real file system).
+  LocalOutput(const BakePlan& plan, PdsmWriter* writer, std::string preview_path,
+              FileSystem* fs = nullptr);
 
   bool has_preview() const { return !preview_path_.empty(); }
   // The preview's surface for tile `tile_index`: the light-space depth of the nearest receiver
@@ -41,6 +43,7 @@ class LocalOutput final : public JobOutput {
  private:
   const BakePlan& plan_;
   const std::string preview_path_;
+  FileSystem* const fs_;
   std::vector<std::vector<float>> receiver_depth_;  // by tile; written before the bake only
   PreviewImage preview_;                            // tiles are disjoint: shading needs no lock
 
