@@ -1,0 +1,47 @@
+// The PDSM header as OpenEXR attributes (docs/pdsm_format.md): the conversion both ways, the
+// checks a header must pass to be written or read, the channel names, and the one place
+// OpenEXR's exceptions become statuses. Internal to core/pdsm (pdsm_file.cc is the public
+// face).
+#ifndef PDSM_CORE_PDSM_PDSM_EXR_HEADER_H_
+#define PDSM_CORE_PDSM_PDSM_EXR_HEADER_H_
+
+#include <OpenEXR/ImfHeader.h>
+
+#include <cstdint>
+#include <limits>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+#include "core/pdsm/pdsm_image.h"
+
+namespace pdsm {
+
+inline constexpr char kDepthChannel[] = "Z";
+inline constexpr char kAttenuationChannel[] = "attenuation";
+
+// The sample count table of a deep tile holds cumulative int32 counts, and OpenEXR sizes a
+// tile's unpacked data with an int: keep both within range.
+inline constexpr uint64_t kMaxVerticesPerTile =
+    static_cast<uint64_t>(std::numeric_limits<int32_t>::max()) / (2 * sizeof(float));
+
+// The status of the exception being handled (call only inside a catch block): NOT_FOUND,
+// PERMISSION_DENIED, RESOURCE_EXHAUSTED (out of memory), DATA_LOSS otherwise; the message is
+// "<action> <path>: <what>". OpenEXR reports everything by throwing; nothing escapes core/pdsm.
+absl::Status StatusFromCurrentException(absl::string_view path, absl::string_view action);
+
+// The deep tiled header of a PDSM: channels, tiling, compression and every pdsm* attribute.
+// REQUIRES: ValidateHeaderForWrite(h) is OK.
+Imf::Header ExrHeaderFromPdsm(const PdsmHeader& h);
+
+// INVALID_ARGUMENT naming `path` when `h` cannot be written (sizes, tile size, version).
+absl::Status ValidateHeaderForWrite(const PdsmHeader& h, absl::string_view path);
+
+// The PdsmHeader of a file's header. DATA_LOSS naming `path` and the attribute when it is not
+// a PDSM or an attribute is missing, mistyped or out of range; FAILED_PRECONDITION for a
+// format version newer than this build reads.
+absl::StatusOr<PdsmHeader> PdsmHeaderFromExr(const Imf::Header& exr, absl::string_view path);
+
+}  // namespace pdsm
+
+#endif  // PDSM_CORE_PDSM_PDSM_EXR_HEADER_H_

@@ -1,0 +1,81 @@
+// A PDSM's tiles as OpenEXR's deep tiled parts want them: the tile grid, the checks a tile's
+// functions must pass before they are written, and the deep frame buffers that point OpenEXR
+// at a tile's vertices. Internal to core/pdsm.
+#ifndef PDSM_CORE_PDSM_PDSM_EXR_TILES_H_
+#define PDSM_CORE_PDSM_PDSM_EXR_TILES_H_
+
+#include <OpenEXR/ImfDeepFrameBuffer.h>
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/strings/string_view.h"
+#include "core/pdsm/pdsm_exr_header.h"
+#include "core/pdsm/pdsm_image.h"
+
+namespace pdsm {
+
+struct TileGrid {
+  int width, height, tile_size;
+
+  int64_t TilesX() const { return (width + tile_size - 1) / tile_size; }
+  int64_t TilesY() const { return (height + tile_size - 1) / tile_size; }
+  int64_t Count() const { return TilesX() * TilesY(); }
+  int TileWidth(int x0) const { return std::min(tile_size, width - x0); }
+  int TileHeight(int y0) const { return std::min(tile_size, height - y0); }
+};
+
+// INVALID_ARGUMENT naming `path` and the tile or pixel when the offsets do not span the
+// vertices, decrease, or hold more vertices than a deep tile can, or a pixel's depths are NaN
+// or decrease. REQUIRES: tile.offsets has width * height + 1 entries.
+absl::Status CheckTileFunctions(const PdsmTile& tile, absl::string_view path);
+
+// Per-pixel sample counts and channel pointers of one tile, as OpenEXR's deep frame
+// buffers want them, addressed relative to the tile's corner.
+struct DeepTileBuffers {
+  std::vector<uint32_t> counts;
+  std::vector<char*> z;
+  std::vector<char*> a;
+
+  void Resize(size_t pixels) {
+    counts.resize(pixels);
+    z.resize(pixels);
+    a.resize(pixels);
+  }
+
+  // Points local pixel p at vertices[begin, end).
+  void Set(size_t p, Vertex* vertices, uint64_t begin, uint64_t end) {
+    counts[p] = static_cast<uint32_t>(end - begin);
+    if (begin == end) {
+      z[p] = a[p] = nullptr;  // never read; also keeps an empty vector's null data() out
+      return;
+    }
+    char* vertex = reinterpret_cast<char*>(vertices + begin);
+    z[p] = vertex + offsetof(Vertex, z);
+    a[p] = vertex + offsetof(Vertex, a);
+  }
+
+  Imf::DeepFrameBuffer FrameBuffer(int tile_width) {
+    constexpr bool kTileCoords = true;
+    Imf::DeepFrameBuffer fb;
+    fb.insertSampleCountSlice(Imf::Slice(Imf::UINT, reinterpret_cast<char*>(counts.data()),
+                                         sizeof(uint32_t), sizeof(uint32_t) * tile_width, 1, 1, 0.0,
+                                         kTileCoords, kTileCoords));
+    fb.insert(kDepthChannel, ChannelSlice(z, tile_width));
+    fb.insert(kAttenuationChannel, ChannelSlice(a, tile_width));
+    return fb;
+  }
+
+ private:
+  static Imf::DeepSlice ChannelSlice(std::vector<char*>& pointers, int tile_width) {
+    return Imf::DeepSlice(Imf::FLOAT, reinterpret_cast<char*>(pointers.data()), sizeof(char*),
+                          sizeof(char*) * tile_width, sizeof(Vertex), 1, 1, 0.0, true, true);
+  }
+};
+
+}  // namespace pdsm
+
+#endif  // PDSM_CORE_PDSM_PDSM_EXR_TILES_H_
