@@ -30,14 +30,6 @@ TileEvents EmptyTileEvents(const TileRect& tile) {
   return out;
 }
 
-// Slope bias is scaled by the larger of a texel and a PDSM pixel: the bilinear lookup reads
-// neighbouring rays, which meet a tilted receiver up to one pixel's depth change away.
-double FootprintScale(const BakePlan& plan) {
-  const PdsmGeometry& g = plan.geometry();
-  const double pixel = std::max(g.PixelPitchS(), g.PixelPitchT());
-  return std::max(1.0, pixel / plan.lattice.pitch_s);
-}
-
 struct BlockScan {
   TileRect rect;
   double z_begin, z_end;  // light-space depths; z_end = +infinity: to w = 0
@@ -111,11 +103,28 @@ void ScanBlock(const BakePlan& plan, const ShadowMapView& view, const BlockScan&
 
 }  // namespace
 
+ShadowMapCamera BakeCamera(const BakePlan& plan) {
+  ShadowMapCamera camera;
+  camera.projection = plan.geometry().projection;
+  camera.lattice = plan.lattice;
+  camera.z_clip_near = plan.z_clip_near;
+  camera.z_clip_far = plan.z_clip_far;
+  camera.depth_bias = plan.header.depth_bias;
+  camera.slope_bias = plan.header.slope_bias;
+  // Slope bias is scaled by the larger of a texel and a PDSM pixel: the bilinear lookup reads
+  // neighbouring rays, which meet a tilted receiver up to one pixel's depth change away.
+  const PdsmGeometry& g = plan.geometry();
+  camera.footprint_scale =
+      std::max(1.0, std::max(g.PixelPitchS(), g.PixelPitchT()) / plan.lattice.pitch_s);
+  return camera;
+}
+
 void TaskStats::Add(const TaskStats& o) {
   shadow_map_seconds += o.shadow_map_seconds;
   scan_seconds += o.scan_seconds;
   shadow_maps += o.shadow_maps;
   shadow_map_texels += o.shadow_map_texels;
+  triangles_submitted += o.triangles_submitted;
   events += o.events;
   texels_walked += o.texels_walked;
   ray_segments += o.ray_segments;
@@ -166,14 +175,7 @@ absl::StatusOr<TileEvents> TaskRunner::Run(const BakeTask& task, TaskStats* stat
   const PdsmGeometry& g = plan_.geometry();
   std::vector<std::vector<Event>> pixel_events(result.PixelCount());
   std::vector<float> depth;
-  ShadowMapCamera camera;
-  camera.projection = g.projection;
-  camera.lattice = plan_.lattice;
-  camera.z_clip_near = plan_.z_clip_near;
-  camera.z_clip_far = plan_.z_clip_far;
-  camera.depth_bias = plan_.header.depth_bias;
-  camera.slope_bias = plan_.header.slope_bias;
-  camera.footprint_scale = FootprintScale(plan_);
+  ShadowMapCamera camera = BakeCamera(plan_);
 
   for (int k = task.sample_begin; k < task.sample_end; ++k) {
     if (cancelled && cancelled()) {
@@ -199,6 +201,7 @@ absl::StatusOr<TileEvents> TaskRunner::Run(const BakeTask& task, TaskStats* stat
     stats->shadow_map_seconds += SecondsSince(render_start);
     stats->shadow_maps += 1;
     stats->shadow_map_texels += texels;
+    stats->triangles_submitted += static_cast<int64_t>(reach.triangles.size());
 
     auto scan_start = std::chrono::steady_clock::now();
     const ShadowMapView view{depth.data(), plan_.lattice, camera.window};
