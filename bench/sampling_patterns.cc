@@ -18,11 +18,11 @@
 
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_split.h"
-#include "worker/local_bake.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_query.h"
 #include "core/reference/exact_visibility.h"
 #include "core/scene/scene_loader.h"
+#include "worker/local_bake.h"
 
 namespace pdsm {
 namespace {

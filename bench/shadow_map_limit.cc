@@ -81,8 +81,7 @@ absl::StatusOr<Cost> RenderFullMaps(const BakePlan& plan, int threads) {
       absl::Status s = [&]() -> absl::Status {
         absl::StatusOr<std::unique_ptr<ShadowMapRenderer>> renderer = ShadowMapRenderer::Create();
         if (!renderer.ok()) return renderer.status();
-        if (absl::Status g = (*renderer)->SetGeometry(plan.casters.positions,
-                                                      plan.casters.indices);
+        if (absl::Status g = (*renderer)->SetGeometry(plan.casters.positions, plan.casters.indices);
             !g.ok()) {
           return g;
         }

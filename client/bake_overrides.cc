@@ -70,8 +70,8 @@ absl::StatusOr<pdsm::v1::BakeParams> ToBakeParams(const OverrideFlags& flags) {
     setter(static_cast<uint32_t>(*value));
     return absl::OkStatus();
   };
-  absl::Status s = set_count("--samples", flags.samples,
-                             [&](uint32_t v) { params.set_samples(v); });
+  absl::Status s =
+      set_count("--samples", flags.samples, [&](uint32_t v) { params.set_samples(v); });
   if (s.ok()) {
     s = set_count("--sm-resolution", flags.sm_resolution,
                   [&](uint32_t v) { params.set_shadow_map_resolution(v); });

@@ -14,8 +14,8 @@ void ProgressReporter::Update(int64_t done, int64_t total, double seconds,
                               std::optional<double> eta_seconds) {
   const double fraction = total > 0 ? static_cast<double>(done) / total : 1.0;
   const double eta = eta_seconds ? std::max(0.0, *eta_seconds)
-                     : done > 0 ? seconds * (1.0 - fraction) / fraction
-                                : 0.0;
+                     : done > 0  ? seconds * (1.0 - fraction) / fraction
+                                 : 0.0;
   if (tty_) {
     constexpr int kWidth = 30;
     const int filled = static_cast<int>(fraction * kWidth);

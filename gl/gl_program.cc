@@ -12,7 +12,7 @@ namespace pdsm::gl {
 
 namespace {
 
-absl::StatusOr<Shader> Compile(const GlFunctions &gl, GLenum type, const char *source,
+absl::StatusOr<Shader> Compile(const GlFunctions& gl, GLenum type, const char* source,
                                absl::string_view name) {
   Shader shader = MakeShader(gl, type);
   if (!shader) return absl::InternalError(absl::StrCat("glCreateShader failed for ", name));
@@ -32,7 +32,7 @@ absl::StatusOr<Shader> Compile(const GlFunctions &gl, GLenum type, const char *s
 
 }  // namespace
 
-absl::Status CheckGlError(const GlFunctions &gl, absl::string_view what) {
+absl::Status CheckGlError(const GlFunctions& gl, absl::string_view what) {
   const GLenum first = gl.GetError();
   if (first == GL_NO_ERROR) return absl::OkStatus();
   for (int i = 0; i < 16 && gl.GetError() != GL_NO_ERROR; ++i) {
@@ -40,8 +40,8 @@ absl::Status CheckGlError(const GlFunctions &gl, absl::string_view what) {
   return absl::InternalError(absl::StrFormat("GL error 0x%04x after %s", first, what));
 }
 
-absl::StatusOr<Program> BuildProgram(const GlFunctions &gl, const char *vertex_source,
-                                     const char *fragment_source, absl::string_view name) {
+absl::StatusOr<Program> BuildProgram(const GlFunctions& gl, const char* vertex_source,
+                                     const char* fragment_source, absl::string_view name) {
   absl::StatusOr<Shader> vertex =
       Compile(gl, GL_VERTEX_SHADER, vertex_source, absl::StrCat(name, " (vertex)"));
   if (!vertex.ok()) return vertex.status();
@@ -70,23 +70,23 @@ absl::StatusOr<Program> BuildProgram(const GlFunctions &gl, const char *vertex_s
   return program;
 }
 
-void UniformSetter::Int(const char *name, int value) const { gl_.Uniform1i(Location(name), value); }
-void UniformSetter::Int2(const char *name, glm::ivec2 value) const {
+void UniformSetter::Int(const char* name, int value) const { gl_.Uniform1i(Location(name), value); }
+void UniformSetter::Int2(const char* name, glm::ivec2 value) const {
   gl_.Uniform2i(Location(name), value.x, value.y);
 }
-void UniformSetter::Float(const char *name, float value) const {
+void UniformSetter::Float(const char* name, float value) const {
   gl_.Uniform1f(Location(name), value);
 }
-void UniformSetter::Vec2(const char *name, glm::vec2 value) const {
+void UniformSetter::Vec2(const char* name, glm::vec2 value) const {
   gl_.Uniform2f(Location(name), value.x, value.y);
 }
-void UniformSetter::Vec3(const char *name, glm::vec3 value) const {
+void UniformSetter::Vec3(const char* name, glm::vec3 value) const {
   gl_.Uniform3f(Location(name), value.x, value.y, value.z);
 }
-void UniformSetter::Mat3(const char *name, const glm::mat3 &value) const {
+void UniformSetter::Mat3(const char* name, const glm::mat3& value) const {
   gl_.UniformMatrix3fv(Location(name), 1, GL_FALSE, glm::value_ptr(value));
 }
-void UniformSetter::Mat4(const char *name, const glm::mat4 &value) const {
+void UniformSetter::Mat4(const char* name, const glm::mat4& value) const {
   gl_.UniformMatrix4fv(Location(name), 1, GL_FALSE, glm::value_ptr(value));
 }
 

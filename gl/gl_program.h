@@ -16,12 +16,12 @@ namespace pdsm::gl {
 
 // Drains the GL error flags; INTERNAL naming `what` and the first error if any
 // was set.
-absl::Status CheckGlError(const GlFunctions &gl, absl::string_view what);
+absl::Status CheckGlError(const GlFunctions& gl, absl::string_view what);
 
 // Compiles both stages and links them; INTERNAL with the driver's log naming
 // `name` on failure. REQUIRES: a current context.
-absl::StatusOr<Program> BuildProgram(const GlFunctions &gl, const char *vertex_source,
-                                     const char *fragment_source, absl::string_view name);
+absl::StatusOr<Program> BuildProgram(const GlFunctions& gl, const char* vertex_source,
+                                     const char* fragment_source, absl::string_view name);
 
 // Uniform setters by name on the program in use (glUseProgram), for callers that set a few
 // dozen uniforms per frame (the viewer): looking them up is not what costs there; a hot loop
@@ -29,18 +29,18 @@ absl::StatusOr<Program> BuildProgram(const GlFunctions &gl, const char *vertex_s
 // the compiler drops uniforms a program does not use. REQUIRES: `gl` outlives the setter.
 class UniformSetter {
  public:
-  UniformSetter(const GlFunctions &gl, GLuint program) : gl_(gl), program_(program) {}
-  void Int(const char *name, int value) const;
-  void Int2(const char *name, glm::ivec2 value) const;
-  void Float(const char *name, float value) const;
-  void Vec2(const char *name, glm::vec2 value) const;
-  void Vec3(const char *name, glm::vec3 value) const;
-  void Mat3(const char *name, const glm::mat3 &value) const;
-  void Mat4(const char *name, const glm::mat4 &value) const;
+  UniformSetter(const GlFunctions& gl, GLuint program) : gl_(gl), program_(program) {}
+  void Int(const char* name, int value) const;
+  void Int2(const char* name, glm::ivec2 value) const;
+  void Float(const char* name, float value) const;
+  void Vec2(const char* name, glm::vec2 value) const;
+  void Vec3(const char* name, glm::vec3 value) const;
+  void Mat3(const char* name, const glm::mat3& value) const;
+  void Mat4(const char* name, const glm::mat4& value) const;
 
  private:
-  GLint Location(const char *name) const { return gl_.GetUniformLocation(program_, name); }
-  const GlFunctions &gl_;
+  GLint Location(const char* name) const { return gl_.GetUniformLocation(program_, name); }
+  const GlFunctions& gl_;
   GLuint program_;
 };
 

@@ -29,8 +29,8 @@ absl::StatusOr<std::string> ReadTokenFile(const std::string& flag, const std::st
 
 // Where and how to reach the coordinator.
 struct ConnectionOptions {
-  std::string address;       // host:port
-  std::string tls_ca_path;   // PEM roots to trust; empty: plaintext
+  std::string address;      // host:port
+  std::string tls_ca_path;  // PEM roots to trust; empty: plaintext
   // The token is not part of the channel: PrepareCall puts it on each call.
 };
 

@@ -20,8 +20,7 @@ absl::StatusOr<TileEvents> TileEventsFromProto(const pdsm::v1::TileEventsData& d
                                                const TileRect& tile) {
   const size_t pixels = static_cast<size_t>(tile.width) * tile.height;
   const auto bad = [&](const std::string& what) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("events (tile ", tile.index, "): ", what));
+    return absl::InvalidArgumentError(absl::StrCat("events (tile ", tile.index, "): ", what));
   };
   if (static_cast<size_t>(data.offsets_size()) != pixels + 1) {
     return bad(absl::StrCat("offsets: must have ", pixels + 1, " entries (got ",
@@ -31,8 +30,8 @@ absl::StatusOr<TileEvents> TileEventsFromProto(const pdsm::v1::TileEventsData& d
     return bad(absl::StrCat("z and count differ in length (", data.z_size(), " and ",
                             data.count_size(), ")"));
   }
-  if (data.offsets(0) != 0 || data.offsets(static_cast<int>(pixels)) !=
-                                  static_cast<uint64_t>(data.z_size())) {
+  if (data.offsets(0) != 0 ||
+      data.offsets(static_cast<int>(pixels)) != static_cast<uint64_t>(data.z_size())) {
     return bad("offsets: must start at 0 and end at the event count");
   }
   // Offsets first: non-decreasing up to the event count keeps every read below in range.

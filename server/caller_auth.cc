@@ -39,9 +39,9 @@ grpc::Status CallerAuth::Check(const grpc::CallbackServerContext* context,
                             ? "a worker token may not call the job API"
                             : "a client token may not call the worker API");
   }
-  return grpc::Status(grpc::StatusCode::UNAUTHENTICATED,
-                      token.empty() ? "missing \"authorization: Bearer <token>\""
-                                    : "invalid token");
+  return grpc::Status(
+      grpc::StatusCode::UNAUTHENTICATED,
+      token.empty() ? "missing \"authorization: Bearer <token>\"" : "invalid token");
 }
 
 }  // namespace pdsm

@@ -30,8 +30,7 @@ int64_t SteadyNowMs() {
 }
 
 bool IsTerminal(pdsm::v1::JobState state) {
-  return state == pdsm::v1::SUCCEEDED || state == pdsm::v1::FAILED ||
-         state == pdsm::v1::CANCELLED;
+  return state == pdsm::v1::SUCCEEDED || state == pdsm::v1::FAILED || state == pdsm::v1::CANCELLED;
 }
 
 EngineOptions MakeEngineOptions(const CoordinatorOptions& options, WorkQueue* pool) {
@@ -56,15 +55,14 @@ Coordinator::Coordinator(const CoordinatorOptions& options)
       // The ticker holds one thread for good; the others assemble.
       pool_(std::max(1, options.assembly_threads) + 1) {}
 
-absl::StatusOr<std::unique_ptr<Coordinator>> Coordinator::Start(
-    const CoordinatorOptions& options) {
+absl::StatusOr<std::unique_ptr<Coordinator>> Coordinator::Start(const CoordinatorOptions& options) {
   std::unique_ptr<Coordinator> c(new Coordinator(options));
   absl::StatusOr<std::unique_ptr<JobStore>> store = JobStore::Open(options.data_dir);
   if (!store.ok()) return store.status();
   c->store_ = *std::move(store);
-  absl::StatusOr<std::unique_ptr<CoordinatorAssets>> assets = CoordinatorAssets::Open(
-      (std::filesystem::path(options.data_dir) / "assets").string(), options.max_asset_bytes,
-      options.fs);
+  absl::StatusOr<std::unique_ptr<CoordinatorAssets>> assets =
+      CoordinatorAssets::Open((std::filesystem::path(options.data_dir) / "assets").string(),
+                              options.max_asset_bytes, options.fs);
   if (!assets.ok()) return assets.status();
   c->assets_ = *std::move(assets);
   if (absl::Status s = c->Resume(); !s.ok()) return s;
@@ -84,10 +82,10 @@ void Coordinator::TickUntilStopped() {
 
 // ---- Jobs: admission, resumption, ending -----------------------------------------------
 
-absl::StatusOr<pdsm::v1::Job> Coordinator::SubmitBake(
-    const pdsm::v1::SubmitBakeRequest& request) {
+absl::StatusOr<pdsm::v1::Job> Coordinator::SubmitBake(const pdsm::v1::SubmitBakeRequest& request) {
   if (absl::Status s = CheckSubmitRequest(request); !s.ok()) return s;
-  absl::StatusOr<BakePlan> plan = PlanJobScene(request.scene(), "scene", *assets_, &options_.limits);
+  absl::StatusOr<BakePlan> plan =
+      PlanJobScene(request.scene(), "scene", *assets_, &options_.limits);
   if (!plan.ok()) return plan.status();
   absl::StatusOr<JobRecord> record = NewJobRecord(request, *plan, UnixNowMs());
   if (!record.ok()) return record.status();
@@ -96,8 +94,8 @@ absl::StatusOr<pdsm::v1::Job> Coordinator::SubmitBake(
   if (!stored.ok()) return stored.status();
   if (created) {
     spdlog::info("job {}: submitted \"{}\", {}x{}, {} samples, {} tiles, priority {}",
-                 stored->job_id, stored->scene_name, stored->width, stored->height,
-                 stored->samples, stored->tiles_total, stored->priority);
+                 stored->job_id, stored->scene_name, stored->width, stored->height, stored->samples,
+                 stored->tiles_total, stored->priority);
     if (absl::Status s = Activate(*stored, {}, *std::move(plan)); !s.ok()) return s;
   }
   return GetJob(stored->job_id);
@@ -116,10 +114,9 @@ absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<in
     plan = *std::move(planned);
   }
   auto shared_plan = std::make_shared<const BakePlan>(*std::move(plan));
-  auto job = std::make_shared<StoredJob>(store_.get(), options_.data_dir, record,
-                                         std::move(scene), shared_plan,
-                                         [this](const std::string& id) { Forget(id); },
-                                         options_.fs);
+  auto job = std::make_shared<StoredJob>(
+      store_.get(), options_.data_dir, record, std::move(scene), shared_plan,
+      [this](const std::string& id) { Forget(id); }, options_.fs);
   {
     absl::MutexLock lock(&mu_);
     active_[record.job_id] = job;
@@ -147,9 +144,9 @@ absl::Status Coordinator::Resume() {
     if (absl::Status s = Activate(record, *done, std::nullopt); !s.ok()) {
       // One unreadable job must not keep the others from resuming.
       spdlog::error("job {}: cannot resume: {}", record.job_id, std::string(s.message()));
-      if (absl::Status f = store_->SetState(record.job_id, pdsm::v1::FAILED,
-                                            absl::StrCat("cannot resume: ", s.message()),
-                                            UnixNowMs());
+      if (absl::Status f =
+              store_->SetState(record.job_id, pdsm::v1::FAILED,
+                               absl::StrCat("cannot resume: ", s.message()), UnixNowMs());
           !f.ok()) {
         return f;
       }
@@ -215,8 +212,8 @@ pdsm::v1::Job Coordinator::ToProto(const JobRecord& record) const {
       const double elapsed_s = static_cast<double>(SteadyNowMs() - p->added_ms) / 1000.0;
       const int64_t gained = p->samples_done - p->samples_at_add;
       if (gained > 0 && elapsed_s > 0) {
-        job.set_eta_seconds(static_cast<double>(p->samples_total - p->samples_done) *
-                            elapsed_s / static_cast<double>(gained));
+        job.set_eta_seconds(static_cast<double>(p->samples_total - p->samples_done) * elapsed_s /
+                            static_cast<double>(gained));
       }
     }
   }
@@ -257,9 +254,9 @@ absl::StatusOr<std::vector<int>> Coordinator::FinishedTiles(const std::string& j
   if (!job || job->ended()) {
     absl::StatusOr<JobRecord> record = store_->GetJob(job_id);
     if (!record.ok()) return record.status();
-    return absl::FailedPreconditionError(absl::StrCat(
-        "job ", job_id, " is ", pdsm::v1::JobState_Name(record->state),
-        ": its tiles are only served while it runs"));
+    return absl::FailedPreconditionError(absl::StrCat("job ", job_id, " is ",
+                                                      pdsm::v1::JobState_Name(record->state),
+                                                      ": its tiles are only served while it runs"));
   }
   return job->FinishedTiles();
 }
@@ -321,8 +318,7 @@ std::optional<pdsm::v1::Task> Coordinator::LeaseTask(const std::string& worker_i
   return task;
 }
 
-absl::StatusOr<int64_t> Coordinator::ExtendLease(const std::string& worker_id,
-                                                 uint64_t lease_id) {
+absl::StatusOr<int64_t> Coordinator::ExtendLease(const std::string& worker_id, uint64_t lease_id) {
   absl::StatusOr<int64_t> deadline = engine_.Extend(worker_id, lease_id);
   if (!deadline.ok()) return deadline.status();
   return options_.lease_ms;

@@ -43,13 +43,13 @@ namespace pdsm {
 
 struct CoordinatorOptions {
   std::string data_dir;
-  int samples_per_task = 64;      // light samples per task (a tile's batch)
+  int samples_per_task = 64;  // light samples per task (a tile's batch)
   int64_t lease_ms = 30'000;
-  int max_open_tiles = 64;        // bounds the memory of partial results
+  int max_open_tiles = 64;  // bounds the memory of partial results
   int max_task_failures = 3;
   int max_worker_failures = 3;
   int assembly_threads = 1;
-  AdmissionLimits limits;         // RESOURCE_EXHAUSTED above them
+  AdmissionLimits limits;  // RESOURCE_EXHAUSTED above them
   int64_t max_asset_bytes = int64_t{1} << 30;
   // Where tiles, PDSMs and assets are written; null: the real file system. (jobs.db is
   // SQLite's own.)

@@ -5,8 +5,9 @@
 
 namespace pdsm {
 
-absl::StatusOr<std::unique_ptr<CoordinatorAssets>> CoordinatorAssets::Open(
-    const std::string& dir, int64_t max_asset_bytes, FileSystem* fs) {
+absl::StatusOr<std::unique_ptr<CoordinatorAssets>> CoordinatorAssets::Open(const std::string& dir,
+                                                                           int64_t max_asset_bytes,
+                                                                           FileSystem* fs) {
   absl::StatusOr<std::unique_ptr<AssetStore>> store = AssetStore::Open(dir, fs);
   if (!store.ok()) return store.status();
   return std::unique_ptr<CoordinatorAssets>(
@@ -27,8 +28,7 @@ absl::Status CoordinatorAssets::Put(const std::string& sha256, std::string_view 
     return absl::ResourceExhaustedError(absl::StrCat(
         "asset ", sha256, ": ", bytes.size(), " bytes, above the limit of ", max_asset_bytes_));
   }
-  if (absl::Status s = DecodeMeshAsset(bytes, absl::StrCat("asset ", sha256)).status();
-      !s.ok()) {
+  if (absl::Status s = DecodeMeshAsset(bytes, absl::StrCat("asset ", sha256)).status(); !s.ok()) {
     return s;
   }
   return store_->Put(sha256, bytes);
@@ -42,25 +42,25 @@ absl::StatusOr<std::string> CoordinatorAssets::Get(const std::string& sha256) co
 }
 
 MeshAssetResolver CoordinatorAssets::Resolver(int64_t max_triangles, int64_t* triangles) const {
-  return [this, max_triangles, triangles](const std::string& sha256,
-                                          const std::string& context)
-             -> absl::StatusOr<MeshFileData> {
-    absl::StatusOr<std::string> blob = store_->Get(sha256);
-    if (absl::IsNotFound(blob.status())) {
-      return absl::FailedPreconditionError(
-          absl::StrCat(context, ": asset ", sha256, " has not been uploaded"));
-    }
-    if (!blob.ok()) return blob.status();
-    absl::StatusOr<MeshFileData> mesh = DecodeMeshAsset(*blob, context);
-    if (!mesh.ok()) return mesh.status();
-    *triangles += static_cast<int64_t>(mesh->indices.size() / 3);
-    if (max_triangles > 0 && *triangles > max_triangles) {
-      return absl::ResourceExhaustedError(absl::StrCat(
-          context, ": the scene exceeds this coordinator's limit of ", max_triangles,
-          " triangles"));
-    }
-    return mesh;
-  };
+  return
+      [this, max_triangles, triangles](const std::string& sha256,
+                                       const std::string& context) -> absl::StatusOr<MeshFileData> {
+        absl::StatusOr<std::string> blob = store_->Get(sha256);
+        if (absl::IsNotFound(blob.status())) {
+          return absl::FailedPreconditionError(
+              absl::StrCat(context, ": asset ", sha256, " has not been uploaded"));
+        }
+        if (!blob.ok()) return blob.status();
+        absl::StatusOr<MeshFileData> mesh = DecodeMeshAsset(*blob, context);
+        if (!mesh.ok()) return mesh.status();
+        *triangles += static_cast<int64_t>(mesh->indices.size() / 3);
+        if (max_triangles > 0 && *triangles > max_triangles) {
+          return absl::ResourceExhaustedError(
+              absl::StrCat(context, ": the scene exceeds this coordinator's limit of ",
+                           max_triangles, " triangles"));
+        }
+        return mesh;
+      };
 }
 
 }  // namespace pdsm

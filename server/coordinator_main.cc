@@ -5,12 +5,12 @@
 #include <sstream>
 #include <thread>
 
-#include <CLI/CLI.hpp>
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
 
 #include "absl/strings/str_cat.h"
 #include "core/util/atomic_file.h"
@@ -83,8 +83,8 @@ int Run(Flags& flags, const sigset_t& signals) {
   absl::StatusOr<std::string> worker_token =
       OptionalToken("--worker-token-file", flags.worker_token_file);
   absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> credentials = Credentials(flags);
-  for (const absl::Status& s : {client_token.status(), worker_token.status(),
-                                credentials.status()}) {
+  for (const absl::Status& s :
+       {client_token.status(), worker_token.status(), credentials.status()}) {
     if (!s.ok()) {
       spdlog::error("{}", std::string(s.message()));
       return 2;
@@ -163,36 +163,46 @@ int main(int argc, char** argv) {
                  "Secret the worker API requires (Bearer token)");
   app.add_option("--tls-cert", flags.tls_cert, "PEM certificate chain: serve TLS");
   app.add_option("--tls-key", flags.tls_key, "PEM private key of --tls-cert");
-  app.add_option("--ready-file", flags.ready_file,
-                 "Write the listening address here once serving");
+  app.add_option("--ready-file", flags.ready_file, "Write the listening address here once serving");
   app.add_option("--samples-per-task", o.samples_per_task, "Light samples per task")
-      ->check(CLI::Range(1, 65536))->capture_default_str();
+      ->check(CLI::Range(1, 65536))
+      ->capture_default_str();
   app.add_option("--lease-seconds", flags.lease_seconds,
                  "Lease length; a silent worker's task is re-issued after it")
-      ->check(CLI::Range(0.1, 3600.0))->capture_default_str();
+      ->check(CLI::Range(0.1, 3600.0))
+      ->capture_default_str();
   app.add_option("--max-open-tiles", o.max_open_tiles,
                  "Tiles whose partial results may be held in memory at once")
-      ->check(CLI::Range(1, 1 << 20))->capture_default_str();
+      ->check(CLI::Range(1, 1 << 20))
+      ->capture_default_str();
   app.add_option("--max-task-failures", o.max_task_failures,
                  "Distinct workers a task may fail on before its job fails")
-      ->check(CLI::Range(1, 1000))->capture_default_str();
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
   app.add_option("--max-worker-failures", o.max_worker_failures,
                  "Failures after which a worker gets no more tasks of a job")
-      ->check(CLI::Range(1, 1000))->capture_default_str();
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
   app.add_option("--assembly-threads", o.assembly_threads,
                  "Threads merging and compressing finished tiles")
-      ->check(CLI::Range(1, 256))->capture_default_str();
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
   app.add_option("--max-message-bytes", flags.max_message_bytes,
                  "Largest request accepted (RESOURCE_EXHAUSTED above)")
-      ->check(CLI::Range(1 << 16, 1 << 30))->capture_default_str();
+      ->check(CLI::Range(1 << 16, 1 << 30))
+      ->capture_default_str();
   app.add_option("--max-job-pixels", o.limits.max_job_pixels, "Largest PDSM (width x height)")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   app.add_option("--max-samples", o.limits.max_samples, "Most light samples per job")
-      ->check(CLI::Range(1, 65536))->capture_default_str();
+      ->check(CLI::Range(1, 65536))
+      ->capture_default_str();
   app.add_option("--max-triangles", o.limits.max_triangles, "Most triangles per job")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   app.add_option("--max-asset-bytes", o.max_asset_bytes, "Largest mesh asset")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}))
       ->capture_default_str();

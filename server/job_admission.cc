@@ -13,8 +13,8 @@ namespace pdsm {
 absl::Status CheckSubmitRequest(const pdsm::v1::SubmitBakeRequest& request) {
   const std::string& key = request.idempotency_key();
   if (key.empty() || key.size() > 128) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "idempotency_key: must have 1 to 128 characters (got ", key.size(), ")"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("idempotency_key: must have 1 to 128 characters (got ", key.size(), ")"));
   }
   for (char c : key) {
     if (c < 0x21 || c > 0x7e) {
@@ -44,8 +44,8 @@ absl::StatusOr<BakePlan> PlanJobScene(const pdsm::v1::Scene& scene, const std::s
     const int64_t pixels = int64_t{loaded->bake.width} * loaded->bake.height;
     if (pixels > limits->max_job_pixels) {
       return absl::ResourceExhaustedError(absl::StrFormat(
-          "%s: bake.resolution: %dx%d is %d pixels, above this coordinator's limit of %d",
-          label, loaded->bake.width, loaded->bake.height, pixels, limits->max_job_pixels));
+          "%s: bake.resolution: %dx%d is %d pixels, above this coordinator's limit of %d", label,
+          loaded->bake.width, loaded->bake.height, pixels, limits->max_job_pixels));
     }
     if (loaded->bake.samples > limits->max_samples) {
       return absl::ResourceExhaustedError(
@@ -54,8 +54,8 @@ absl::StatusOr<BakePlan> PlanJobScene(const pdsm::v1::Scene& scene, const std::s
     }
     if (triangles > limits->max_triangles) {
       return absl::ResourceExhaustedError(
-          absl::StrFormat("%s: meshes: %d triangles, above this coordinator's limit of %d",
-                          label, triangles, limits->max_triangles));
+          absl::StrFormat("%s: meshes: %d triangles, above this coordinator's limit of %d", label,
+                          triangles, limits->max_triangles));
     }
   }
   return PlanBake(*loaded);

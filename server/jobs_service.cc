@@ -44,8 +44,8 @@ class UploadReactor final : public grpc::ServerReadReactor<pdsm::v1::AssetChunk>
       blob_.reserve(std::min<uint64_t>(expected_bytes_, kChunkBytes));
     }
     if (blob_.size() + chunk_.data().size() > expected_bytes_) {
-      return Fail(absl::InvalidArgumentError(absl::StrCat(
-          "data: more bytes than the announced total_bytes (", expected_bytes_, ")")));
+      return Fail(absl::InvalidArgumentError(
+          absl::StrCat("data: more bytes than the announced total_bytes (", expected_bytes_, ")")));
     }
     blob_ += chunk_.data();
     StartRead(&chunk_);
@@ -140,8 +140,8 @@ grpc::ServerUnaryReactor* JobsService::FindMissingAssets(
     return Answer(context, s);
   }
   if (request->sha256_size() > kMaxAssetQueries) {
-    return Answer(context, absl::ResourceExhaustedError(absl::StrCat(
-                               "sha256: at most ", kMaxAssetQueries, " per call")));
+    return Answer(context, absl::ResourceExhaustedError(
+                               absl::StrCat("sha256: at most ", kMaxAssetQueries, " per call")));
   }
   std::vector<std::string> hashes;
   for (int i = 0; i < request->sha256_size(); ++i) {
@@ -173,7 +173,8 @@ grpc::ServerUnaryReactor* JobsService::SubmitBake(grpc::CallbackServerContext* c
   }
   absl::StatusOr<pdsm::v1::Job> job = coordinator_->SubmitBake(*request);
   if (!job.ok()) {
-    spdlog::warn("SubmitBake refused ({}): {}", context->peer(), std::string(job.status().message()));
+    spdlog::warn("SubmitBake refused ({}): {}", context->peer(),
+                 std::string(job.status().message()));
     return Answer(context, job.status());
   }
   *response = *std::move(job);
@@ -252,8 +253,7 @@ grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>* JobsService::FetchTile(
   if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
     return new RefusedStream<grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>>(s);
   }
-  return new FetchReactor(
-      coordinator_->FinishedTilePath(request->job_id(), request->tile_index()));
+  return new FetchReactor(coordinator_->FinishedTilePath(request->job_id(), request->tile_index()));
 }
 
 grpc::ServerUnaryReactor* JobsService::QueryAttenuation(
@@ -263,16 +263,16 @@ grpc::ServerUnaryReactor* JobsService::QueryAttenuation(
     return Answer(context, s);
   }
   if (request->points_size() > kMaxQueryPoints) {
-    return Answer(context, absl::ResourceExhaustedError(absl::StrCat(
-                               "points: at most ", kMaxQueryPoints, " per call")));
+    return Answer(context, absl::ResourceExhaustedError(
+                               absl::StrCat("points: at most ", kMaxQueryPoints, " per call")));
   }
   std::vector<glm::dvec3> points;
   points.reserve(request->points_size());
   for (int i = 0; i < request->points_size(); ++i) {
     const pdsm::v1::QueryPoint& p = request->points(i);
     if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !std::isfinite(p.z())) {
-      return Answer(context, absl::InvalidArgumentError(
-                                 absl::StrCat("points[", i, "]: must be finite")));
+      return Answer(context,
+                    absl::InvalidArgumentError(absl::StrCat("points[", i, "]: must be finite")));
     }
     points.emplace_back(p.x(), p.y(), p.z());
   }

@@ -49,9 +49,9 @@ class JobsService final : public pdsm::v1::PdsmJobs::CallbackService {
                                               pdsm::v1::FinishedTiles* response) override;
   grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>* FetchTile(
       grpc::CallbackServerContext* context, const pdsm::v1::FetchTileRequest* request) override;
-  grpc::ServerUnaryReactor* QueryAttenuation(
-      grpc::CallbackServerContext* context, const pdsm::v1::QueryAttenuationRequest* request,
-      pdsm::v1::QueryAttenuationResponse* response) override;
+  grpc::ServerUnaryReactor* QueryAttenuation(grpc::CallbackServerContext* context,
+                                             const pdsm::v1::QueryAttenuationRequest* request,
+                                             pdsm::v1::QueryAttenuationResponse* response) override;
   grpc::ServerUnaryReactor* GetStats(grpc::CallbackServerContext* context,
                                      const pdsm::v1::GetStatsRequest* request,
                                      pdsm::v1::Stats* response) override;

@@ -5,9 +5,9 @@
 
 namespace pdsm {
 
-absl::StatusOr<std::vector<double>> QueryCache::Query(
-    const std::string& job_id, const std::string& pdsm_path,
-    const std::vector<glm::dvec3>& points_world) {
+absl::StatusOr<std::vector<double>> QueryCache::Query(const std::string& job_id,
+                                                      const std::string& pdsm_path,
+                                                      const std::vector<glm::dvec3>& points_world) {
   std::shared_ptr<const PdsmImage> image;
   {
     absl::MutexLock lock(&mu_);

@@ -21,8 +21,7 @@ class QueryCache {
  public:
   // The attenuation at each world point (NaN outside the frustum) from the finished PDSM of
   // `job_id` at `pdsm_path`. Errors of ReadPdsm.
-  absl::StatusOr<std::vector<double>> Query(const std::string& job_id,
-                                            const std::string& pdsm_path,
+  absl::StatusOr<std::vector<double>> Query(const std::string& job_id, const std::string& pdsm_path,
                                             const std::vector<glm::dvec3>& points_world);
 
  private:

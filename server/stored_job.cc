@@ -79,8 +79,7 @@ absl::Status StoredJob::StoreTile(const PdsmTile& tile) {
   if (absl::Status s = store_->MarkTileDone(record_.job_id, index, UnixNowMs()); !s.ok()) {
     return s;
   }
-  spdlog::debug("job {} tile {}: stored, {} vertices", record_.job_id, index,
-                tile.vertices.size());
+  spdlog::debug("job {} tile {}: stored, {} vertices", record_.job_id, index, tile.vertices.size());
   return absl::OkStatus();
 }
 
@@ -111,8 +110,8 @@ bool StoredJob::RecordEnd(JobEnd end, const absl::Status& status) {
     s = store_->SetState(id, StateOf(end), std::string(status.message()), UnixNowMs());
   }
   if (!s.ok()) {
-    spdlog::error("job {}: cannot record state {}: {}", id,
-                  pdsm::v1::JobState_Name(StateOf(end)), std::string(s.message()));
+    spdlog::error("job {}: cannot record state {}: {}", id, pdsm::v1::JobState_Name(StateOf(end)),
+                  std::string(s.message()));
   }
   return s.ok();
 }

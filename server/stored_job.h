@@ -38,9 +38,9 @@ class StoredJob final : public JobOutput {
  public:
   // `store` outlives this. `on_ended(job_id)` runs at the end of Ended(). `fs`: where tile
   // files and the PDSM are written (null: the real file system).
-  StoredJob(JobStore* store, const std::string& data_dir, JobRecord record,
-            pdsm::v1::Scene scene, std::shared_ptr<const BakePlan> plan,
-            std::function<void(const std::string&)> on_ended, FileSystem* fs = nullptr);
+  StoredJob(JobStore* store, const std::string& data_dir, JobRecord record, pdsm::v1::Scene scene,
+            std::shared_ptr<const BakePlan> plan, std::function<void(const std::string&)> on_ended,
+            FileSystem* fs = nullptr);
 
   const JobRecord& record() const { return record_; }  // as it was when the job was activated
   const pdsm::v1::Scene& scene() const { return scene_; }

@@ -77,7 +77,6 @@ class WatchHub::Watcher final : public grpc::ServerWriteReactor<pdsm::v1::Job> {
     }
   }
 
-
  private:
   WatchHub* const hub_;
   bool writing_ ABSL_GUARDED_BY(hub_->mu_) = false;
@@ -91,9 +90,7 @@ class WatchHub::Watcher final : public grpc::ServerWriteReactor<pdsm::v1::Job> {
 WatchHub::WatchHub(Coordinator* coordinator)
     : coordinator_(coordinator), thread_([this] { Loop(); }) {}
 
-WatchHub::~WatchHub() {
-  Shutdown();
-}
+WatchHub::~WatchHub() { Shutdown(); }
 
 grpc::ServerWriteReactor<pdsm::v1::Job>* WatchHub::Watch(const std::string& job_id) {
   auto* watcher = new Watcher(this, job_id);

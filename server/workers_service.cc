@@ -70,9 +70,9 @@ grpc::ServerUnaryReactor* WorkersService::LeaseTask(grpc::CallbackServerContext*
   return Answer(context, grpc::Status::OK);
 }
 
-grpc::ServerUnaryReactor* WorkersService::ExtendLease(
-    grpc::CallbackServerContext* context, const pdsm::v1::ExtendLeaseRequest* request,
-    pdsm::v1::ExtendLeaseResponse* response) {
+grpc::ServerUnaryReactor* WorkersService::ExtendLease(grpc::CallbackServerContext* context,
+                                                      const pdsm::v1::ExtendLeaseRequest* request,
+                                                      pdsm::v1::ExtendLeaseResponse* response) {
   if (grpc::Status s = auth_->Check(context, Audience::kWorker); !s.ok()) {
     return Answer(context, s);
   }
@@ -83,9 +83,9 @@ grpc::ServerUnaryReactor* WorkersService::ExtendLease(
   return Answer(context, grpc::Status::OK);
 }
 
-grpc::ServerUnaryReactor* WorkersService::ReportResult(
-    grpc::CallbackServerContext* context, const pdsm::v1::ReportResultRequest* request,
-    pdsm::v1::ReportResultResponse* response) {
+grpc::ServerUnaryReactor* WorkersService::ReportResult(grpc::CallbackServerContext* context,
+                                                       const pdsm::v1::ReportResultRequest* request,
+                                                       pdsm::v1::ReportResultResponse* response) {
   if (grpc::Status s = auth_->Check(context, Audience::kWorker); !s.ok()) {
     return Answer(context, s);
   }
@@ -107,9 +107,9 @@ grpc::ServerUnaryReactor* WorkersService::ReportFailure(
   return Answer(context, grpc::Status::OK);
 }
 
-grpc::ServerUnaryReactor* WorkersService::GetJobScene(
-    grpc::CallbackServerContext* context, const pdsm::v1::GetJobSceneRequest* request,
-    pdsm::v1::GetJobSceneResponse* response) {
+grpc::ServerUnaryReactor* WorkersService::GetJobScene(grpc::CallbackServerContext* context,
+                                                      const pdsm::v1::GetJobSceneRequest* request,
+                                                      pdsm::v1::GetJobSceneResponse* response) {
   if (grpc::Status s = auth_->Check(context, Audience::kWorker); !s.ok()) {
     return Answer(context, s);
   }

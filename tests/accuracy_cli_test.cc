@@ -76,9 +76,8 @@ TEST(ReferenceCli, BadInputExits2NamingTheFile) {
   EXPECT_NE(r.err.find("pts.csv:2"), std::string::npos) << r.err;
   EXPECT_TRUE(r.out.empty()) << r.out;
 
-  r = RunCommand(kPdsm + " reference " + dir.File("missing.json") + " --points " +
-                     dir.File("pts.csv"),
-                 dir);
+  r = RunCommand(
+      kPdsm + " reference " + dir.File("missing.json") + " --points " + dir.File("pts.csv"), dir);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("missing.json"), std::string::npos) << r.err;
 
@@ -93,8 +92,8 @@ TEST(ReferenceCli, BadInputExits2NamingTheFile) {
                  dir);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--method"), std::string::npos) << r.err;
-  r = RunCommand(kPdsm + " reference " + ExamplePath("plates") + " --points " +
-                     dir.File("ok.csv") + " --method magic",
+  r = RunCommand(kPdsm + " reference " + ExamplePath("plates") + " --points " + dir.File("ok.csv") +
+                     " --method magic",
                  dir);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--method"), std::string::npos) << r.err;
@@ -190,11 +189,12 @@ TEST(SweepCli, TinyGridWritesCsvAndPlotWithErrorFallingWithSamples) {
 TEST(SweepCli, WithoutGnuplotWritesTheCsvAndWarns) {
   TempDir dir;
   const std::string out = dir.File("sweep");
-  const CommandResult r = RunCommand(
-      "env PATH=" + dir.File("empty") + " " + kPdsm + " sweep " + ExamplePath("plates") +
-          " --out " + out + " --samples 4 --resolution 48 --sm-resolution 96 --surface-points 50 "
-          "--free-points 50",
-      dir);
+  const CommandResult r =
+      RunCommand("env PATH=" + dir.File("empty") + " " + kPdsm + " sweep " + ExamplePath("plates") +
+                     " --out " + out +
+                     " --samples 4 --resolution 48 --sm-resolution 96 --surface-points 50 "
+                     "--free-points 50",
+                 dir);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("warning: no plot"), std::string::npos) << r.err;
   std::string header;
@@ -204,15 +204,16 @@ TEST(SweepCli, WithoutGnuplotWritesTheCsvAndWarns) {
 
 TEST(SweepCli, BadKnobExits2) {
   TempDir dir;
-  CommandResult r = RunCommand(kPdsm + " sweep " + ExamplePath("plates") + " --out " +
-                                   dir.File("s") + " --sampling NOPE",
-                               dir);
+  CommandResult r = RunCommand(
+      kPdsm + " sweep " + ExamplePath("plates") + " --out " + dir.File("s") + " --sampling NOPE",
+      dir);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--sampling"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("stratified, uniform, sobol, halton, blue-noise"), std::string::npos) << r.err;
-  r = RunCommand(kPdsm + " sweep " + ExamplePath("plates") + " --out " + dir.File("s") +
-                     " --resolution 12y5",
-                 dir);
+  EXPECT_NE(r.err.find("stratified, uniform, sobol, halton, blue-noise"), std::string::npos)
+      << r.err;
+  r = RunCommand(
+      kPdsm + " sweep " + ExamplePath("plates") + " --out " + dir.File("s") + " --resolution 12y5",
+      dir);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--resolution"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir.File("s/sweep.csv")));
@@ -221,8 +222,8 @@ TEST(SweepCli, BadKnobExits2) {
 // Knobs the chooser's bakes cannot take are refused, not silently dropped.
 TEST(TargetErrorCli, RefusesKnobsItWouldIgnore) {
   TempDir dir;
-  for (const std::string flag : {"--tile-size 16", "--surfaces-only", "--adaptive-tolerance 0.1",
-                                 "--samples-per-task 4"}) {
+  for (const std::string flag :
+       {"--tile-size 16", "--surfaces-only", "--adaptive-tolerance 0.1", "--samples-per-task 4"}) {
     const CommandResult r = RunCommand(kPdsm + " bake " + ExamplePath("plates") + " -o " +
                                            dir.File("x.exr") + " --target-error 0.02 " + flag,
                                        dir);
@@ -236,9 +237,9 @@ TEST(TargetErrorCli, BakeMeetsTheTargetOnIndependentPoints) {
   TempDir dir;
   constexpr double kTarget = 0.02;
   const std::string out = dir.File("plates.exr");
-  const CommandResult r = RunCommand(kPdsm + " bake " + ExamplePath("plates") + " -o " + out +
-                                         " --target-error 0.02 --threads 2",
-                                     dir);
+  const CommandResult r = RunCommand(
+      kPdsm + " bake " + ExamplePath("plates") + " -o " + out + " --target-error 0.02 --threads 2",
+      dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("chose samples"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find(": met"), std::string::npos) << r.err;

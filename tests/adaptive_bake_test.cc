@@ -10,13 +10,13 @@
 #include <random>
 #include <vector>
 
-#include "worker/local_bake.h"
 #include "core/bake/adaptive_sampling.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_query.h"
 #include "core/reference/exact_visibility.h"
 #include "core/scene/scene_loader.h"
 #include "tests/test_support.h"
+#include "worker/local_bake.h"
 
 namespace pdsm {
 namespace {

@@ -8,13 +8,13 @@
 
 #include <gtest/gtest.h>
 
-#include "worker/local_bake.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_query.h"
 #include "core/reference/accuracy_points.h"
 #include "core/reference/exact_visibility.h"
 #include "core/scene/scene_loader.h"
 #include "tests/test_support.h"
+#include "worker/local_bake.h"
 
 namespace pdsm {
 namespace {
@@ -102,8 +102,7 @@ TEST_F(PlatesAccuracy, GroundReceiverMatchesExactReference) {
 
 TEST_F(PlatesAccuracy, FreeSpacePointsMatchExactReference) {
   ASSERT_NE(pdsm_, nullptr);
-  const ErrorStats e =
-      Compare(*pdsm_, *scene_, RandomBox({-5, 0.05, -5}, {5, 3.9, 5}, 1500, 7));
+  const ErrorStats e = Compare(*pdsm_, *scene_, RandomBox({-5, 0.05, -5}, {5, 3.9, 5}, 1500, 7));
   std::printf("volume: n=%zu mean %.4f p95 %.4f max %.4f\n", e.count, e.mean, e.p95, e.max);
   EXPECT_EQ(e.count, 1500u);
   // Measured: mean 0.0018, p95 0.0088.
@@ -123,8 +122,7 @@ TEST_F(PlatesAccuracy, CasterSurfacesDoNotShadowThemselves) {
     points.emplace_back(x, 2.0, z);
   }
   const ErrorStats e = Compare(*pdsm_, *scene_, points);
-  std::printf("caster top: n=%zu mean %.4f p95 %.4f max %.4f\n", e.count, e.mean, e.p95,
-              e.max);
+  std::printf("caster top: n=%zu mean %.4f p95 %.4f max %.4f\n", e.count, e.mean, e.p95, e.max);
   // Without the bias the plate would hide itself (attenuation 1); measured max 0.
   EXPECT_LT(e.max, 0.02);
 }

@@ -83,7 +83,8 @@ TEST(Cli, BadPointsFileNamesFileAndLine) {
   const std::string out = dir.File("tiny.exr");
   ASSERT_EQ(RunCommand(kPdsm + " bake " + scene + " -o " + out, dir).exit_code, 0);
   WriteText(dir.File("pts.csv"), "1,2,3\n1,nan,3\n");
-  const CommandResult r = RunCommand(kPdsm + " query " + out + " --points " + dir.File("pts.csv"), dir);
+  const CommandResult r =
+      RunCommand(kPdsm + " query " + out + " --points " + dir.File("pts.csv"), dir);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("pts.csv:2"), std::string::npos) << r.err;
 }
@@ -100,9 +101,7 @@ TEST(Cli, NotAPdsmFileExits2) {
 }
 
 TEST(Cli, MalformedJson) { ExpectBadScene("{\"name\": \"x\", ", "invalid scene JSON"); }
-TEST(Cli, UnknownField) {
-  ExpectBadScene(Replace(kGoodScene, "\"meshes\"", "\"meshs\""), "meshs");
-}
+TEST(Cli, UnknownField) { ExpectBadScene(Replace(kGoodScene, "\"meshes\"", "\"meshs\""), "meshs"); }
 TEST(Cli, MissingMesh) {
   ExpectBadScene(Replace(kGoodScene, "{\"inline\": {\"positions\": [-1,2,-1",
                          "{\"path\": \"nowhere.ply\"}, {\"inline\": {\"positions\": [-1,2,-1"),
@@ -148,8 +147,8 @@ TEST(Cli, BadOverrideFlagsExit2) {
   TempDir dir;
   const std::string scene = dir.File("tiny.json");
   WriteText(scene, kGoodScene);
-  for (const std::string flags : {"--samples 0", "--resolution 12by4", "--epsilon 3",
-                                  "--tile-size 0", "--samples 70000"}) {
+  for (const std::string flags :
+       {"--samples 0", "--resolution 12by4", "--epsilon 3", "--tile-size 0", "--samples 70000"}) {
     const CommandResult r =
         RunCommand(kPdsm + " bake " + scene + " -o " + dir.File("o.exr") + " " + flags, dir);
     EXPECT_EQ(r.exit_code, 2) << flags << ": " << r.err;

@@ -2,9 +2,9 @@
 // into tasks (the distributed service relies on this).
 #include <gtest/gtest.h>
 
-#include "worker/local_bake.h"
 #include "core/scene/scene_loader.h"
 #include "tests/test_support.h"
+#include "worker/local_bake.h"
 
 namespace pdsm {
 namespace {
@@ -13,8 +13,8 @@ using testing::ExamplePath;
 using testing::ReadBytes;
 using testing::TempDir;
 
-std::string Bake(const std::string& example, int threads, int samples_per_task,
-                 const TempDir& dir, const std::string& name) {
+std::string Bake(const std::string& example, int threads, int samples_per_task, const TempDir& dir,
+                 const std::string& name) {
   pdsm::v1::BakeParams overrides;
   overrides.add_resolution(72);
   overrides.add_resolution(40);

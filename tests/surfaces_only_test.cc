@@ -7,12 +7,12 @@
 
 #include <gtest/gtest.h>
 
-#include "worker/local_bake.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_query.h"
 #include "core/scene/scene_loader.h"
 #include "tests/service/service_cluster.h"
 #include "tests/test_support.h"
+#include "worker/local_bake.h"
 
 namespace pdsm {
 namespace {
@@ -55,7 +55,8 @@ Baked BakePlates(bool surfaces_only, double epsilon, const TempDir& dir, const s
 std::vector<glm::dvec3> ReceiverPoints() {
   std::vector<glm::dvec3> points;
   for (int i = 0; i < 40; ++i) {
-    for (int j = 0; j < 40; ++j) points.emplace_back(-6 + 12 * (i + 0.5) / 40, 0, -6 + 12 * (j + 0.5) / 40);
+    for (int j = 0; j < 40; ++j)
+      points.emplace_back(-6 + 12 * (i + 0.5) / 40, 0, -6 + 12 * (j + 0.5) / 40);
   }
   for (int k = 0; k < 200; ++k) {
     const double u = (k % 20 + 0.5) / 20.0, v = (k / 20 + 0.5) / 10.0;
@@ -86,9 +87,10 @@ TEST(SurfacesOnly, AnswersAsTheFullBakeOnReceiversLossless) {
     shadowed += a > 0;
     ++compared;
   }
-  std::printf("lossless: max |surfaces - full| %.2e, %d of %d points differ (%d shadowed); "
-              "bytes %zu -> %zu\n",
-              max_diff, differing, compared, shadowed, full.bytes.size(), surfaces.bytes.size());
+  std::printf(
+      "lossless: max |surfaces - full| %.2e, %d of %d points differ (%d shadowed); "
+      "bytes %zu -> %zu\n",
+      max_diff, differing, compared, shadowed, full.bytes.size(), surfaces.bytes.size());
   EXPECT_GT(shadowed, 300);
   // Inside a window the per-sample shadow test is the full bake's. The shadow maps cover
   // smaller windows, though, and a texel centre lying on a caster's edge can rasterize the
@@ -113,11 +115,12 @@ TEST(SurfacesOnly, WithinTwoEpsilonOfTheFullBakeAndSmaller) {
     ASSERT_FALSE(std::isnan(surface)) << "a receiver point off the windows";  // max() hides NaN
     max_diff = std::max(max_diff, std::abs(QueryAttenuation(full.image, p) - surface));
   }
-  std::printf("epsilon %.2f: max |surfaces - full| %.4f; bytes %zu -> %zu; texels walked "
-              "%lld -> %lld\n",
-              kEpsilon, max_diff, full.bytes.size(), surfaces.bytes.size(),
-              static_cast<long long>(full.summary.tasks_stats.texels_walked),
-              static_cast<long long>(surfaces.summary.tasks_stats.texels_walked));
+  std::printf(
+      "epsilon %.2f: max |surfaces - full| %.4f; bytes %zu -> %zu; texels walked "
+      "%lld -> %lld\n",
+      kEpsilon, max_diff, full.bytes.size(), surfaces.bytes.size(),
+      static_cast<long long>(full.summary.tasks_stats.texels_walked),
+      static_cast<long long>(surfaces.summary.tasks_stats.texels_walked));
   // Each file is within epsilon of the same exact function on receivers.
   EXPECT_LE(max_diff, 2 * kEpsilon);
   EXPECT_LT(surfaces.bytes.size(), full.bytes.size());
@@ -143,8 +146,8 @@ TEST(SurfacesOnly, ServiceMatchesTheLocalBakeByteForByte) {
       cluster.dir());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // `pdsm info` says where the file is defined (format 2).
-  const testing::CommandResult info = testing::RunCommand(
-      std::string(PDSM_CLI) + " info " + local + " --json", cluster.dir());
+  const testing::CommandResult info =
+      testing::RunCommand(std::string(PDSM_CLI) + " info " + local + " --json", cluster.dir());
   ASSERT_EQ(info.exit_code, 0) << info.err;
   EXPECT_NE(info.out.find("\"formatVersion\": 2"), std::string::npos) << info.out;
   EXPECT_NE(info.out.find("\"surfacesOnly\": true"), std::string::npos) << info.out;

@@ -81,8 +81,8 @@ void ScanBlock(const BakePlan& plan, const ShadowMapView& view, const BlockScan&
       const size_t p = static_cast<size_t>(y - tile.y0) * tile.width + (x - tile.x0);
       std::vector<Event>* events = &(*pixel_events)[p];
       if (windows == nullptr) {
-        walked += ScanConvertRay(view, RayForSample(plan, s, t, sample, b.z_begin),
-                                 g.projection, events);
+        walked +=
+            ScanConvertRay(view, RayForSample(plan, s, t, sample, b.z_begin), g.projection, events);
         ++segments;
         continue;
       }
@@ -186,8 +186,8 @@ absl::StatusOr<TileEvents> TaskRunner::Run(const BakeTask& task, TaskStats* stat
     // Only the texels the blocks' clipped segments cross.
     camera.window = ShadowMapWindow{};
     for (const BlockScan& b : blocks) {
-      camera.window = UnionWindow(
-          camera.window, ShadowMapWindowFor(plan_, b.rect, sample, b.z_begin, b.z_end));
+      camera.window =
+          UnionWindow(camera.window, ShadowMapWindowFor(plan_, b.rect, sample, b.z_begin, b.z_end));
     }
     const int64_t texels = int64_t{camera.window.width} * camera.window.height;
     if (texels > kMaxShadowMapTexels) {
@@ -206,8 +206,7 @@ absl::StatusOr<TileEvents> TaskRunner::Run(const BakeTask& task, TaskStats* stat
     auto scan_start = std::chrono::steady_clock::now();
     const ShadowMapView view{depth.data(), plan_.lattice, camera.window};
     for (const BlockScan& b : blocks) {
-      ScanBlock(plan_, view, b, sample, windows ? &*windows : nullptr, tile, &pixel_events,
-                stats);
+      ScanBlock(plan_, view, b, sample, windows ? &*windows : nullptr, tile, &pixel_events, stats);
     }
     stats->scan_seconds += SecondsSince(scan_start);
   }
@@ -227,8 +226,7 @@ absl::StatusOr<TileEvents> TaskRunner::Run(const BakeTask& task, TaskStats* stat
 absl::StatusOr<std::vector<float>> TaskRunner::ReceiverDepth(const TileRect& tile) {
   // The light-centre view of the receivers on the PDSM's own pixel grid.
   if (!receivers_uploaded_) {
-    if (absl::Status s =
-            renderer_->SetGeometry(plan_.receivers.positions, plan_.receivers.indices);
+    if (absl::Status s = renderer_->SetGeometry(plan_.receivers.positions, plan_.receivers.indices);
         !s.ok()) {
       return s;
     }
@@ -240,8 +238,8 @@ absl::StatusOr<std::vector<float>> TaskRunner::ReceiverDepth(const TileRect& til
   camera.lattice = ShadowMapLattice{g.s_min, g.t_min, g.PixelPitchS(), g.PixelPitchT()};
   camera.window = ShadowMapWindow{tile.x0, tile.y0, tile.width, tile.height};
   // Receivers may lie nearer than any caster: clip only at the light plane.
-  camera.z_clip_near = g.projection == Projection::kPerspective ? 1e-6 * g.z_far
-                                                                : plan_.z_clip_near;
+  camera.z_clip_near =
+      g.projection == Projection::kPerspective ? 1e-6 * g.z_far : plan_.z_clip_near;
   camera.z_clip_far = plan_.z_clip_far;
   std::vector<float> depth;
   if (absl::Status s = renderer_->Render(camera, &depth); !s.ok()) return s;

@@ -30,10 +30,10 @@ struct TaskStats {
   int64_t shadow_maps = 0;
   int64_t shadow_map_texels = 0;
   int64_t triangles_submitted = 0;  // summed over the shadow maps rendered
-  int64_t events = 0;             // before merging
-  int64_t texels_walked = 0;      // shadow-map texels visited by scan conversion
-  int64_t tiles_skipped = 0;      // tiles no caster reaches (no shadow map at all)
-  int64_t ray_segments = 0;       // ray pieces scan-converted (rays x samples, x windows)
+  int64_t events = 0;               // before merging
+  int64_t texels_walked = 0;        // shadow-map texels visited by scan conversion
+  int64_t tiles_skipped = 0;        // tiles no caster reaches (no shadow map at all)
+  int64_t ray_segments = 0;         // ray pieces scan-converted (rays x samples, x windows)
   void Add(const TaskStats& o);
 };
 

@@ -37,8 +37,7 @@ absl::StatusOr<int64_t> CoordinatorClient::Extend(uint64_t lease_id) {
   request.set_worker_id(worker_id_);
   request.set_lease_id(lease_id);
   pdsm::v1::ExtendLeaseResponse response;
-  if (absl::Status s = FromGrpcStatus(stub_->ExtendLease(&context, request, &response));
-      !s.ok()) {
+  if (absl::Status s = FromGrpcStatus(stub_->ExtendLease(&context, request, &response)); !s.ok()) {
     return s;
   }
   return response.lease_ms();
@@ -54,8 +53,7 @@ absl::StatusOr<bool> CoordinatorClient::ReportResult(uint64_t lease_id, const Ti
   request.set_seconds(seconds);
   TileEventsToProto(events, request.mutable_events());
   pdsm::v1::ReportResultResponse response;
-  if (absl::Status s = FromGrpcStatus(stub_->ReportResult(&context, request, &response));
-      !s.ok()) {
+  if (absl::Status s = FromGrpcStatus(stub_->ReportResult(&context, request, &response)); !s.ok()) {
     return s;
   }
   return response.accepted();
@@ -81,8 +79,7 @@ absl::StatusOr<pdsm::v1::GetJobSceneResponse> CoordinatorClient::JobScene(
   pdsm::v1::GetJobSceneRequest request;
   request.set_job_id(job_id);
   pdsm::v1::GetJobSceneResponse response;
-  if (absl::Status s = FromGrpcStatus(stub_->GetJobScene(&context, request, &response));
-      !s.ok()) {
+  if (absl::Status s = FromGrpcStatus(stub_->GetJobScene(&context, request, &response)); !s.ok()) {
     return s;
   }
   return response;

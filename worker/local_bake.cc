@@ -50,8 +50,8 @@ class LocalWorker {
       const std::optional<TaskLease> lease = engine_->Lease(id_, kIdleWait);
       if (!lease) continue;
       absl::StatusOr<TileEvents> events =
-          runner_->Run(BakeTask{lease->tile_index, lease->sample_begin, lease->sample_end},
-                       &stats_, [this] { return output_->ended(); });
+          runner_->Run(BakeTask{lease->tile_index, lease->sample_begin, lease->sample_end}, &stats_,
+                       [this] { return output_->ended(); });
       if (events.ok()) {
         engine_->Report(id_, lease->lease_id, *std::move(events));
       } else {
@@ -81,8 +81,8 @@ class LocalWorker {
 // Threads worth starting: more than tasks would only cost contexts.
 int ThreadCount(const BakePlan& plan, const LocalBakeOptions& options) {
   const int64_t wanted = options.threads > 0 ? options.threads : CoreCount();
-  const int64_t batch = options.samples_per_task > 0 ? options.samples_per_task
-                                                     : std::max(1, plan.header.samples);
+  const int64_t batch =
+      options.samples_per_task > 0 ? options.samples_per_task : std::max(1, plan.header.samples);
   const int64_t batches = (std::max(1, plan.header.samples) + batch - 1) / batch;
   const int64_t tasks = std::max<int64_t>(1, static_cast<int64_t>(plan.tiles.size()) * batches);
   return static_cast<int>(std::clamp<int64_t>(wanted, 1, tasks));

@@ -28,8 +28,8 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
 void SleepUnlessStopped(std::chrono::milliseconds duration, const std::atomic<bool>& stop) {
   const auto end = std::chrono::steady_clock::now() + duration;
   while (!stop && std::chrono::steady_clock::now() < end) {
-    std::this_thread::sleep_for(std::min<std::chrono::milliseconds>(
-        duration, std::chrono::milliseconds(50)));
+    std::this_thread::sleep_for(
+        std::min<std::chrono::milliseconds>(duration, std::chrono::milliseconds(50)));
   }
 }
 
@@ -71,9 +71,9 @@ absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::Lo
     const std::string& job_id) {
   absl::StatusOr<pdsm::v1::GetJobSceneResponse> scene = client_->JobScene(job_id);
   if (!scene.ok()) return scene.status();
-  const MeshAssetResolver resolver = [this](const std::string& sha256,
-                                            const std::string& context)
-      -> absl::StatusOr<MeshFileData> {
+  const MeshAssetResolver resolver =
+      [this](const std::string& sha256,
+             const std::string& context) -> absl::StatusOr<MeshFileData> {
     absl::StatusOr<std::string> blob = assets_->Get(sha256);
     if (!blob.ok()) {
       blob = client_->FetchAsset(sha256);
@@ -93,9 +93,11 @@ absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::Lo
   context->fingerprint = PlanFingerprint(context->plan);
   if (context->fingerprint != scene->plan_fingerprint()) {
     return absl::FailedPreconditionError(absl::StrCat(
-        "job ", job_id, ": this worker plans the bake differently from the coordinator "
-        "(fingerprint ", context->fingerprint.substr(0, 12), " vs ",
-        scene->plan_fingerprint().substr(0, 12), "): run the same pdsm build on both"));
+        "job ", job_id,
+        ": this worker plans the bake differently from the coordinator "
+        "(fingerprint ",
+        context->fingerprint.substr(0, 12), " vs ", scene->plan_fingerprint().substr(0, 12),
+        "): run the same pdsm build on both"));
   }
   spdlog::info("job {}: planned, {} tiles, {} samples", job_id, context->plan.tiles.size(),
                context->plan.samples.size());
@@ -119,7 +121,8 @@ void RemoteWorker::KeepLeases(const std::atomic<bool>& stop) {
       // UNAVAILABLE: the coordinator may be restarting; keep working and try again.
       if (!extended.ok() && !absl::IsUnavailable(extended.status()) &&
           !absl::IsDeadlineExceeded(extended.status())) {
-        spdlog::info("lease {}: lost ({}); dropping the task", id, std::string(extended.status().message()));
+        spdlog::info("lease {}: lost ({}); dropping the task", id,
+                     std::string(extended.status().message()));
         lease->lost = true;
       }
     }
@@ -138,10 +141,11 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
   while (!stop) {
     absl::StatusOr<pdsm::v1::LeaseTaskResponse> response = client_->Lease();
     if (!response.ok()) {
-      spdlog::warn("lease: {} (retrying in {} ms)", std::string(response.status().message()), backoff.count());
+      spdlog::warn("lease: {} (retrying in {} ms)", std::string(response.status().message()),
+                   backoff.count());
       SleepUnlessStopped(backoff, stop);
-      backoff = std::min(backoff * 2, std::chrono::duration_cast<std::chrono::milliseconds>(
-                                          kMaxBackoff));
+      backoff =
+          std::min(backoff * 2, std::chrono::duration_cast<std::chrono::milliseconds>(kMaxBackoff));
       continue;
     }
     backoff = std::chrono::milliseconds(100);
@@ -152,7 +156,8 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
     const pdsm::v1::Task& task = response->task();
     const auto start = std::chrono::steady_clock::now();
     const auto fail = [&](const absl::Status& s, bool handed_back) {
-      spdlog::warn("job {} tile {}: {}", task.job_id(), task.tile_index(), std::string(s.message()));
+      spdlog::warn("job {} tile {}: {}", task.job_id(), task.tile_index(),
+                   std::string(s.message()));
       (void)client_->ReportFailure(task.lease_id(), std::string(s.message()), handed_back);
     };
 
@@ -186,17 +191,17 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
       runner = *std::move(created);
       runner_job = task.job_id();
     }
-    if (context->fingerprint != task.plan_fingerprint() ||
-        task.tile_index() < 0 || task.tile_index() >= static_cast<int>(context->plan.tiles.size())) {
+    if (context->fingerprint != task.plan_fingerprint() || task.tile_index() < 0 ||
+        task.tile_index() >= static_cast<int>(context->plan.tiles.size())) {
       forget_lease();
       fail(absl::FailedPreconditionError("the task does not match this worker's plan"), false);
       continue;
     }
 
     TaskStats stats;
-    absl::StatusOr<TileEvents> events = runner->Run(
-        BakeTask{task.tile_index(), task.sample_begin(), task.sample_end()}, &stats,
-        [&] { return stop.load() || lease->lost.load(); });
+    absl::StatusOr<TileEvents> events =
+        runner->Run(BakeTask{task.tile_index(), task.sample_begin(), task.sample_end()}, &stats,
+                    [&] { return stop.load() || lease->lost.load(); });
     forget_lease();
     if (lease->lost) continue;  // the coordinator has moved on; nothing to report
     if (!events.ok()) {
@@ -211,8 +216,7 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
     } else {
       spdlog::debug("job {} tile {}: samples [{}, {}) {} in {:.3f} s, {} events", task.job_id(),
                     task.tile_index(), task.sample_begin(), task.sample_end(),
-                    *accepted ? "accepted" : "dropped as stale", SecondsSince(start),
-                    stats.events);
+                    *accepted ? "accepted" : "dropped as stale", SecondsSince(start), stats.events);
     }
   }
 }

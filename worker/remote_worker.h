@@ -1,6 +1,6 @@
 // pdsm-worker's main loop: N threads of a WorkQueue, each with its own OSMesa context, pull
-// tasks from the coordinator, run them (bake_task.h) and report the events. A lease keeper thread extends
-// the leases of running tasks; a lost lease (expired, cancelled job) stops its task at the
+// tasks from the coordinator, run them (bake_task.h) and report the events. A lease keeper thread
+// extends the leases of running tasks; a lost lease (expired, cancelled job) stops its task at the
 // next light sample. Scenes and mesh assets are fetched once per job and cached on disk by
 // content hash.
 #ifndef PDSM_WORKER_REMOTE_WORKER_H_

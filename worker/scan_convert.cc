@@ -65,7 +65,7 @@ class EventEmitter {
 }  // namespace
 
 int64_t ScanConvertRay(const ShadowMapView& sm, const RayInShadowMap& ray, Projection projection,
-                    std::vector<Event>* events, SegmentEnd end) {
+                       std::vector<Event>* events, SegmentEnd end) {
   const ShadowMapLattice& lat = sm.lattice;
   const ShadowMapWindow& win = sm.window;
   // Window-relative continuous texel coordinates of the segment's ends.

@@ -43,8 +43,8 @@ enum class SegmentEnd { kOpen, kClose };
 // REQUIRES: the ray's segment lies inside the view's window (ShadowMapWindowFor).
 // Returns the number of texels walked.
 int64_t ScanConvertRay(const ShadowMapView& shadow_map, const RayInShadowMap& ray,
-                    Projection projection, std::vector<Event>* events,
-                    SegmentEnd end = SegmentEnd::kOpen);
+                       Projection projection, std::vector<Event>* events,
+                       SegmentEnd end = SegmentEnd::kOpen);
 
 }  // namespace pdsm
 

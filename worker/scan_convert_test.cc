@@ -73,8 +73,7 @@ TEST(ScanConvert, OccluderBehindTheRayPieceLeavesItLit) {
 TEST(ScanConvert, OneTexelRayIsShadowedFromTheOccluderToInfinity) {
   // The light-centre sample: the perspective ray does not move in the shadow map.
   const Row row{{kEmpty, 3.25f, kEmpty}};
-  const RayInShadowMap ray{{1.5, 0.5}, {1.5, 0.5}, 1.0,
-                           std::numeric_limits<double>::infinity()};
+  const RayInShadowMap ray{{1.5, 0.5}, {1.5, 0.5}, 1.0, std::numeric_limits<double>::infinity()};
   const auto events = Convert(row, ray, Projection::kPerspective);
   ASSERT_EQ(events.size(), 1u);
   EXPECT_EQ(events[0], (Event{3.25f, +1}));
@@ -89,7 +88,7 @@ TEST(ScanConvert, PerspectiveDepthsAreLinearInInverseDepth) {
   ASSERT_EQ(events.size(), 2u);
   EXPECT_FLOAT_EQ(events[0].z, 4.0f / 3.0f);  // enters at texel 1's near bound
   EXPECT_EQ(events[0].count, +1);
-  EXPECT_FLOAT_EQ(events[1].z, 2.0f);         // texel 2 lit: leaves at z = 4 / 2
+  EXPECT_FLOAT_EQ(events[1].z, 2.0f);  // texel 2 lit: leaves at z = 4 / 2
   EXPECT_EQ(events[1].count, -1);
 }
 
@@ -101,8 +100,8 @@ TEST(ScanConvert, DiagonalRayVisitsEveryCrossedTexel) {
   for (int k = 0; k < 3; ++k) depths[k * 3 + k] = 0.0f;
   ShadowMapView view{depths.data(), ShadowMapLattice{0, 0, 1, 1}, ShadowMapWindow{0, 0, 3, 3}};
   std::vector<Event> events;
-  ScanConvertRay(view, RayInShadowMap{{0.1, 0.1}, {2.9, 2.85}, 1.0, 2.0},
-                 Projection::kOrthographic, &events);
+  ScanConvertRay(view, RayInShadowMap{{0.1, 0.1}, {2.9, 2.85}, 1.0, 2.0}, Projection::kOrthographic,
+                 &events);
   ASSERT_FALSE(events.empty());
   EXPECT_EQ(events.front(), (Event{1.0f, +1}));
   int sum = 0;
@@ -132,9 +131,9 @@ TEST(ScanConvert, ClosedSegmentsAddUpToTheWholeRay) {
   std::vector<Event> whole, pieces;
   ScanConvertRay(view, ray(1.0, 7.0), Projection::kOrthographic, &whole);
   // Pieces [2.5, 3.5] (inside the first shadow, which ends at 4) and [4.5, 6.5].
-  EXPECT_EQ(ScanConvertRay(view, ray(2.5, 3.5), Projection::kOrthographic, &pieces,
-                           SegmentEnd::kClose),
-            2);
+  EXPECT_EQ(
+      ScanConvertRay(view, ray(2.5, 3.5), Projection::kOrthographic, &pieces, SegmentEnd::kClose),
+      2);
   ScanConvertRay(view, ray(4.5, 6.5), Projection::kOrthographic, &pieces, SegmentEnd::kClose);
   auto hidden_at = [](const std::vector<Event>& events, double z) {
     int sum = 0;

@@ -514,8 +514,7 @@ TEST_F(ShadowMapRendererTest, RejectsBadInput) {
 // for the driver, and BiasedDepth is defined once.
 TEST(ShadowMapShadersTest, BiasChunkIsIncludedAtBuildTime) {
   const std::string fragment = kShadowMapFragmentShader;
-  EXPECT_FALSE(std::regex_search(fragment, std::regex("(^|\n)[ \t]*#[ \t]*include")))
-      << fragment;
+  EXPECT_FALSE(std::regex_search(fragment, std::regex("(^|\n)[ \t]*#[ \t]*include"))) << fragment;
   const size_t definition = fragment.find("float BiasedDepth(");
   ASSERT_NE(definition, std::string::npos) << fragment;
   EXPECT_EQ(fragment.find("float BiasedDepth(", definition + 1), std::string::npos);

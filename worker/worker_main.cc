@@ -9,9 +9,9 @@
 #include <random>
 #include <thread>
 
-#include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
 
 #include "absl/strings/str_format.h"
 #include "rpc/grpc_support.h"
@@ -69,8 +69,8 @@ int Run(const Flags& flags, const sigset_t& signals) {
   }
   CoordinatorClient client(*channel, token, MakeWorkerId());
   RemoteWorkerOptions options;
-  options.threads = flags.threads > 0 ? flags.threads
-                                      : std::max(1u, std::thread::hardware_concurrency());
+  options.threads =
+      flags.threads > 0 ? flags.threads : std::max(1u, std::thread::hardware_concurrency());
   options.cache_dir = flags.cache_dir.empty() ? DefaultCacheDir() : flags.cache_dir;
   absl::StatusOr<std::unique_ptr<RemoteWorker>> worker = RemoteWorker::Create(&client, options);
   if (!worker.ok()) {
@@ -110,8 +110,7 @@ int main(int argc, char** argv) {
 
   pdsm::Flags flags;
   CLI::App app{"pdsm-worker: renders PDSM bake tasks for a pdsm-coordinator"};
-  app.add_option("--coordinator", flags.coordinator, "host:port of the coordinator")
-      ->required();
+  app.add_option("--coordinator", flags.coordinator, "host:port of the coordinator")->required();
   app.add_option("--token-file", flags.token_file, "File holding the worker token");
   app.add_option("--tls-ca", flags.tls_ca, "PEM roots to trust: connect with TLS");
   app.add_option("--threads", flags.threads, "Task threads (0: one per core)")

@@ -10,10 +10,10 @@
 #include "client/bake_overrides.h"
 #include "client/cli_common.h"
 #include "client/commands.h"
-#include "worker/local_bake.h"
-#include "client/progress_reporter.h"
 #include "client/measure/target_error.h"
+#include "client/progress_reporter.h"
 #include "core/scene/scene_loader.h"
+#include "worker/local_bake.h"
 
 namespace pdsm {
 namespace {
@@ -36,27 +36,27 @@ std::string HumanBytes(uint64_t bytes) {
 
 void PrintSummary(const Scene& scene, const BakeFlags& flags, const std::string& preview,
                   const BakeSummary& s) {
-  std::fprintf(stderr,
-               "baked \"%s\": %dx%d PDSM, %d samples, %d tiles (%d all lit), %lld tasks\n"
-               "  time %.2fs; shadow maps %.2f thread-s (%lld maps, %.1f Mtexels), "
-               "scan conversion %.2f thread-s, merge+compress %.3f thread-s\n"
-               "  events %lld -> %lld merged -> %lld consolidated -> %lld vertices\n"
-               "  scan: %lld ray segments, %.1f Mtexels walked; %lld tiles skipped (no caster)\n",
-               scene.name.c_str(), scene.bake.width, scene.bake.height, scene.bake.samples, s.tiles,
-               s.tiles_all_lit, static_cast<long long>(s.tasks), s.seconds,
-               s.tasks_stats.shadow_map_seconds, static_cast<long long>(s.tasks_stats.shadow_maps),
-               s.tasks_stats.shadow_map_texels / 1e6, s.tasks_stats.scan_seconds,
-               s.assembly.seconds, static_cast<long long>(s.tasks_stats.events),
-               static_cast<long long>(s.assembly.merged_events),
-               static_cast<long long>(s.assembly.consolidated_events),
-               static_cast<long long>(s.assembly.vertices),
-               static_cast<long long>(s.tasks_stats.ray_segments),
-               s.tasks_stats.texels_walked / 1e6,
-               static_cast<long long>(s.tasks_stats.tiles_skipped));
+  std::fprintf(
+      stderr,
+      "baked \"%s\": %dx%d PDSM, %d samples, %d tiles (%d all lit), %lld tasks\n"
+      "  time %.2fs; shadow maps %.2f thread-s (%lld maps, %.1f Mtexels), "
+      "scan conversion %.2f thread-s, merge+compress %.3f thread-s\n"
+      "  events %lld -> %lld merged -> %lld consolidated -> %lld vertices\n"
+      "  scan: %lld ray segments, %.1f Mtexels walked; %lld tiles skipped (no caster)\n",
+      scene.name.c_str(), scene.bake.width, scene.bake.height, scene.bake.samples, s.tiles,
+      s.tiles_all_lit, static_cast<long long>(s.tasks), s.seconds, s.tasks_stats.shadow_map_seconds,
+      static_cast<long long>(s.tasks_stats.shadow_maps), s.tasks_stats.shadow_map_texels / 1e6,
+      s.tasks_stats.scan_seconds, s.assembly.seconds, static_cast<long long>(s.tasks_stats.events),
+      static_cast<long long>(s.assembly.merged_events),
+      static_cast<long long>(s.assembly.consolidated_events),
+      static_cast<long long>(s.assembly.vertices),
+      static_cast<long long>(s.tasks_stats.ray_segments), s.tasks_stats.texels_walked / 1e6,
+      static_cast<long long>(s.tasks_stats.tiles_skipped));
   if (scene.bake.adaptive() && s.tiles > 0) {
-    std::fprintf(stderr, "  adaptive sampling: tolerance %g, %.1f samples per tile on average "
-                 "(first batch %d, max %d)\n", scene.bake.adaptive_tolerance,
-                 static_cast<double>(s.tile_samples_total) / s.tiles,
+    std::fprintf(stderr,
+                 "  adaptive sampling: tolerance %g, %.1f samples per tile on average "
+                 "(first batch %d, max %d)\n",
+                 scene.bake.adaptive_tolerance, static_cast<double>(s.tile_samples_total) / s.tiles,
                  scene.bake.adaptive_min_samples, scene.bake.samples);
   }
   std::printf("pdsm: %s (%s)\n", flags.output_path.c_str(), HumanBytes(s.file_bytes).c_str());
@@ -103,8 +103,7 @@ int RunTargetErrorBake(const BakeFlags& flags, const pdsm::v1::BakeParams& overr
                options.target, r->knobs.samples, r->knobs.width, r->knobs.height,
                r->knobs.sm_resolution, r->knobs.epsilon, r->knobs.sampling.c_str(),
                r->measured.all.mean, r->measured.surface.mean, r->measured.free_space.mean,
-               r->predicted, r->met ? "met" : "NOT met", r->seconds, r->bakes,
-               r->total_seconds);
+               r->predicted, r->met ? "met" : "NOT met", r->seconds, r->bakes, r->total_seconds);
   std::printf("pdsm: %s\n", flags.output_path.c_str());
   if (!r->met) {
     std::fprintf(stderr,
@@ -126,11 +125,10 @@ int RunBake(const BakeFlags& flags) {
   LocalBakeOptions options;
   options.output_path = flags.output_path;
   if (!flags.no_preview) {
-    options.preview_path = !flags.preview_path.empty()
-                               ? flags.preview_path
-                               : std::filesystem::path(flags.output_path)
-                                     .replace_extension(".png")
-                                     .string();
+    options.preview_path =
+        !flags.preview_path.empty()
+            ? flags.preview_path
+            : std::filesystem::path(flags.output_path).replace_extension(".png").string();
   }
   options.threads = flags.threads;
   options.samples_per_task = flags.samples_per_task;

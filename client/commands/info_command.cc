@@ -57,11 +57,12 @@ int RunInfo(const InfoFlags& flags) {
     tile_mean += static_cast<double>(n) / h.tile_samples.size();
   }
   const std::string adaptive_json =
-      h.adaptive() ? absl::StrFormat(", \"adaptiveTolerance\": %.17g, \"adaptiveMinSamples\": %d, "
-                                     "\"tileSamples\": {\"min\": %d, \"mean\": %.17g, \"max\": %d}",
-                                     h.adaptive_tolerance, h.adaptive_min_samples, tile_min,
-                                     tile_mean, tile_max)
-                   : "";
+      h.adaptive()
+          ? absl::StrFormat(
+                ", \"adaptiveTolerance\": %.17g, \"adaptiveMinSamples\": %d, "
+                "\"tileSamples\": {\"min\": %d, \"mean\": %.17g, \"max\": %d}",
+                h.adaptive_tolerance, h.adaptive_min_samples, tile_min, tile_mean, tile_max)
+          : "";
   // Format 2: where the file knows nothing (queries there are NaN).
   const std::string validity_json =
       absl::StrFormat(", \"surfacesOnly\": %s, \"zValidMin\": %.17g",
@@ -74,36 +75,37 @@ int RunInfo(const InfoFlags& flags) {
         "\"samples\": %d, \"shadowMapResolution\": %d, \"epsilon\": %.17g, "
         "\"depthBias\": %.17g, \"slopeBias\": %.17g, \"tileSize\": %d, "
         "\"vertices\": %zu, \"maxVerticesPerPixel\": %zu, \"emptyPixels\": %zu%s%s}\n",
-        h.format_version, JsonString(h.scene_name).c_str(), JsonString(LightShapeName(h.light_shape)).c_str(),
-        projection.c_str(), g.width, g.height, g.s_min, g.s_max, g.t_min, g.t_max, g.z_near,
-        g.z_far, v3(g.frame.center).c_str(), v3(g.frame.n).c_str(), h.samples,
-        h.shadow_map_resolution, h.epsilon, h.depth_bias, h.slope_bias, h.tile_size,
-        pdsm->vertices.size(), max_vertices, empty_pixels, adaptive_json.c_str(),
-        validity_json.c_str());
+        h.format_version, JsonString(h.scene_name).c_str(),
+        JsonString(LightShapeName(h.light_shape)).c_str(), projection.c_str(), g.width, g.height,
+        g.s_min, g.s_max, g.t_min, g.t_max, g.z_near, g.z_far, v3(g.frame.center).c_str(),
+        v3(g.frame.n).c_str(), h.samples, h.shadow_map_resolution, h.epsilon, h.depth_bias,
+        h.slope_bias, h.tile_size, pdsm->vertices.size(), max_vertices, empty_pixels,
+        adaptive_json.c_str(), validity_json.c_str());
     return kExitOk;
   }
   std::printf("%s: PDSM format %d, scene \"%s\"\n", flags.pdsm_path.c_str(), h.format_version,
               h.scene_name.c_str());
   std::printf("  light       %s, centre %s, normal %s\n", LightShapeName(h.light_shape),
               v3(g.frame.center).c_str(), v3(g.frame.n).c_str());
-  std::printf("  projection  %s, %dx%d pixels, window s [%g, %g] t [%g, %g]\n",
-              projection.c_str(), g.width, g.height, g.s_min, g.s_max, g.t_min, g.t_max);
+  std::printf("  projection  %s, %dx%d pixels, window s [%g, %g] t [%g, %g]\n", projection.c_str(),
+              g.width, g.height, g.s_min, g.s_max, g.t_min, g.t_max);
   std::printf("  depths      [%g, %g]\n", g.z_near, g.z_far);
-  std::printf("  bake        %d samples, shadow maps %d, epsilon %g, bias %g + slope %g, "
-              "tiles %d\n",
-              h.samples, h.shadow_map_resolution, h.epsilon, h.depth_bias, h.slope_bias,
-              h.tile_size);
+  std::printf(
+      "  bake        %d samples, shadow maps %d, epsilon %g, bias %g + slope %g, "
+      "tiles %d\n",
+      h.samples, h.shadow_map_resolution, h.epsilon, h.depth_bias, h.slope_bias, h.tile_size);
   if (h.adaptive()) {
-    std::printf("  adaptive    tolerance %g, first batch %d; samples per tile min %d, mean %.1f, "
-                "max %d\n",
-                h.adaptive_tolerance, h.adaptive_min_samples, tile_min, tile_mean, tile_max);
+    std::printf(
+        "  adaptive    tolerance %g, first batch %d; samples per tile min %d, mean %.1f, "
+        "max %d\n",
+        h.adaptive_tolerance, h.adaptive_min_samples, tile_min, tile_mean, tile_max);
   }
   if (h.surfaces_only || g.z_valid_min != 0) {
-    std::printf("  defined     %s%s%s\n",
-                h.surfaces_only ? "only near the receiver surfaces (surfaces-only bake)" : "",
-                h.surfaces_only && g.z_valid_min != 0 ? "; " : "",
-                g.z_valid_min != 0 ? absl::StrFormat("from depth %g on", g.z_valid_min).c_str()
-                                   : "");
+    std::printf(
+        "  defined     %s%s%s\n",
+        h.surfaces_only ? "only near the receiver surfaces (surfaces-only bake)" : "",
+        h.surfaces_only && g.z_valid_min != 0 ? "; " : "",
+        g.z_valid_min != 0 ? absl::StrFormat("from depth %g on", g.z_valid_min).c_str() : "");
   }
   std::printf("  functions   %zu vertices, at most %zu per pixel, %zu empty pixels (all lit)\n",
               pdsm->vertices.size(), max_vertices, empty_pixels);

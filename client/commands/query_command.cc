@@ -49,8 +49,8 @@ absl::Status QueryRemote(const QueryFlags& flags, const std::vector<QueryPoint>&
       p->set_z(points[i].world.z);
     }
     pdsm::v1::QueryAttenuationResponse response;
-    if (grpc::Status s = c->stub->QueryAttenuation(c->Call(std::chrono::minutes(5)).get(),
-                                                   request, &response);
+    if (grpc::Status s =
+            c->stub->QueryAttenuation(c->Call(std::chrono::minutes(5)).get(), request, &response);
         !s.ok()) {
       return CallError("querying job " + flags.job_id, s, flags.service.server);
     }
@@ -66,8 +66,8 @@ absl::Status QueryRemote(const QueryFlags& flags, const std::vector<QueryPoint>&
 
 int RunQuery(const QueryFlags& flags) {
   if (flags.pdsm_path.empty() == flags.job_id.empty()) {
-    return ReportError(absl::InvalidArgumentError(
-        "query: give either a PDSM file or --job JOB (with --server)"));
+    return ReportError(
+        absl::InvalidArgumentError("query: give either a PDSM file or --job JOB (with --server)"));
   }
   if (!flags.job_id.empty() && flags.service.server.empty()) {
     return ReportError(absl::InvalidArgumentError("--job needs --server ADDR"));

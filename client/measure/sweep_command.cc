@@ -8,16 +8,16 @@
 #include <vector>
 
 #include "absl/strings/str_format.h"
-#include "client/measure/accuracy_probe.h"
-#include "client/measure/bake_knobs.h"
 #include "client/bake_overrides.h"
-#include "client/measure/child_bake.h"
 #include "client/cli_common.h"
 #include "client/commands.h"
-#include "client/progress_reporter.h"
+#include "client/measure/accuracy_probe.h"
+#include "client/measure/bake_knobs.h"
+#include "client/measure/child_bake.h"
 #include "client/measure/sweep_plot.h"
 #include "client/measure/sweep_report.h"
 #include "client/measure/target_error.h"
+#include "client/progress_reporter.h"
 #include "core/scene/scene_loader.h"
 
 namespace pdsm {

@@ -44,8 +44,8 @@ void PrintJob(const pdsm::v1::Job& job) {
   std::printf("\n  %dx%d, %d samples, priority %d, submitted %s\n", job.width(), job.height(),
               job.samples(), job.priority(), LocalTime(job.created_unix_ms()).c_str());
   if (!job.error().empty()) std::printf("  error: %s\n", job.error().c_str());
-  if (job.pdsm_bytes() > 0) std::printf("  PDSM: %llu bytes\n",
-                                        static_cast<unsigned long long>(job.pdsm_bytes()));
+  if (job.pdsm_bytes() > 0)
+    std::printf("  PDSM: %llu bytes\n", static_cast<unsigned long long>(job.pdsm_bytes()));
 }
 
 int RunStatus(const JobFlags& flags) {
@@ -143,8 +143,8 @@ void RegisterJobCommands(CLI::App& app, int* exit_code) {
       ->add_flag("--json", status->json, "One JSON object (fields of pdsm.v1.Job)");
 
   auto list = std::make_shared<JobFlags>();
-  CLI::App* list_cmd = JobCommand(app, "list", "Jobs on the coordinator, newest first", list,
-                                  false);
+  CLI::App* list_cmd =
+      JobCommand(app, "list", "Jobs on the coordinator, newest first", list, false);
   list_cmd->add_flag("--json", list->json, "JSON output");
   list_cmd->add_option("--limit", list->limit, "At most this many jobs")
       ->check(CLI::Range(1, 10000));

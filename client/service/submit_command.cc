@@ -35,8 +35,8 @@ std::string RandomKey() {
 }
 
 // Replaces every mesh path by the SHA-256 of its asset blob; returns the blobs by hash.
-absl::StatusOr<std::map<std::string, std::string>> MeshesToAssets(
-    const std::string& scene_path, pdsm::v1::Scene* scene) {
+absl::StatusOr<std::map<std::string, std::string>> MeshesToAssets(const std::string& scene_path,
+                                                                  pdsm::v1::Scene* scene) {
   std::map<std::string, std::string> blobs;
   for (int i = 0; i < scene->meshes_size(); ++i) {
     pdsm::v1::Mesh* mesh = scene->mutable_meshes(i);
@@ -94,9 +94,10 @@ int RunSubmit(const SubmitFlags& flags) {
   // A scene file may not name assets itself: they are what this command makes of paths.
   for (int i = 0; i < scene->meshes_size(); ++i) {
     if (scene->meshes(i).source_case() == pdsm::v1::Mesh::kAssetSha256) {
-      return ReportError(absl::InvalidArgumentError(absl::StrCat(
-          flags.scene_path, ": meshes[", i, "].assetSha256: mesh assets are only accepted by "
-          "the coordinator; use path or inline")));
+      return ReportError(
+          absl::InvalidArgumentError(absl::StrCat(flags.scene_path, ": meshes[", i,
+                                                  "].assetSha256: mesh assets are only accepted by "
+                                                  "the coordinator; use path or inline")));
     }
   }
   absl::StatusOr<std::map<std::string, std::string>> blobs =
@@ -104,8 +105,7 @@ int RunSubmit(const SubmitFlags& flags) {
   if (!blobs.ok()) return ReportError(blobs.status());
   // Validate fully here, from the blobs just made (each mesh file is read once), so errors
   // name the scene file and field before anything is sent.
-  const MeshAssetResolver from_blobs = [&](const std::string& sha256,
-                                           const std::string& context) {
+  const MeshAssetResolver from_blobs = [&](const std::string& sha256, const std::string& context) {
     return DecodeMeshAsset(blobs->at(sha256), context);
   };
   absl::StatusOr<Scene> local =
@@ -118,16 +118,15 @@ int RunSubmit(const SubmitFlags& flags) {
     return ReportError(s);
   }
   pdsm::v1::SubmitBakeRequest request;
-  request.set_idempotency_key(flags.idempotency_key.empty() ? RandomKey()
-                                                            : flags.idempotency_key);
+  request.set_idempotency_key(flags.idempotency_key.empty() ? RandomKey() : flags.idempotency_key);
   request.set_priority(flags.priority);
   *request.mutable_scene() = *std::move(scene);
   pdsm::v1::Job job;
   grpc::Status status;
   // A lost reply is retried with the same key: the coordinator returns the job it made.
   for (int attempt = 0; attempt < 3; ++attempt) {
-    status = connection->stub->SubmitBake(connection->Call(std::chrono::minutes(5)).get(),
-                                          request, &job);
+    status = connection->stub->SubmitBake(connection->Call(std::chrono::minutes(5)).get(), request,
+                                          &job);
     if (status.error_code() != grpc::StatusCode::UNAVAILABLE) break;
   }
   if (!status.ok()) {

@@ -31,9 +31,9 @@ int RunWatch(const WatchFlags& flags) {
     any = true;
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    progress.Update(job.samples_done(), job.samples_total(), seconds,
-                    job.eta_seconds() >= 0 ? std::optional<double>(job.eta_seconds())
-                                           : std::nullopt);
+    progress.Update(
+        job.samples_done(), job.samples_total(), seconds,
+        job.eta_seconds() >= 0 ? std::optional<double>(job.eta_seconds()) : std::nullopt);
   }
   progress.Finish();
   if (grpc::Status s = reader->Finish(); !s.ok()) {
@@ -42,8 +42,8 @@ int RunWatch(const WatchFlags& flags) {
   if (!any) return ReportError(absl::UnavailableError("the watch ended without news"));
   std::printf("job %s: %s\n", job.job_id().c_str(), pdsm::v1::JobState_Name(job.state()).c_str());
   if (job.state() == pdsm::v1::SUCCEEDED) return kExitOk;
-  if (!job.error().empty()) std::fprintf(stderr, "pdsm: job %s: %s\n", job.job_id().c_str(),
-                                         job.error().c_str());
+  if (!job.error().empty())
+    std::fprintf(stderr, "pdsm: job %s: %s\n", job.job_id().c_str(), job.error().c_str());
   return kExitFailure;
 }
 

@@ -23,8 +23,7 @@ double SecondsSince(Clock::time_point start) {
 }
 
 // Texture units of shade.frag's samplers, and its SSBO bindings.
-constexpr int kUnitPdsmIndex = 0, kUnitCpuAttenuation = 1, kUnitShadowMap = 2,
-              kUnitShadowMaps = 3;
+constexpr int kUnitPdsmIndex = 0, kUnitCpuAttenuation = 1, kUnitShadowMap = 2, kUnitShadowMaps = 3;
 constexpr int kBindingPdsmVertices = 0, kBindingLightSamples = 1;
 constexpr float kBackgroundColour[4] = {0.11f, 0.12f, 0.14f, 1.0f};
 
@@ -63,8 +62,8 @@ MeshGpu UploadMesh(const gl::GlFunctions& gl, const DrawMesh& mesh, bool casts) 
   return gpu;
 }
 
-gl::Texture MakeTarget(const gl::GlFunctions& gl, GLint internal_format, GLenum format,
-                       GLenum type, int width, int height) {
+gl::Texture MakeTarget(const gl::GlFunctions& gl, GLint internal_format, GLenum format, GLenum type,
+                       int width, int height) {
   gl::Texture texture = gl::MakeTexture(gl);
   gl.BindTexture(GL_TEXTURE_2D, texture.name());
   gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
@@ -115,8 +114,8 @@ absl::StatusOr<std::unique_ptr<FrameRenderer>> FrameRenderer::Create(
   // 4.3 for the shader storage buffer of PDSM vertices, 4.5 for glClipControl (reversed depth).
   if (major < 4 || (major == 4 && minor < 5)) {
     return absl::UnavailableError(absl::StrCat(
-        "pdsm-view needs OpenGL 4.5 core (storage buffers, glClipControl); this context is ",
-        major, ".", minor));
+        "pdsm-view needs OpenGL 4.5 core (storage buffers, glClipControl); this context is ", major,
+        ".", minor));
   }
   std::unique_ptr<FrameRenderer> renderer(new FrameRenderer(gl, scene, settings));
   if (absl::Status s = renderer->Init(); !s.ok()) return s;
@@ -152,9 +151,8 @@ absl::Status FrameRenderer::Init() {
 
   const PdsmHeader& header = scene_->pdsm.header;
   const int sm_size = settings_.sm_size > 0 ? settings_.sm_size : header.shadow_map_resolution;
-  const int multi_size = settings_.multi_sm_size > 0
-                             ? settings_.multi_sm_size
-                             : std::min(header.shadow_map_resolution, 1024);
+  const int multi_size = settings_.multi_sm_size > 0 ? settings_.multi_sm_size
+                                                     : std::min(header.shadow_map_resolution, 1024);
   im.single_layout = MakeShadowMapLayout(header, sm_size, /*grow_for_samples=*/false);
   im.multi_layout = MakeShadowMapLayout(header, multi_size, /*grow_for_samples=*/true);
   const int count = settings_.sm_count > 0 ? settings_.sm_count : header.samples;
@@ -163,8 +161,8 @@ absl::Status FrameRenderer::Init() {
   if (samples_f.empty()) samples_f.emplace_back(0.0f);
   im.samples = gl::MakeBuffer(gl_);
   gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, im.samples.name());
-  gl_.BufferData(GL_SHADER_STORAGE_BUFFER, samples_f.size() * sizeof(glm::vec2),
-                 samples_f.data(), GL_STATIC_DRAW);
+  gl_.BufferData(GL_SHADER_STORAGE_BUFFER, samples_f.size() * sizeof(glm::vec2), samples_f.data(),
+                 GL_STATIC_DRAW);
   gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
 
   gl_.UseProgram(im.shade.name());
@@ -216,8 +214,8 @@ absl::Status FrameRenderer::EnsureTarget(int width, int height) {
   gl_.DrawBuffers(2, buffers);
   if (absl::Status s = check("frame"); !s.ok()) return s;
   gl_.BindFramebuffer(GL_FRAMEBUFFER, im.gbuffer_target.name());
-  gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
-                           im.positions.name(), 0);
+  gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, im.positions.name(),
+                           0);
   gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D,
                            im.depth_buffer.name(), 0);
   gl_.DrawBuffers(1, buffers);
@@ -307,9 +305,8 @@ absl::Status FrameRenderer::RenderCpuAttenuation(const glm::mat4& clip_from_ligh
   gl_.ReadBuffer(GL_COLOR_ATTACHMENT0);
   gl_.PixelStorei(GL_PACK_ALIGNMENT, 4);
   gl_.ReadPixels(0, 0, im.width, im.height, GL_RGBA, GL_FLOAT, gbuffer.data());
-  const std::vector<float> attenuation =
-      EvaluateAttenuationImage(scene_->pdsm, gbuffer, im.width, im.height, scene_->pending,
-                               kPending);
+  const std::vector<float> attenuation = EvaluateAttenuationImage(
+      scene_->pdsm, gbuffer, im.width, im.height, scene_->pending, kPending);
   gl_.BindTexture(GL_TEXTURE_2D, im.cpu_attenuation.name());
   gl_.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
   gl_.TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, im.width, im.height, GL_RED, GL_FLOAT,

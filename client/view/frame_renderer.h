@@ -23,11 +23,11 @@
 namespace pdsm::view {
 
 struct RenderSettings {
-  bool bilinear = true;     // PDSM: blend 4 pixels (thesis 4.2); off: nearest pixel
-  int sm_size = 0;          // hard/pcf/pcss/vsm map, texels per side; 0: the bake's
-  int sm_count = 0;         // multi-sm maps; 0: the bake's sample count
-  int multi_sm_size = 0;    // multi-sm texels per side; 0: the bake's, at most 1024
-  int filter_radius = 2;    // pcf and vsm kernel half-width, texels
+  bool bilinear = true;   // PDSM: blend 4 pixels (thesis 4.2); off: nearest pixel
+  int sm_size = 0;        // hard/pcf/pcss/vsm map, texels per side; 0: the bake's
+  int sm_count = 0;       // multi-sm maps; 0: the bake's sample count
+  int multi_sm_size = 0;  // multi-sm texels per side; 0: the bake's, at most 1024
+  int filter_radius = 2;  // pcf and vsm kernel half-width, texels
   float ambient = 0.15f;
 };
 
@@ -38,8 +38,8 @@ inline constexpr float kPending = -3.0f;      // pdsm: its PDSM pixels are not b
 
 struct Frame {
   int width = 0, height = 0;
-  std::vector<uint8_t> rgb;         // row 0 at the top
-  std::vector<float> attenuation;   // row 0 at the top
+  std::vector<uint8_t> rgb;        // row 0 at the top
+  std::vector<float> attenuation;  // row 0 at the top
 };
 
 struct FrameTimings {
@@ -71,7 +71,10 @@ class FrameRenderer {
   absl::Status ReplacePdsm();
 
   // The dynamic objects moved: shadow maps are re-rendered on the next frame that needs them.
-  void InvalidateShadowMaps() { layers_valid_ = false; single_valid_ = false; }
+  void InvalidateShadowMaps() {
+    layers_valid_ = false;
+    single_valid_ = false;
+  }
   RenderSettings& settings() { return settings_; }
   const PdsmGpu& pdsm_gpu() const;
   uint64_t shadow_map_bytes() const;

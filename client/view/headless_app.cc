@@ -27,8 +27,7 @@ absl::Status RunBenchmark(FrameRenderer& renderer, const ViewOptions& options,
   std::printf("size %dx%d, %d frames per mode (median ms)\n", options.width, options.height,
               options.bench_frames);
   std::printf("PDSM upload: %.1f ms, GPU bytes: index %.2f MiB + vertices %.2f MiB\n",
-              1e3 * gpu.upload_seconds, gpu.index_bytes / 1048576.0,
-              gpu.vertex_bytes / 1048576.0);
+              1e3 * gpu.upload_seconds, gpu.index_bytes / 1048576.0, gpu.vertex_bytes / 1048576.0);
   std::printf("| mode | frame ms (static light) | shadow maps ms (per update) | cpu eval ms |\n");
   std::printf("|---|---:|---:|---:|\n");
   for (ViewMode mode : modes) {
@@ -38,8 +37,7 @@ absl::Status RunBenchmark(FrameRenderer& renderer, const ViewOptions& options,
     std::vector<double> frame, maps, cpu;
     for (int i = 0; i < options.bench_frames; ++i) {
       renderer.InvalidateShadowMaps();
-      if (absl::Status s = renderer.Render(mode, camera, options.width, options.height);
-          !s.ok()) {
+      if (absl::Status s = renderer.Render(mode, camera, options.width, options.height); !s.ok()) {
         return s;
       }
       const FrameTimings& t = renderer.last_timings();

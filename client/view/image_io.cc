@@ -19,7 +19,8 @@ absl::Status WritePng(const std::string& path, const RgbImage& image, FileSystem
 }
 
 absl::StatusOr<RgbImage> ReadPng(const std::string& path) {
-  if (!std::filesystem::exists(path)) return absl::NotFoundError(absl::StrCat(path, ": no such file"));
+  if (!std::filesystem::exists(path))
+    return absl::NotFoundError(absl::StrCat(path, ": no such file"));
   png_image image;
   std::memset(&image, 0, sizeof(image));
   image.version = PNG_IMAGE_VERSION;

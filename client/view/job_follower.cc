@@ -33,7 +33,8 @@ PartialPdsm AssemblePartialPdsm(const BakePlan& plan, const std::map<int, PdsmTi
   for (size_t p = 0; p < pixels; ++p) {
     const PdsmTile* tile = tile_of[p];
     if (tile != nullptr) {
-      const int x = static_cast<int>(p % width) - tile->x0, y = static_cast<int>(p / width) - tile->y0;
+      const int x = static_cast<int>(p % width) - tile->x0,
+                y = static_cast<int>(p / width) - tile->y0;
       const std::span<const Vertex> f = tile->Function(x, y);
       out.image.vertices.insert(out.image.vertices.end(), f.begin(), f.end());
     }
@@ -87,17 +88,18 @@ absl::StatusOr<JobSnapshot> JobFollower::Poll() {
   }
   const pdsm::v1::Job& job = snapshot.job;
   const PdsmGeometry& g = plan_->header.geometry;
-  if (job.width() != g.width || job.height() != g.height || job.samples() != plan_->header.samples) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "--job ", job_id_, ": the job bakes ", job.width(), "x", job.height(), " x ",
-        job.samples(), " samples, the scene file plans ", g.width, "x", g.height, " x ",
-        plan_->header.samples, " (another scene?)"));
+  if (job.width() != g.width || job.height() != g.height ||
+      job.samples() != plan_->header.samples) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--job ", job_id_, ": the job bakes ", job.width(), "x", job.height(), " x ",
+                     job.samples(), " samples, the scene file plans ", g.width, "x", g.height,
+                     " x ", plan_->header.samples, " (another scene?)"));
   }
   if (finished_) return snapshot;
   if (job.state() == pdsm::v1::FAILED || job.state() == pdsm::v1::CANCELLED) {
-    return absl::FailedPreconditionError(absl::StrCat("--job ", job_id_, ": ",
-                                                      pdsm::v1::JobState_Name(job.state()),
-                                                      job.error().empty() ? "" : ": ", job.error()));
+    return absl::FailedPreconditionError(
+        absl::StrCat("--job ", job_id_, ": ", pdsm::v1::JobState_Name(job.state()),
+                     job.error().empty() ? "" : ": ", job.error()));
   }
   if (job.state() == pdsm::v1::SUCCEEDED) {
     // ReadPdsm reads files: a temporary one, removed at once.

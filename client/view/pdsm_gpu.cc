@@ -19,9 +19,8 @@ absl::StatusOr<PdsmGpu> UploadPdsm(const gl::GlFunctions& gl, const PdsmImage& p
   gl.GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture);
   gl.GetIntegerv(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
   if (width > max_texture || height > max_texture) {
-    return absl::ResourceExhaustedError(absl::StrCat("PDSM of ", width, "x", height,
-                                                     " exceeds GL_MAX_TEXTURE_SIZE ",
-                                                     max_texture));
+    return absl::ResourceExhaustedError(
+        absl::StrCat("PDSM of ", width, "x", height, " exceeds GL_MAX_TEXTURE_SIZE ", max_texture));
   }
   // The index holds 32-bit offsets; the block size is what one SSBO binding may address.
   const uint64_t vertex_bytes = vertex_count * 2 * sizeof(float);

@@ -20,8 +20,8 @@
 namespace pdsm::view {
 
 struct PdsmGpu {
-  gl::Texture index;     // RG32UI, PDSM width x height, row 0 at t_min
-  gl::Buffer vertices;   // SSBO: vec2 (z, A) per vertex, std430
+  gl::Texture index;    // RG32UI, PDSM width x height, row 0 at t_min
+  gl::Buffer vertices;  // SSBO: vec2 (z, A) per vertex, std430
   uint64_t index_bytes = 0;
   uint64_t vertex_bytes = 0;
   double upload_seconds = 0;  // CPU packing + GL upload, with glFinish

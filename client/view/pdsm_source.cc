@@ -25,8 +25,8 @@ absl::Status WaitForJob(const ServiceConnection& c, const ServiceFlags& service,
   while (reader->Read(&job)) {
     any = true;
     std::fprintf(stderr, "\rpdsm-view: job %s %s: %d/%d tiles, %.1f%%   ", job_id.c_str(),
-                 pdsm::v1::JobState_Name(job.state()).c_str(), job.tiles_done(),
-                 job.tiles_total(), 100.0 * job.progress());
+                 pdsm::v1::JobState_Name(job.state()).c_str(), job.tiles_done(), job.tiles_total(),
+                 100.0 * job.progress());
   }
   std::fprintf(stderr, "\n");
   if (grpc::Status s = reader->Finish(); !s.ok()) {
@@ -34,9 +34,9 @@ absl::Status WaitForJob(const ServiceConnection& c, const ServiceFlags& service,
   }
   if (!any) return absl::UnavailableError("watching job " + job_id + ": no news from the server");
   if (job.state() != pdsm::v1::SUCCEEDED) {
-    return absl::FailedPreconditionError(absl::StrCat(
-        "--job ", job_id, ": ", pdsm::v1::JobState_Name(job.state()),
-        job.error().empty() ? "" : ": ", job.error()));
+    return absl::FailedPreconditionError(
+        absl::StrCat("--job ", job_id, ": ", pdsm::v1::JobState_Name(job.state()),
+                     job.error().empty() ? "" : ": ", job.error()));
   }
   return absl::OkStatus();
 }

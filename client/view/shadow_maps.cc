@@ -20,9 +20,12 @@ ShadowClipRange ShadowClipRangeOf(const PdsmGeometry& g) {
 
 glm::dvec2 LightHalfExtent(const PdsmHeader& header) {
   switch (header.light_shape) {
-    case LightShape::kRect: return {header.light_half_width, header.light_half_height};
-    case LightShape::kDisk: return {header.light_radius, header.light_radius};
-    case LightShape::kSun: return {header.tan_half_angle, header.tan_half_angle};
+    case LightShape::kRect:
+      return {header.light_half_width, header.light_half_height};
+    case LightShape::kDisk:
+      return {header.light_radius, header.light_radius};
+    case LightShape::kSun:
+      return {header.tan_half_angle, header.tan_half_angle};
   }
   return {0, 0};
 }
@@ -112,8 +115,8 @@ absl::Status ShadowMapTargets::Bind(GLuint colour, int layer, int size) {
   return absl::OkStatus();
 }
 
-absl::Status ShadowMapTargets::RenderSingle(const PdsmHeader& header,
-                                            const ShadowMapLayout& layout, const DrawFn& draw) {
+absl::Status ShadowMapTargets::RenderSingle(const PdsmHeader& header, const ShadowMapLayout& layout,
+                                            const DrawFn& draw) {
   const gl::GlFunctions& gl = *gl_;
   if (single_size_ != layout.size) {
     single_ = gl::MakeTexture(gl);
@@ -131,8 +134,7 @@ absl::Status ShadowMapTargets::RenderSingle(const PdsmHeader& header,
   return gl::CheckGlError(gl, "rendering the shadow map");
 }
 
-absl::Status ShadowMapTargets::RenderLayers(const PdsmHeader& header,
-                                            const ShadowMapLayout& layout,
+absl::Status ShadowMapTargets::RenderLayers(const PdsmHeader& header, const ShadowMapLayout& layout,
                                             const std::vector<glm::dvec2>& samples,
                                             const DrawFn& draw) {
   const gl::GlFunctions& gl = *gl_;
@@ -141,18 +143,18 @@ absl::Status ShadowMapTargets::RenderLayers(const PdsmHeader& header,
   gl.GetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
   const uint64_t bytes = uint64_t{4} * layout.size * layout.size * count;
   if (count > max_layers || bytes > kMaxLayerBytes) {
-    return absl::ResourceExhaustedError(absl::StrCat(
-        "multi-sm: ", count, " shadow maps of ", layout.size, "^2 (", bytes >> 20,
-        " MiB; at most ", max_layers, " layers and ", kMaxLayerBytes >> 20,
-        " MiB here): lower --sm-count or --multi-sm-size"));
+    return absl::ResourceExhaustedError(
+        absl::StrCat("multi-sm: ", count, " shadow maps of ", layout.size, "^2 (", bytes >> 20,
+                     " MiB; at most ", max_layers, " layers and ", kMaxLayerBytes >> 20,
+                     " MiB here): lower --sm-count or --multi-sm-size"));
   }
   if (layers_size_ != layout.size || layer_count_ != count) {
     layers_ = gl::MakeTexture(gl);
     gl.BindTexture(GL_TEXTURE_2D_ARRAY, layers_.name());
     gl.TexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     gl.TexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    gl.TexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_R32F, layout.size, layout.size, std::max(count, 1),
-                  0, GL_RED, GL_FLOAT, nullptr);
+    gl.TexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_R32F, layout.size, layout.size, std::max(count, 1), 0,
+                  GL_RED, GL_FLOAT, nullptr);
     layers_size_ = layout.size;
     layer_count_ = count;
     bytes_layers_ = bytes;

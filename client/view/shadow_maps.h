@@ -76,11 +76,11 @@ class ShadowMapTargets {
 
   const gl::GlFunctions* gl_;
   gl::Framebuffer framebuffer_;
-  gl::Texture depth_;          // DEPTH_COMPONENT32F, reversed
+  gl::Texture depth_;  // DEPTH_COMPONENT32F, reversed
   int depth_size_ = 0;
-  gl::Texture single_;         // RG32F
+  gl::Texture single_;  // RG32F
   int single_size_ = 0;
-  gl::Texture layers_;         // R32F array
+  gl::Texture layers_;  // R32F array
   int layers_size_ = 0, layer_count_ = 0;
   uint64_t bytes_single_ = 0, bytes_layers_ = 0;
 };

@@ -49,8 +49,8 @@ absl::Status StartFromPlan(const ViewOptions& options, ViewScene* view) {
     if (!snapshot.ok()) return snapshot.status();
     if (snapshot->pdsm) partial = *std::move(snapshot->pdsm);
     std::fprintf(stderr, "pdsm-view: job %s %s: %d/%d tiles\n", options.job_id.c_str(),
-                 pdsm::v1::JobState_Name(snapshot->job.state()).c_str(),
-                 snapshot->job.tiles_done(), snapshot->job.tiles_total());
+                 pdsm::v1::JobState_Name(snapshot->job.state()).c_str(), snapshot->job.tiles_done(),
+                 snapshot->job.tiles_total());
   }
   view->pdsm = std::move(partial.image);
   view->pending = std::move(partial.pending);
@@ -135,7 +135,8 @@ int RunViewer(int argc, char** argv) {
   }
   // Logs (warnings, GL details) go to stderr: stdout carries the tile order and file names.
   spdlog::set_default_logger(spdlog::stderr_color_mt("pdsm-view"));
-  spdlog::set_level(options->verbose ? spdlog::level::debug : spdlog::level::warn);  // -v: GL details
+  spdlog::set_level(options->verbose ? spdlog::level::debug
+                                     : spdlog::level::warn);  // -v: GL details
   absl::StatusOr<ViewScene> scene = LoadViewScene(*options);
   absl::Status status = scene.status();
   if (status.ok()) {

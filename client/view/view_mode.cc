@@ -7,13 +7,20 @@ namespace pdsm::view {
 
 const char* ModeName(ViewMode mode) {
   switch (mode) {
-    case ViewMode::kPdsm: return "pdsm";
-    case ViewMode::kCpu: return "cpu";
-    case ViewMode::kHard: return "hard";
-    case ViewMode::kPcf: return "pcf";
-    case ViewMode::kPcss: return "pcss";
-    case ViewMode::kVsm: return "vsm";
-    case ViewMode::kMultiSm: return "multi-sm";
+    case ViewMode::kPdsm:
+      return "pdsm";
+    case ViewMode::kCpu:
+      return "cpu";
+    case ViewMode::kHard:
+      return "hard";
+    case ViewMode::kPcf:
+      return "pcf";
+    case ViewMode::kPcss:
+      return "pcss";
+    case ViewMode::kVsm:
+      return "vsm";
+    case ViewMode::kMultiSm:
+      return "multi-sm";
   }
   return "?";
 }
@@ -26,7 +33,7 @@ std::optional<ViewMode> ModeFromName(const std::string& name) {
 }
 
 absl::StatusOr<std::vector<ViewMode>> ParseModeList(const std::string& list,
-                                                     const std::string& flag) {
+                                                    const std::string& flag) {
   std::vector<ViewMode> modes;
   for (absl::string_view part : absl::StrSplit(list, ',')) {
     std::optional<ViewMode> mode = ModeFromName(std::string(part));

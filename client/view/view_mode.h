@@ -14,8 +14,8 @@ namespace pdsm::view {
 // The numbers are the `mode` uniform of shaders/view/shade.frag.
 enum class ViewMode { kPdsm = 0, kCpu = 1, kHard = 2, kPcf = 3, kPcss = 4, kVsm = 5, kMultiSm = 6 };
 
-inline constexpr ViewMode kAllModes[] = {ViewMode::kPdsm, ViewMode::kCpu,  ViewMode::kHard,
-                                         ViewMode::kPcf,  ViewMode::kPcss, ViewMode::kVsm,
+inline constexpr ViewMode kAllModes[] = {ViewMode::kPdsm,   ViewMode::kCpu,  ViewMode::kHard,
+                                         ViewMode::kPcf,    ViewMode::kPcss, ViewMode::kVsm,
                                          ViewMode::kMultiSm};
 
 // "pdsm", "cpu", "hard", "pcf", "pcss", "vsm", "multi-sm".
@@ -24,7 +24,7 @@ std::optional<ViewMode> ModeFromName(const std::string& name);
 
 // A comma-separated list ("pdsm,cpu,hard"); INVALID_ARGUMENT naming `flag` and the bad entry.
 absl::StatusOr<std::vector<ViewMode>> ParseModeList(const std::string& list,
-                                                     const std::string& flag);
+                                                    const std::string& flag);
 
 // Modes that need shadow maps rendered from the light.
 inline bool UsesShadowMap(ViewMode mode) {

@@ -16,9 +16,8 @@ absl::StatusOr<std::vector<double>> ParseNumbers(const std::string& text, size_t
   absl::StatusOr<std::vector<double>> numbers = ParseFlagNumbers(text, flag);
   if (!numbers.ok()) return numbers.status();
   if (numbers->size() != count) {
-    return absl::InvalidArgumentError(
-        absl::StrCat(flag, ": expected ", count, " comma-separated numbers, got ",
-                     numbers->size()));
+    return absl::InvalidArgumentError(absl::StrCat(
+        flag, ": expected ", count, " comma-separated numbers, got ", numbers->size()));
   }
   return numbers;
 }
@@ -87,7 +86,8 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
       ->default_val(mode);
   app.add_option("--compare", compare, "Comma-separated modes tiled side by side");
   app.add_option("--compare-columns", o.compare_columns, "Tiles per row in --compare");
-  app.add_option("--camera", camera, "EX,EY,EZ,TX,TY,TZ[,FOV_DEG] (world); default frames the scene");
+  app.add_option("--camera", camera,
+                 "EX,EY,EZ,TX,TY,TZ[,FOV_DEG] (world); default frames the scene");
   app.add_flag("--no-bilinear", no_bilinear, "PDSM: nearest pixel instead of 4-pixel blend");
   app.add_option("--sm-size", o.render.sm_size, "hard/pcf/pcss/vsm map size (default: bake's)");
   app.add_option("--sm-count", o.render.sm_count, "multi-sm maps (default: bake's samples)");
@@ -100,7 +100,8 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
   app.add_option("--object-transform", transforms,
                  "16 numbers, row-major world_from_object of the matching --object");
   app.add_option("--frames", o.frames, "Window: render N frames, write --screenshot, exit");
-  app.add_option("--bench", o.bench_frames, "Headless: time N frames of each mode (--compare or all)");
+  app.add_option("--bench", o.bench_frames,
+                 "Headless: time N frames of each mode (--compare or all)");
   app.add_flag("--partial", o.partial,
                "--job, headless: render the tiles finished so far instead of waiting");
   app.add_flag("--allow-mismatch", o.allow_mismatch,
@@ -117,8 +118,8 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
   const std::vector<std::string> wh = absl::StrSplit(size, 'x');
   if (wh.size() != 2 || !absl::SimpleAtoi(wh[0], &o.width) || !absl::SimpleAtoi(wh[1], &o.height) ||
       o.width < 1 || o.height < 1 || o.width > 16384 || o.height > 16384) {
-    return absl::InvalidArgumentError(absl::StrCat("--size: expected WxH (1..16384), got \"",
-                                                   size, "\""));
+    return absl::InvalidArgumentError(
+        absl::StrCat("--size: expected WxH (1..16384), got \"", size, "\""));
   }
   absl::StatusOr<std::vector<ViewMode>> modes = ParseModeList(mode, "--mode");
   if (!modes.ok()) return modes.status();
@@ -134,7 +135,8 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
     if (!c.ok()) return c.status();
     o.camera = *c;
   }
-  absl::StatusOr<std::vector<DynamicObjectSpec>> objects = ParseObjects(spheres, meshes, transforms);
+  absl::StatusOr<std::vector<DynamicObjectSpec>> objects =
+      ParseObjects(spheres, meshes, transforms);
   if (!objects.ok()) return objects.status();
   o.objects = *objects;
   if (o.pdsm_path.empty() == o.job_id.empty()) {
@@ -144,11 +146,11 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
     return absl::InvalidArgumentError("--job needs --server ADDR (or $PDSM_SERVER)");
   }
   if (o.partial && (o.job_id.empty() || !o.headless)) {
-    return absl::InvalidArgumentError("--partial needs --headless and --job (a window always shows tiles as they finish)");
+    return absl::InvalidArgumentError(
+        "--partial needs --headless and --job (a window always shows tiles as they finish)");
   }
   if (!o.headless && (!o.compare.empty() || o.bench_frames > 0 || !o.attenuation_path.empty())) {
-    return absl::InvalidArgumentError(
-        "--compare, --bench and --save-attenuation need --headless");
+    return absl::InvalidArgumentError("--compare, --bench and --save-attenuation need --headless");
   }
   if (!o.compare.empty() && !o.attenuation_path.empty()) {
     return absl::InvalidArgumentError("--save-attenuation: needs one mode, not --compare");

@@ -24,23 +24,23 @@ struct DynamicObjectSpec {
 
 struct ViewOptions {
   std::string scene_path;
-  std::string pdsm_path;        // --pdsm, or:
-  ServiceFlags service;         // --server, --token-file, --tls-ca
-  std::string job_id;           // --job
+  std::string pdsm_path;  // --pdsm, or:
+  ServiceFlags service;   // --server, --token-file, --tls-ca
+  std::string job_id;     // --job
   bool headless = false;
   int width = 1280, height = 720;
-  std::string screenshot_path;  // --screenshot
-  std::string attenuation_path; // --save-attenuation (PFM)
+  std::string screenshot_path;   // --screenshot
+  std::string attenuation_path;  // --save-attenuation (PFM)
   ViewMode mode = ViewMode::kPdsm;
   std::vector<ViewMode> compare;  // --compare: tiles these modes into the screenshot
   int compare_columns = 0;        // 0: all in one row up to 4, then rows of 4
   std::optional<Camera> camera;
   RenderSettings render;
   std::vector<DynamicObjectSpec> objects;
-  int frames = 0;               // window: render this many frames, screenshot, exit
-  int bench_frames = 0;         // headless: time this many frames of each mode
+  int frames = 0;        // window: render this many frames, screenshot, exit
+  int bench_frames = 0;  // headless: time this many frames of each mode
   bool allow_mismatch = false;
-  bool partial = false;         // --server, headless: the tiles finished now, no waiting
+  bool partial = false;  // --server, headless: the tiles finished now, no waiting
   bool verbose = false;
 };
 

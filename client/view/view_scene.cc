@@ -30,8 +30,7 @@ bool NearVec(const glm::dvec3& a, const glm::dvec3& b, double scale) {
 
 std::string Vec(const glm::dvec3& v) { return absl::StrFormat("(%g, %g, %g)", v.x, v.y, v.z); }
 
-void AppendTriangle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
-                    DrawMesh* mesh) {
+void AppendTriangle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, DrawMesh* mesh) {
   glm::dvec3 normal = glm::cross(b - a, c - a);
   const double length = glm::length(normal);
   normal = length > 0 ? normal / length : glm::dvec3(0, 0, 1);
@@ -66,8 +65,8 @@ absl::Status CheckPdsmMatchesScene(const Scene& scene, const PdsmHeader& header,
         " (was this PDSM baked from this scene? --allow-mismatch shows it anyway)"));
   };
   if (header.scene_name != scene.name) {
-    return mismatch("scene_name", absl::StrCat("\"", header.scene_name, "\" vs \"", scene.name,
-                                               "\""));
+    return mismatch("scene_name",
+                    absl::StrCat("\"", header.scene_name, "\" vs \"", scene.name, "\""));
   }
   const LightSpec& light = scene.light;
   if (header.light_shape != light.shape) {
@@ -80,8 +79,8 @@ absl::Status CheckPdsmMatchesScene(const Scene& scene, const PdsmHeader& header,
   }
   if (light.shape == LightShape::kSun) {
     if (!Near(header.tan_half_angle, light.tan_half_angle, 1.0)) {
-      return mismatch("tan_half_angle", absl::StrCat(header.tan_half_angle, " vs ",
-                                                     light.tan_half_angle));
+      return mismatch("tan_half_angle",
+                      absl::StrCat(header.tan_half_angle, " vs ", light.tan_half_angle));
     }
     return absl::OkStatus();
   }
@@ -95,8 +94,7 @@ absl::Status CheckPdsmMatchesScene(const Scene& scene, const PdsmHeader& header,
     return mismatch("light size",
                     absl::StrCat("half extents ", header.light_half_width, " x ",
                                  header.light_half_height, " r ", header.light_radius, " vs ",
-                                 light.half_width, " x ", light.half_height, " r ",
-                                 light.radius));
+                                 light.half_width, " x ", light.half_height, " r ", light.radius));
   }
   return absl::OkStatus();
 }
@@ -116,8 +114,7 @@ std::vector<DrawMesh> BuildBakedMeshes(const Scene& scene, const LightFrame& fra
     for (size_t i = 0; i + 2 < source.indices.size(); i += 3) {
       AppendTriangle(frame.LightFromWorld(source.positions_world[source.indices[i]]),
                      frame.LightFromWorld(source.positions_world[source.indices[i + 1]]),
-                     frame.LightFromWorld(source.positions_world[source.indices[i + 2]]),
-                     &mesh);
+                     frame.LightFromWorld(source.positions_world[source.indices[i + 2]]), &mesh);
     }
     meshes.push_back(std::move(mesh));
   }

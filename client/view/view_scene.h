@@ -31,16 +31,16 @@ struct DrawMesh {
 
 // A mesh placed by a transform the viewer may change every frame (arrow keys).
 struct DynamicObject {
-  DrawMesh mesh;                     // object space
+  DrawMesh mesh;  // object space
   glm::dmat4 world_from_object{1.0};
 };
 
 struct ViewScene {
   Scene scene;
   PdsmImage pdsm;
-  std::vector<uint8_t> pending;     // per PDSM pixel: not baked yet (--server, job running)
+  std::vector<uint8_t> pending;          // per PDSM pixel: not baked yet (--server, job running)
   std::shared_ptr<const BakePlan> plan;  // the scene's plan, when following a running job
-  std::vector<DrawMesh> baked;       // light space: the scene file's meshes
+  std::vector<DrawMesh> baked;           // light space: the scene file's meshes
   std::vector<DynamicObject> dynamic_objects;
   glm::dvec3 bounds_min_world{0.0};  // of the baked meshes
   glm::dvec3 bounds_max_world{0.0};

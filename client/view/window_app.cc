@@ -74,20 +74,42 @@ void OnKey(GLFWwindow* window, int key, int, int action, int) {
   const glm::dvec3 right = glm::cross(forward, glm::dvec3(0, 1, 0));
   if (key >= GLFW_KEY_1 && key <= GLFW_KEY_7) s.mode = kAllModes[key - GLFW_KEY_1];
   switch (key) {
-    case GLFW_KEY_ESCAPE: case GLFW_KEY_Q: glfwSetWindowShouldClose(window, GLFW_TRUE); break;
+    case GLFW_KEY_ESCAPE:
+    case GLFW_KEY_Q:
+      glfwSetWindowShouldClose(window, GLFW_TRUE);
+      break;
     case GLFW_KEY_B:
       s.renderer->settings().bilinear = !s.renderer->settings().bilinear;
       break;
-    case GLFW_KEY_UP: MoveObjects(s, s.step * forward); break;
-    case GLFW_KEY_DOWN: MoveObjects(s, -s.step * forward); break;
-    case GLFW_KEY_RIGHT: MoveObjects(s, s.step * right); break;
-    case GLFW_KEY_LEFT: MoveObjects(s, -s.step * right); break;
-    case GLFW_KEY_PAGE_UP: MoveObjects(s, glm::dvec3(0, s.step, 0)); break;
-    case GLFW_KEY_PAGE_DOWN: MoveObjects(s, glm::dvec3(0, -s.step, 0)); break;
-    case GLFW_KEY_R: s.camera = s.home; break;
-    case GLFW_KEY_C: std::printf("--camera %s\n", FormatCamera(s.camera).c_str()); break;
-    case GLFW_KEY_P: s.screenshot_requested = true; break;
-    default: break;
+    case GLFW_KEY_UP:
+      MoveObjects(s, s.step * forward);
+      break;
+    case GLFW_KEY_DOWN:
+      MoveObjects(s, -s.step * forward);
+      break;
+    case GLFW_KEY_RIGHT:
+      MoveObjects(s, s.step * right);
+      break;
+    case GLFW_KEY_LEFT:
+      MoveObjects(s, -s.step * right);
+      break;
+    case GLFW_KEY_PAGE_UP:
+      MoveObjects(s, glm::dvec3(0, s.step, 0));
+      break;
+    case GLFW_KEY_PAGE_DOWN:
+      MoveObjects(s, glm::dvec3(0, -s.step, 0));
+      break;
+    case GLFW_KEY_R:
+      s.camera = s.home;
+      break;
+    case GLFW_KEY_C:
+      std::printf("--camera %s\n", FormatCamera(s.camera).c_str());
+      break;
+    case GLFW_KEY_P:
+      s.screenshot_requested = true;
+      break;
+    default:
+      break;
   }
 }
 
@@ -210,19 +232,18 @@ absl::Status RunWindow(const ViewOptions& options, ViewScene& scene) {
       (*renderer)->BlitToScreen(width, height);
       const FrameTimings& t = (*renderer)->last_timings();
       const std::string job_line =
-          follower == nullptr ? ""
-                              : absl::StrFormat("  job %s: %d/%d tiles", 
-                                                pdsm::v1::JobState_Name(job.state()),
-                                                job.tiles_done(), job.tiles_total());
-      glfwSetWindowTitle(window->get(),
-                         absl::StrFormat("pdsm-view: %s%s  %.1f ms%s  [1-7 mode, B bilinear, "
-                                         "arrows/PgUp/PgDn move, P screenshot]",
-                                         ModeName(state.mode),
-                                         (*renderer)->settings().bilinear ? "" : " (nearest)",
-                                         1e3 * (t.shade_seconds + t.cpu_seconds +
-                                                t.shadow_map_seconds),
-                                         job_line)
-                             .c_str());
+          follower == nullptr
+              ? ""
+              : absl::StrFormat("  job %s: %d/%d tiles", pdsm::v1::JobState_Name(job.state()),
+                                job.tiles_done(), job.tiles_total());
+      glfwSetWindowTitle(
+          window->get(),
+          absl::StrFormat("pdsm-view: %s%s  %.1f ms%s  [1-7 mode, B bilinear, "
+                          "arrows/PgUp/PgDn move, P screenshot]",
+                          ModeName(state.mode),
+                          (*renderer)->settings().bilinear ? "" : " (nearest)",
+                          1e3 * (t.shade_seconds + t.cpu_seconds + t.shadow_map_seconds), job_line)
+              .c_str());
     }
     if (state.screenshot_requested) {
       state.screenshot_requested = false;
@@ -231,7 +252,8 @@ absl::Status RunWindow(const ViewOptions& options, ViewScene& scene) {
     }
     glfwSwapBuffers(window->get());
     if (options.frames > 0 && frame + 1 >= options.frames) {
-      if (!options.screenshot_path.empty()) status = SaveScreenshot(**renderer, options.screenshot_path);
+      if (!options.screenshot_path.empty())
+        status = SaveScreenshot(**renderer, options.screenshot_path);
       break;
     }
     glfwPollEvents();

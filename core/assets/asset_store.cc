@@ -50,7 +50,7 @@ absl::StatusOr<std::string> ReadAll(int fd, size_t size, const std::string& path
 }  // namespace
 
 absl::StatusOr<std::unique_ptr<AssetStore>> AssetStore::Open(const std::string& dir,
-                                                              FileSystem* fs) {
+                                                             FileSystem* fs) {
   if (dir.empty()) return absl::InvalidArgumentError("asset store: the folder name is empty");
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);

@@ -24,7 +24,6 @@ constexpr size_t kHeaderBytes = sizeof(kMagic) + 4 + 8 + 8;
 constexpr size_t kVertexBytes = 3 * 8;  // float64 x, y, z
 constexpr size_t kIndexBytes = 4;       // uint32
 
-
 // The JSON spellings of the non-finite values, as in scene messages.
 std::string FormatDouble(double x) {
   if (std::isnan(x)) return "NaN";

@@ -66,9 +66,9 @@ bool JudgeAdaptiveStage(const PdsmHeader& header, const std::vector<SampleRange>
   if (!done) {
     const PdsmGeometry& g = header.geometry;
     TileEvents first = MergeTileEvents(*earlier);
-    done = SplitHalfError(first, n1, last, n2,
-                          kAdaptiveSurfaceDepthFraction * (g.z_far - g.z_near)) <=
-           header.adaptive_tolerance;
+    done =
+        SplitHalfError(first, n1, last, n2, kAdaptiveSurfaceDepthFraction * (g.z_far - g.z_near)) <=
+        header.adaptive_tolerance;
     earlier->clear();
     earlier->push_back(std::move(first));
   }

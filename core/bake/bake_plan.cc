@@ -48,8 +48,7 @@ int ClipTriangleNear(const glm::dvec3 tri[3], double z_min, glm::dvec3 out[4]) {
 void FitTriangle(const glm::dvec3 tri[3], bool casts, bool receives, Projection projection,
                  double z_min, WindowFit* fit) {
   glm::dvec3 clipped[4];
-  const int n = projection == Projection::kPerspective ? ClipTriangleNear(tri, z_min, clipped)
-                                                      : 3;
+  const int n = projection == Projection::kPerspective ? ClipTriangleNear(tri, z_min, clipped) : 3;
   if (projection == Projection::kOrthographic) std::copy(tri, tri + 3, clipped);
   for (int k = 0; k < n; ++k) {
     const glm::dvec3& p = clipped[k];
@@ -198,8 +197,8 @@ void SetWindow(const WindowFit& fit, PdsmGeometry* g) {
 // The global shadow-map lattice: square texels, shadowMapResolution across the window.
 void SetLattice(const Scene& scene, BakePlan* plan) {
   const PdsmGeometry& g = plan->header.geometry;
-  const double texel_pitch = std::max(g.s_max - g.s_min, g.t_max - g.t_min) /
-                             scene.bake.shadow_map_resolution;
+  const double texel_pitch =
+      std::max(g.s_max - g.s_min, g.t_max - g.t_min) / scene.bake.shadow_map_resolution;
   plan->lattice = ShadowMapLattice{g.s_min, g.t_min, texel_pitch, texel_pitch};
 }
 
@@ -211,8 +210,8 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
   BakePlan plan;
   FillHeader(scene, &plan);
   PdsmGeometry& g = plan.header.geometry;
-  g.projection = scene.light.shape == LightShape::kSun ? Projection::kOrthographic
-                                                       : Projection::kPerspective;
+  g.projection =
+      scene.light.shape == LightShape::kSun ? Projection::kOrthographic : Projection::kPerspective;
   g.frame = g.projection == Projection::kOrthographic ? SunFrame(scene) : scene.light.frame;
   g.width = scene.bake.width;
   g.height = scene.bake.height;
@@ -236,9 +235,9 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
     g.z_near = f.z_near;
     g.z_far = f.z_far;
     if (g.projection == Projection::kPerspective && !(f.z_near > 0)) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "%s: bake.frustum.depthRange[0]: must be > 0 for a %s light (got %g)",
-          scene.source_path, "rect or disk", f.z_near));
+      return absl::InvalidArgumentError(
+          absl::StrFormat("%s: bake.frustum.depthRange[0]: must be > 0 for a %s light (got %g)",
+                          scene.source_path, "rect or disk", f.z_near));
     }
   } else if (fit.empty()) {
     g.s_min = g.t_min = -1;
@@ -259,8 +258,8 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
   plan.z_clip_far = g.z_far + 1e-3 * std::max(g.z_far - g.z_near, 1e-9);
 
   SetLattice(scene, &plan);
-  plan.samples = GenerateLightSamples(scene.light, scene.bake.samples, scene.bake.sampling,
-                                      scene.bake.seed);
+  plan.samples =
+      GenerateLightSamples(scene.light, scene.bake.samples, scene.bake.sampling, scene.bake.seed);
   MakeTiles(&plan);
   plan.z_scan_floor = ScanFloor(plan, fit.z_near_receivers);
   if (!scene.bake.frustum && plan.z_scan_floor > g.z_near) {

@@ -34,12 +34,12 @@ struct BakePlan {
   PdsmHeader header;                // geometry and knobs, as the file will store them
   std::vector<glm::dvec2> samples;  // see core/sampling/light_samples.h
   ShadowMapLattice lattice;
-  double z_clip_near = 0;           // shadow maps clip geometry nearer than this
-  double z_clip_far = 0;            // sun shadow maps clip geometry farther than this
+  double z_clip_near = 0;  // shadow maps clip geometry nearer than this
+  double z_clip_far = 0;   // sun shadow maps clip geometry farther than this
   // Perspective rays are scanned from no nearer than this (ScanFloor in bake_plan.cc: where a
   // tile's shadow map reaches kShadowMapTexelBudget, or a ray kMaxRayTexels); 0 for the sun.
   double z_scan_floor = 0;
-  std::vector<TileRect> tiles;      // row-major grid of header.tile_size
+  std::vector<TileRect> tiles;  // row-major grid of header.tile_size
   int tiles_x = 0, tiles_y = 0;
   LightSpaceMesh casters;
   LightSpaceMesh receivers;

@@ -86,8 +86,8 @@ bool Overlaps(const ProjectedTriangle& tri, const glm::dvec2& centre, const glm:
 // Perspective: 1/z is affine in (s, t) on a plane, so its extremes are at the corners while it
 // keeps one sign; orthographic: z itself is affine. Otherwise (a plane seen edge-on from the
 // light, or crossing it) the triangle's whole range.
-DepthWindow DepthOver(const PdsmGeometry& g, const ProjectedTriangle& tri,
-                      const glm::dvec2& centre, const glm::dvec2& half) {
+DepthWindow DepthOver(const PdsmGeometry& g, const ProjectedTriangle& tri, const glm::dvec2& centre,
+                      const glm::dvec2& half) {
   DepthWindow w{kInf, -kInf};
   const double tiny = 1e-12 * glm::length(tri.normal) * (1.0 + std::abs(tri.z_max));
   for (int corner = 0; corner < 4; ++corner) {
@@ -117,10 +117,9 @@ void MergeWindows(double abs_pad, std::vector<DepthWindow>* windows) {
     w.lo -= kWindowRelativePad * std::abs(w.lo) + abs_pad;
     w.hi += kWindowRelativePad * std::abs(w.hi) + abs_pad;
   }
-  std::sort(windows->begin(), windows->end(),
-            [](const DepthWindow& a, const DepthWindow& b) {
-              return a.lo < b.lo || (a.lo == b.lo && a.hi < b.hi);
-            });
+  std::sort(windows->begin(), windows->end(), [](const DepthWindow& a, const DepthWindow& b) {
+    return a.lo < b.lo || (a.lo == b.lo && a.hi < b.hi);
+  });
   size_t out = 0;
   for (size_t k = 0; k < windows->size(); ++k) {
     if (out > 0 && (*windows)[k].lo <= (*windows)[out - 1].hi) {
@@ -148,10 +147,12 @@ TileWindows ComputeReceiverWindows(const BakePlan& plan, const TileRect& tile) {
     ProjectedTriangle projected;
     if (!Project(g, tri, z_min_perspective, &projected)) continue;
     // Pixels whose support [centre - pitch, centre + pitch] meets the triangle's bounds.
-    const int i_lo = std::max(tile.x0, PixelIndex(std::ceil((projected.lo.x - g.s_min) / pitch.x - 1.5)));
+    const int i_lo =
+        std::max(tile.x0, PixelIndex(std::ceil((projected.lo.x - g.s_min) / pitch.x - 1.5)));
     const int i_hi = std::min(tile.x0 + tile.width - 1,
                               PixelIndex(std::floor((projected.hi.x - g.s_min) / pitch.x + 0.5)));
-    const int j_lo = std::max(tile.y0, PixelIndex(std::ceil((projected.lo.y - g.t_min) / pitch.y - 1.5)));
+    const int j_lo =
+        std::max(tile.y0, PixelIndex(std::ceil((projected.lo.y - g.t_min) / pitch.y - 1.5)));
     const int j_hi = std::min(tile.y0 + tile.height - 1,
                               PixelIndex(std::floor((projected.hi.y - g.t_min) / pitch.y + 0.5)));
     for (int j = j_lo; j <= j_hi; ++j) {

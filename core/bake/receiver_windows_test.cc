@@ -54,7 +54,8 @@ TEST_P(ReceiverWindowsTest, EveryReceiverPointIsInsideItsFourPixelsWindows) {
   ASSERT_TRUE(plan.ok()) << plan.status();
   const PdsmGeometry& g = plan->geometry();
   std::map<int, TileWindows> windows;
-  for (const TileRect& tile : plan->tiles) windows.emplace(tile.index, ComputeReceiverWindows(*plan, tile));
+  for (const TileRect& tile : plan->tiles)
+    windows.emplace(tile.index, ComputeReceiverWindows(*plan, tile));
 
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -64,11 +65,11 @@ TEST_P(ReceiverWindowsTest, EveryReceiverPointIsInsideItsFourPixelsWindows) {
       for (int trial = 0; trial < 400; ++trial) {
         double u = unit(rng), v = unit(rng);
         if (u + v > 1) u = 1 - u, v = 1 - v;
-        const glm::dvec3 p = mesh.positions_world[mesh.indices[k]] +
-                             u * (mesh.positions_world[mesh.indices[k + 1]] -
-                                  mesh.positions_world[mesh.indices[k]]) +
-                             v * (mesh.positions_world[mesh.indices[k + 2]] -
-                                  mesh.positions_world[mesh.indices[k]]);
+        const glm::dvec3 p =
+            mesh.positions_world[mesh.indices[k]] +
+            u * (mesh.positions_world[mesh.indices[k + 1]] -
+                 mesh.positions_world[mesh.indices[k]]) +
+            v * (mesh.positions_world[mesh.indices[k + 2]] - mesh.positions_world[mesh.indices[k]]);
         const std::optional<PdsmPoint> at = g.Locate(p);
         if (!at) continue;
         // The pixels BilinearAttenuation reads (clamped at the border).
@@ -80,15 +81,16 @@ TEST_P(ReceiverWindowsTest, EveryReceiverPointIsInsideItsFourPixelsWindows) {
             const int y = std::clamp(fy + dy, 0, g.height - 1);
             const int tile_index = (y / 16) * plan->tiles_x + x / 16;
             const TileWindows& tw = windows.at(tile_index);
-            const size_t pixel = static_cast<size_t>(y - tw.rect.y0) * tw.rect.width + (x - tw.rect.x0);
+            const size_t pixel =
+                static_cast<size_t>(y - tw.rect.y0) * tw.rect.width + (x - tw.rect.x0);
             bool inside = false;
             for (const DepthWindow& w : tw.Pixel(pixel)) inside |= w.lo <= at->z && at->z <= w.hi;
             std::string listed;
             for (const DepthWindow& w : tw.Pixel(pixel)) {
               listed += " [" + std::to_string(w.lo) + ", " + std::to_string(w.hi) + "]";
             }
-            ASSERT_TRUE(inside) << "point " << p.x << "," << p.y << "," << p.z << " depth "
-                                << at->z << " at pixel coords " << at->px << "," << at->py
+            ASSERT_TRUE(inside) << "point " << p.x << "," << p.y << "," << p.z << " depth " << at->z
+                                << " at pixel coords " << at->px << "," << at->py
                                 << " not in a window of pixel " << x << "," << y << ":" << listed;
             ++checked;
           }

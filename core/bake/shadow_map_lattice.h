@@ -13,8 +13,12 @@ struct ShadowMapLattice {
   double s_origin = 0, t_origin = 0;
   double pitch_s = 1, pitch_t = 1;
 
-  int64_t TexelS(double s) const { return static_cast<int64_t>(std::floor((s - s_origin) / pitch_s)); }
-  int64_t TexelT(double t) const { return static_cast<int64_t>(std::floor((t - t_origin) / pitch_t)); }
+  int64_t TexelS(double s) const {
+    return static_cast<int64_t>(std::floor((s - s_origin) / pitch_s));
+  }
+  int64_t TexelT(double t) const {
+    return static_cast<int64_t>(std::floor((t - t_origin) / pitch_t));
+  }
   double EdgeS(int64_t k) const { return s_origin + static_cast<double>(k) * pitch_s; }
   double EdgeT(int64_t l) const { return t_origin + static_cast<double>(l) * pitch_t; }
 };

@@ -8,16 +8,15 @@ namespace pdsm {
 
 std::vector<Vertex> SurfaceFunction(std::span<const Event> events,
                                     std::span<const DepthWindow> windows, int total_samples,
-                                    double epsilon, CompressionMetric metric,
-                                    double depth_scale) {
+                                    double epsilon, CompressionMetric metric, double depth_scale) {
   if (events.empty()) return {};
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   std::vector<Vertex> out = {Vertex{kUndefinedFrom, kNaN}};
   const auto value = [total_samples](int64_t hidden) {
     return static_cast<float>(static_cast<double>(hidden) / total_samples);
   };
-  size_t next = 0;      // first event not yet counted
-  int64_t hidden = 0;   // sum of the counts before `next`
+  size_t next = 0;     // first event not yet counted
+  int64_t hidden = 0;  // sum of the counts before `next`
   std::vector<Vertex> piece;
   for (const DepthWindow& window : windows) {
     const float lo = static_cast<float>(window.lo);

@@ -136,9 +136,8 @@ std::array<glm::dvec3, 3> CasterTriangle(const LightSpaceMesh& mesh, size_t k) {
 }
 
 bool OutsideRegion(const std::vector<HalfSpace>& region, const std::array<glm::dvec3, 3>& p) {
-  return std::any_of(region.begin(), region.end(), [&](const HalfSpace& h) {
-    return h(p[0]) > 0 && h(p[1]) > 0 && h(p[2]) > 0;
-  });
+  return std::any_of(region.begin(), region.end(),
+                     [&](const HalfSpace& h) { return h(p[0]) > 0 && h(p[1]) > 0 && h(p[2]) > 0; });
 }
 
 }  // namespace

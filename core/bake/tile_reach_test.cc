@@ -473,8 +473,8 @@ TEST(ScanFloor, NearLightOccluderStaysWithinTheBudgets) {
   Scene scene = MakeScene(LightShape::kRect, 3, 10);
   TriangleMesh near_light;
   near_light.role = MeshRole::kCasterOnly;
-  near_light.positions_world = {{-0.5, 10 - 1e-4, -0.5}, {0.5, 10 - 1e-4, -0.5},
-                                {0.0, 10 - 1e-4, 0.5}};
+  near_light.positions_world = {
+      {-0.5, 10 - 1e-4, -0.5}, {0.5, 10 - 1e-4, -0.5}, {0.0, 10 - 1e-4, 0.5}};
   near_light.indices = {0, 1, 2};
   scene.meshes.push_back(near_light);
   const BakePlan plan = Plan(scene);

@@ -9,10 +9,10 @@
 namespace pdsm {
 
 struct LightFrame {
-  glm::dvec3 center{0.0};        // world
-  glm::dvec3 u{1.0, 0.0, 0.0};   // world, unit
-  glm::dvec3 v{0.0, 1.0, 0.0};   // world, unit
-  glm::dvec3 n{0.0, 0.0, 1.0};   // world, unit, u x v = n
+  glm::dvec3 center{0.0};       // world
+  glm::dvec3 u{1.0, 0.0, 0.0};  // world, unit
+  glm::dvec3 v{0.0, 1.0, 0.0};  // world, unit
+  glm::dvec3 n{0.0, 0.0, 1.0};  // world, unit, u x v = n
 
   glm::dvec3 LightFromWorld(const glm::dvec3& p_world) const {
     const glm::dvec3 d = p_world - center;
@@ -26,8 +26,7 @@ struct LightFrame {
 // A right-handed frame with the given normal; `up` fixes v when given and not parallel to n,
 // else a stable basis is chosen (Duff et al., "Building an Orthonormal Basis, Revisited").
 // REQUIRES: normal and up finite, |normal| > 0.
-LightFrame MakeLightFrame(const glm::dvec3& center, const glm::dvec3& normal,
-                          const glm::dvec3* up);
+LightFrame MakeLightFrame(const glm::dvec3& center, const glm::dvec3& normal, const glm::dvec3* up);
 
 }  // namespace pdsm
 

@@ -96,7 +96,7 @@ std::vector<Vertex> CompressFunction(std::span<const Vertex> function, double ep
   out.push_back(function[0]);
   LineCone cone(metric, StoredTolerance(epsilon), depth_scale);
   cone.Reset(function[0].z, function[0].a);
-  size_t last_admitted = 0;  // index of the last input vertex the current segment covers
+  size_t last_admitted = 0;   // index of the last input vertex the current segment covers
   size_t first_at_depth = 0;  // first input vertex at the depth of function[i]
   auto emit_segment_end = [&](size_t index) {
     const double z = function[index].z;

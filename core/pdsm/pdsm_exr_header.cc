@@ -103,8 +103,10 @@ constexpr EnumName<CompressionMetric> kMetricNames[] = {
     {CompressionMetric::kVertical, "vertical"},
     {CompressionMetric::kPerpendicular, "perpendicular"}};
 constexpr EnumName<SamplingPattern> kSamplingNames[] = {
-    {SamplingPattern::kStratified, "stratified"}, {SamplingPattern::kUniform, "uniform"},
-    {SamplingPattern::kSobol, "sobol"},           {SamplingPattern::kHalton, "halton"},
+    {SamplingPattern::kStratified, "stratified"},
+    {SamplingPattern::kUniform, "uniform"},
+    {SamplingPattern::kSobol, "sobol"},
+    {SamplingPattern::kHalton, "halton"},
     {SamplingPattern::kBlueNoise, "blue_noise"}};
 
 template <typename E, size_t N>

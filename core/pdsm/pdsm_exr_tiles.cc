@@ -37,5 +37,4 @@ absl::Status CheckTileFunctions(const PdsmTile& tile, absl::string_view path) {
   return absl::OkStatus();
 }
 
-
 }  // namespace pdsm

@@ -25,10 +25,10 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/string_view.h"
 #include "core/pdsm/exr_output_stream.h"
-#include "core/util/atomic_file.h"
-#include "core/util/file_system.h"
 #include "core/pdsm/pdsm_exr_header.h"
 #include "core/pdsm/pdsm_exr_tiles.h"
+#include "core/util/atomic_file.h"
+#include "core/util/file_system.h"
 
 namespace pdsm {
 namespace {
@@ -167,9 +167,9 @@ class ExrPdsmWriter final : public PdsmWriter {
       exr_->writeTile(tile.x0 / grid_.tile_size, tile.y0 / grid_.tile_size);
     } catch (...) {
       if (!stream_->error().ok()) return Fail(stream_->error());
-      return Fail(absl::InternalError(absl::StrCat(
-          StatusFromCurrentException(file_->temp_path(), "writing").message(), " (for ", path_,
-          ")")));
+      return Fail(absl::InternalError(
+          absl::StrCat(StatusFromCurrentException(file_->temp_path(), "writing").message(),
+                       " (for ", path_, ")")));
     }
     ++next_tile_;
     return absl::OkStatus();
@@ -189,8 +189,8 @@ class ExrPdsmWriter final : public PdsmWriter {
   FileSystem* const fs_;
   PdsmHeader header_;  // tile_samples filled as tiles arrive (adaptive bakes)
   const TileGrid grid_;
-  std::unique_ptr<AtomicFile> file_;  // the rewritten one once RewriteWithTileSamples() ran
-  std::unique_ptr<ExrOutputStream> stream_;        // writes to *file_; null after a rewrite
+  std::unique_ptr<AtomicFile> file_;         // the rewritten one once RewriteWithTileSamples() ran
+  std::unique_ptr<ExrOutputStream> stream_;  // writes to *file_; null after a rewrite
   std::unique_ptr<Imf::DeepTiledOutputFile> exr_;  // writes to *stream_; null once finished
   std::map<int64_t, PdsmTile> pending_;            // out-of-order tiles by index
   int64_t next_tile_ = 0;                          // all tiles before it are written

@@ -554,8 +554,10 @@ TEST_F(PdsmFileTest, NewerFormatVersionIsFailedPrecondition) {
 TEST_F(PdsmFileTest, VersionTwoOnlyWhenTheEvaluationRuleChanged) {
   // Plain files stay version 1 (a version-1 reader opens them); surfaces-only and z_valid_min
   // files are version 2, and a version-1 file claiming those features is refused.
-  EXPECT_EQ(HeaderOf(WriteSample("plain.exr")).typedAttribute<Imf::IntAttribute>(
-                "pdsmFormatVersion").value(), 1);
+  EXPECT_EQ(HeaderOf(WriteSample("plain.exr"))
+                .typedAttribute<Imf::IntAttribute>("pdsmFormatVersion")
+                .value(),
+            1);
   PdsmImage image = RandomImage(FullHeader(40, 24, 16), 7);
   image.header.surfaces_only = true;
   image.header.geometry.z_valid_min = image.header.geometry.z_near + 0.01;

@@ -59,8 +59,7 @@ struct PdsmGeometry {
     if (!st) return std::nullopt;
     if (st->x < s_min || st->x > s_max || st->y < t_min || st->y > t_max) return std::nullopt;
     if (p_light.z < z_valid_min) return std::nullopt;
-    return PdsmPoint{(st->x - s_min) / PixelPitchS(), (st->y - t_min) / PixelPitchT(),
-                     p_light.z};
+    return PdsmPoint{(st->x - s_min) / PixelPitchS(), (st->y - t_min) / PixelPitchT(), p_light.z};
   }
 };
 

@@ -42,7 +42,7 @@ struct PdsmHeader {
   double slope_bias = 0;
   SamplingPattern sampling = SamplingPattern::kStratified;
   uint64_t seed = 0;
-  int tile_size = 0;       // PDSM pixels per tile side, also the EXR tile size
+  int tile_size = 0;  // PDSM pixels per tile side, also the EXR tile size
   // Adaptive sampling (docs/algorithms.md); 0 when off. `samples` is then the per-tile maximum
   // and tile t was baked with the first tile_samples[t] samples (row-major tile order).
   // tile_samples is empty for fixed-count bakes and in the header a bake starts writing with.
@@ -70,7 +70,7 @@ inline int MinimumFormatVersion(const PdsmHeader& h) {
 
 // One rectangle of pixels with their functions: the unit of writing and of assembling.
 struct PdsmTile {
-  int x0 = 0, y0 = 0;       // first pixel
+  int x0 = 0, y0 = 0;  // first pixel
   int width = 0, height = 0;
   int samples = 0;  // light samples behind its functions (adaptive bakes); 0: header.samples
   std::vector<uint64_t> offsets;  // width * height + 1, row-major from (x0, y0)

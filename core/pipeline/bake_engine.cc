@@ -303,8 +303,8 @@ void BakeEngine::ReportFailure(const std::string& worker_id, uint64_t lease_id,
       scheduler_.Fail(worker_id, lease_id, std::string(status.message()), /*handed_back=*/true,
                       now);
     } else {
-      failure = scheduler_.Fail(worker_id, lease_id, std::string(status.message()), handed_back,
-                                now);
+      failure =
+          scheduler_.Fail(worker_id, lease_id, std::string(status.message()), handed_back, now);
       if (failure) job = FindJob(failure->job_id);
     }
     changed_.SignalAll();

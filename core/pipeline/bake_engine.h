@@ -50,13 +50,13 @@ struct JobProgress {
   bool started = false;  // a task has been leased
   int tiles_total = 0;
   int tiles_done = 0;
-  int tiles_all_lit = 0;   // stored with no vertex at all (no caster reaches their rays)
-  int64_t tasks_done = 0;  // accepted results
-  int64_t tasks_total = 0; // known so far: adaptive stages add theirs as tiles need them
+  int tiles_all_lit = 0;    // stored with no vertex at all (no caster reaches their rays)
+  int64_t tasks_done = 0;   // accepted results
+  int64_t tasks_total = 0;  // known so far: adaptive stages add theirs as tiles need them
   int64_t samples_total = 0;
   int64_t samples_done = 0;
-  int64_t samples_at_add = 0;  // samples_done when AddJob ran (a resumed job starts > 0)
-  int64_t added_ms = 0;        // now_ms() at AddJob: with the two above, this run's rate
+  int64_t samples_at_add = 0;      // samples_done when AddJob ran (a resumed job starts > 0)
+  int64_t added_ms = 0;            // now_ms() at AddJob: with the two above, this run's rate
   int64_t tile_samples_total = 0;  // samples behind the stored tiles (adaptive: < maximum)
   AssemblyStats assembly;
 };

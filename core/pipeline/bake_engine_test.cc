@@ -89,13 +89,34 @@ class RecordingOutput : public JobOutput {
     ended_note_.Notify();
   }
 
-  int started() { absl::MutexLock lock(&mu_); return started_; }
-  int finished() { absl::MutexLock lock(&mu_); return finished_; }
-  int ended() { absl::MutexLock lock(&mu_); return ended_; }
-  JobEnd end() { absl::MutexLock lock(&mu_); return end_; }
-  absl::Status status() { absl::MutexLock lock(&mu_); return status_; }
-  JobProgress progress() { absl::MutexLock lock(&mu_); return progress_; }
-  std::map<int, PdsmTile> tiles() { absl::MutexLock lock(&mu_); return tiles_; }
+  int started() {
+    absl::MutexLock lock(&mu_);
+    return started_;
+  }
+  int finished() {
+    absl::MutexLock lock(&mu_);
+    return finished_;
+  }
+  int ended() {
+    absl::MutexLock lock(&mu_);
+    return ended_;
+  }
+  JobEnd end() {
+    absl::MutexLock lock(&mu_);
+    return end_;
+  }
+  absl::Status status() {
+    absl::MutexLock lock(&mu_);
+    return status_;
+  }
+  JobProgress progress() {
+    absl::MutexLock lock(&mu_);
+    return progress_;
+  }
+  std::map<int, PdsmTile> tiles() {
+    absl::MutexLock lock(&mu_);
+    return tiles_;
+  }
 
   bool hold_store_ = false;
   absl::Notification store_entered_, release_store_, ended_note_;
@@ -414,8 +435,8 @@ TEST(BakeEngine, ManyThreadsBakeTheSameTilesAsOne) {
     threads.Post([&, t] {
       const std::string id = "w" + std::to_string(t);
       while (std::optional<TaskLease> l = engine.Lease(id, absl::Seconds(5))) {
-        engine.Report(id, l->lease_id, BatchEvents(*plan, l->tile_index, l->sample_begin,
-                                                   l->sample_end));
+        engine.Report(id, l->lease_id,
+                      BatchEvents(*plan, l->tile_index, l->sample_begin, l->sample_end));
       }
     });
   }

@@ -37,10 +37,10 @@ struct SchedulerOptions {
 struct JobSpec {
   std::string job_id;
   int priority = 0;
-  int64_t sequence = 0;         // submission order, ascending
-  std::vector<int> tiles;       // tiles still to do (a resumed job lists only unfinished ones)
-  int samples = 1;              // light samples of the bake
-  int samples_per_task = 1;     // batch size; the last batch of a tile may be smaller
+  int64_t sequence = 0;      // submission order, ascending
+  std::vector<int> tiles;    // tiles still to do (a resumed job lists only unfinished ones)
+  int samples = 1;           // light samples of the bake
+  int samples_per_task = 1;  // batch size; the last batch of a tile may be smaller
   // Adaptive sampling (core/bake/adaptive_sampling.h): > 0 makes a tile's work come in stages
   // of these first samples; after each stage completes the service either assembles the tile
   // or calls AddStage(). 0: one stage holding all `samples`.
@@ -90,8 +90,7 @@ class Scheduler {
   std::optional<TaskLease> Lease(const std::string& worker_id, int64_t now_ms);
 
   // New deadline. FAILED_PRECONDITION when the lease is not current or not this worker's.
-  absl::StatusOr<int64_t> Extend(const std::string& worker_id, uint64_t lease_id,
-                                 int64_t now_ms);
+  absl::StatusOr<int64_t> Extend(const std::string& worker_id, uint64_t lease_id, int64_t now_ms);
 
   // Accepts the result of a current lease held by `worker_id`; anything else is dropped
   // (late after expiry, duplicate, cancelled job, unknown lease). kTileComplete: every batch
@@ -170,13 +169,13 @@ class Scheduler {
     int samples = 1;
     int samples_per_task = 1;
     int adaptive_min_samples = 0;  // 0: fixed-count job
-    std::vector<int> tile_order;  // tiles in the order they open
-    size_t next_tile = 0;         // next tile of tile_order to open
-    std::map<int, Tile> tiles;    // open tiles by tile index
-    std::set<TaskRef> pending;    // tasks of open tiles waiting for a worker
-    std::set<uint64_t> leases;    // current leases
-    int64_t tasks_left = 0;       // not yet accepted, open or not
-    int tiles_left = 0;           // not yet assembled
+    std::vector<int> tile_order;   // tiles in the order they open
+    size_t next_tile = 0;          // next tile of tile_order to open
+    std::map<int, Tile> tiles;     // open tiles by tile index
+    std::set<TaskRef> pending;     // tasks of open tiles waiting for a worker
+    std::set<uint64_t> leases;     // current leases
+    int64_t tasks_left = 0;        // not yet accepted, open or not
+    int tiles_left = 0;            // not yet assembled
     std::map<std::string, int> worker_failures;
     std::string last_failure;
   };

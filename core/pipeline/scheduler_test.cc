@@ -99,8 +99,8 @@ TEST(SchedulerTest, AdaptiveStagesGoOutOnlyWhenAsked) {
   ASSERT_TRUE(scheduler.AddStage("a", 3));
   EXPECT_EQ(drain(), (std::vector<std::tuple<int, int, int>>{{3, 8, 14}, {3, 14, 16}}));
   ASSERT_TRUE(scheduler.AddStage("a", 3));
-  EXPECT_EQ(drain(), (std::vector<std::tuple<int, int, int>>{
-                         {3, 16, 22}, {3, 22, 28}, {3, 28, 32}}));
+  EXPECT_EQ(drain(),
+            (std::vector<std::tuple<int, int, int>>{{3, 16, 22}, {3, 22, 28}, {3, 28, 32}}));
   ASSERT_TRUE(scheduler.AddStage("a", 3));
   EXPECT_EQ(drain(), (std::vector<std::tuple<int, int, int>>{{3, 32, 38}, {3, 38, 40}}));
   EXPECT_FALSE(scheduler.AddStage("a", 3));  // past the last stage

@@ -9,8 +9,9 @@ namespace pdsm {
 StageVerdict JudgeStage(const PdsmHeader& header, TileStageState state,
                         std::vector<StageBatch> batches) {
   // Batches in sample order: the merge does not depend on it, but a fixed order costs nothing.
-  std::sort(batches.begin(), batches.end(),
-            [](const StageBatch& a, const StageBatch& b) { return a.sample_begin < b.sample_begin; });
+  std::sort(batches.begin(), batches.end(), [](const StageBatch& a, const StageBatch& b) {
+    return a.sample_begin < b.sample_begin;
+  });
   StageVerdict verdict;
   if (!header.adaptive()) {
     verdict.done = true;

@@ -24,8 +24,8 @@ PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> part
   return tile;
 }
 
-PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts,
-                      int tile_samples, AssemblyStats* stats, const TileWindows* windows) {
+PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts, int tile_samples,
+                      AssemblyStats* stats, const TileWindows* windows) {
   const auto start = std::chrono::steady_clock::now();
   const TileEvents merged = MergeTileEvents(parts);
   PdsmTile tile;
@@ -59,8 +59,8 @@ PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> part
   return tile;
 }
 
-PdsmTile AssemblePlanTile(const BakePlan& plan, std::span<const TileEvents> parts,
-                          int tile_samples, AssemblyStats* stats) {
+PdsmTile AssemblePlanTile(const BakePlan& plan, std::span<const TileEvents> parts, int tile_samples,
+                          AssemblyStats* stats) {
   std::optional<TileWindows> windows;
   if (plan.header.surfaces_only) {
     windows = ComputeReceiverWindows(plan, plan.tiles.at(parts.front().tile_index));

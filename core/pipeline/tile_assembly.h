@@ -30,15 +30,14 @@ PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> part
 
 // Adaptive bakes (core/bake/adaptive_sampling.h): `parts` cover the first `tile_samples`
 // samples exactly once, and attenuation is count / tile_samples. Sets PdsmTile::samples.
-PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts,
-                      int tile_samples, AssemblyStats* stats,
-                      const TileWindows* windows = nullptr);
+PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts, int tile_samples,
+                      AssemblyStats* stats, const TileWindows* windows = nullptr);
 
 // The tile of `plan` the local bake and the coordinator both assemble: with its receiver
 // windows when the bake is surfaces-only, as an adaptive tile when `tile_samples` > 0.
 // REQUIRES: `parts` non-empty, all of tile parts.front().tile_index.
-PdsmTile AssemblePlanTile(const BakePlan& plan, std::span<const TileEvents> parts,
-                          int tile_samples, AssemblyStats* stats);
+PdsmTile AssemblePlanTile(const BakePlan& plan, std::span<const TileEvents> parts, int tile_samples,
+                          AssemblyStats* stats);
 
 }  // namespace pdsm
 

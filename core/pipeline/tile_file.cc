@@ -40,7 +40,6 @@ uint64_t Checksum(std::string_view bytes) {
   return hash;
 }
 
-
 absl::Status CheckTileForWrite(const PdsmTile& tile, const std::string& path) {
   const auto bad = [&](absl::string_view what) {
     return absl::InvalidArgumentError(absl::StrFormat("%s: tile at (%d, %d) size %dx%d: %s", path,

@@ -36,8 +36,7 @@ inline constexpr uint32_t kTileFileVersion = 2;
 // values from 0 to the vertex count, or width or height is negative; otherwise the errno
 // status of the failing step (e.g. RESOURCE_EXHAUSTED for a full disk), naming the path.
 // `fs` null means FileSystem::Default().
-absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile,
-                           FileSystem* fs = nullptr);
+absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile, FileSystem* fs = nullptr);
 
 // Reads a tile written by WriteTileFile. Sizes in the file are checked against the file's
 // length before anything is allocated from them, so a corrupt file costs no more memory than

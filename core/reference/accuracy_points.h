@@ -23,8 +23,8 @@ struct AccuracyPoints {
 };
 
 // Every point lies inside the PDSM frustum the scene's bake plan fits (its window does not depend
-// on the resolution or sample knobs), no nearer than its z_valid_min. A scene without receivers in front of the light gets no
-// surface points. Errors: those of PlanBake.
+// on the resolution or sample knobs), no nearer than its z_valid_min. A scene without receivers in
+// front of the light gets no surface points. Errors: those of PlanBake.
 absl::StatusOr<AccuracyPoints> MakeAccuracyPoints(const Scene& scene, int surface_count,
                                                   int free_space_count, uint64_t seed);
 

@@ -44,11 +44,16 @@ std::vector<glm::dvec2> UniformUnitSquare(int count, uint64_t seed) {
 
 std::vector<glm::dvec2> UnitSquareSamples(int count, SamplingPattern pattern, uint64_t seed) {
   switch (pattern) {
-    case SamplingPattern::kUniform: return UniformUnitSquare(count, seed);
-    case SamplingPattern::kSobol: return SobolUnitSquare(count, seed);
-    case SamplingPattern::kHalton: return HaltonUnitSquare(count, seed);
-    case SamplingPattern::kBlueNoise: return BlueNoiseUnitSquare(count, seed);
-    case SamplingPattern::kStratified: break;
+    case SamplingPattern::kUniform:
+      return UniformUnitSquare(count, seed);
+    case SamplingPattern::kSobol:
+      return SobolUnitSquare(count, seed);
+    case SamplingPattern::kHalton:
+      return HaltonUnitSquare(count, seed);
+    case SamplingPattern::kBlueNoise:
+      return BlueNoiseUnitSquare(count, seed);
+    case SamplingPattern::kStratified:
+      break;
   }
   return StratifiedUnitSquare(count, seed);
 }

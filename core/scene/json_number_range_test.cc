@@ -35,14 +35,14 @@ TEST(FindOutOfRangeNumber, SiblingsAfterNestedContainersKeepTheirPaths) {
 // levels took seconds and hundreds of MB building a path per level.
 TEST(FindOutOfRangeNumber, DeepNestingNeitherCrashesNorCostsMoreThanItsLength) {
   for (int depth : {20'000, 300'000}) {
-    const std::string json = "{\"x\": " + std::string(depth, '[') + "1e999" +
-                             std::string(depth, ']') + "}";
+    const std::string json =
+        "{\"x\": " + std::string(depth, '[') + "1e999" + std::string(depth, ']') + "}";
     const auto start = std::chrono::steady_clock::now();
     EXPECT_FALSE(FindOutOfRangeNumber(json)) << "beyond the depth limit: left to the parser";
     EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
   }
-  const std::string shallow = "{\"x\": " + std::string(900, '[') + "1e999" +
-                              std::string(900, ']') + "}";
+  const std::string shallow =
+      "{\"x\": " + std::string(900, '[') + "1e999" + std::string(900, ']') + "}";
   const std::optional<OutOfRangeNumber> found = FindOutOfRangeNumber(shallow);
   ASSERT_TRUE(found);
   EXPECT_EQ(found->field.size(), 1 + 900 * 3);  // "x" then "[0]" per level

@@ -5,9 +5,9 @@
 #include <limits>
 #include <system_error>
 
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <assimp/Importer.hpp>
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
@@ -60,9 +60,9 @@ absl::StatusOr<MeshFileData> LoadMeshFile(const std::string& path, const std::st
   // triangle list comes out; JoinIdenticalVertices undoes the per-face vertex copies some
   // importers (OBJ) make, and drops vertices no face uses.
   Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(
-      path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                aiProcess_PreTransformVertices);
+  const aiScene* scene =
+      importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                  aiProcess_PreTransformVertices);
   if (scene == nullptr) return CannotRead(context, path, importer.GetErrorString());
 
   size_t vertex_count = 0;

@@ -67,15 +67,16 @@ TEST_F(MeshFileTest, GltfNodeTransformIsApplied) {
   std::string bytes(sizeof(positions) + sizeof(indices) + 2, '\0');
   std::memcpy(bytes.data(), positions, sizeof(positions));
   std::memcpy(bytes.data() + sizeof(positions), indices, sizeof(indices));
-  const std::string gltf = absl::StrCat(R"({
+  const std::string gltf =
+      absl::StrCat(R"({
     "asset": {"version": "2.0"},
     "scene": 0,
     "scenes": [{"nodes": [0]}],
     "nodes": [{"mesh": 0, "translation": [10, 20, 30], "scale": [2, 2, 2]}],
     "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
-    "buffers": [{"byteLength": )", bytes.size(),
-                                        R"(, "uri": "data:application/octet-stream;base64,)",
-                                        absl::Base64Escape(bytes), R"("}],
+    "buffers": [{"byteLength": )",
+                   bytes.size(), R"(, "uri": "data:application/octet-stream;base64,)",
+                   absl::Base64Escape(bytes), R"("}],
     "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
                     {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
     "accessors": [

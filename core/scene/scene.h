@@ -20,7 +20,7 @@ inline bool Casts(MeshRole role) { return role != MeshRole::kReceiverOnly; }
 inline bool Receives(MeshRole role) { return role != MeshRole::kCasterOnly; }
 
 struct TriangleMesh {
-  std::string label;                        // "meshes[2] (models/dragon.ply)", for messages
+  std::string label;  // "meshes[2] (models/dragon.ply)", for messages
   MeshRole role = MeshRole::kCasterAndReceiver;
   std::vector<glm::dvec3> positions_world;  // transformed, double
   std::vector<uint32_t> indices;            // 3 per triangle
@@ -31,9 +31,12 @@ enum class LightShape { kRect, kDisk, kSun };
 // "rect", "disk", "sun": the scene file's names, for messages and `pdsm info`.
 inline const char* LightShapeName(LightShape shape) {
   switch (shape) {
-    case LightShape::kRect: return "rect";
-    case LightShape::kDisk: return "disk";
-    case LightShape::kSun: return "sun";
+    case LightShape::kRect:
+      return "rect";
+    case LightShape::kDisk:
+      return "disk";
+    case LightShape::kSun:
+      return "sun";
   }
   return "?";
 }

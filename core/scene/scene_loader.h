@@ -38,16 +38,15 @@ std::string ResolveMeshPath(const std::string& scene_path, const std::string& me
 // Returns the decoded mesh of an asset, or an error. `context` names the field for messages
 // (e.g. "job 7: meshes[0].assetSha256"). The mesh must hold MeshFileData's invariants, as
 // DecodeMeshAsset's result does; an error is passed on to the caller as it is.
-using MeshAssetResolver = std::function<absl::StatusOr<MeshFileData>(
-    const std::string& sha256, const std::string& context)>;
+using MeshAssetResolver = std::function<absl::StatusOr<MeshFileData>(const std::string& sha256,
+                                                                     const std::string& context)>;
 
 // The same from an already parsed message. `source_label` prefixes messages; `base_dir`
 // resolves relative mesh paths (empty: mesh paths are refused, as on the server); `assets`
 // loads `meshes[i].assetSha256` meshes (null: they are refused, as in scene files). A mesh
 // from an asset gives the same Scene, bit for bit, as the mesh file it was encoded from.
 absl::StatusOr<Scene> SceneFromProto(const pdsm::v1::Scene& message,
-                                     const std::string& source_label,
-                                     const std::string& base_dir,
+                                     const std::string& source_label, const std::string& base_dir,
                                      const MeshAssetResolver& assets = nullptr);
 
 }  // namespace pdsm

@@ -55,8 +55,7 @@ class SceneLoaderTest : public ::testing::Test {
     return path.string();
   }
 
-  absl::StatusOr<Scene> Load(const std::string& json,
-                             const pdsm::v1::BakeParams& overrides = {}) {
+  absl::StatusOr<Scene> Load(const std::string& json, const pdsm::v1::BakeParams& overrides = {}) {
     scene_path_ = Write("scene.json", json);
     return LoadSceneFile(scene_path_, overrides);
   }
@@ -98,8 +97,8 @@ TEST_P(SceneLoaderBadInputTest, IsInvalidArgumentNamingFileAndField) {
 
 std::string InlineMesh(const std::string& positions, const std::string& indices,
                        const std::string& extra = "") {
-  return absl::StrCat(R"({"inline": {"positions": [)", positions, R"(], "indices": [)",
-                      indices, "]}", extra, "}");
+  return absl::StrCat(R"({"inline": {"positions": [)", positions, R"(], "indices": [)", indices,
+                      "]}", extra, "}");
 }
 const std::string kTri = "0,0,0, 1,0,0, 0,0,1";
 std::string WithTransform(const std::string& transform) {
@@ -111,8 +110,7 @@ std::string Rect(const std::string& center, const std::string& normal, const std
                       R"(], "up": [)", up, R"(], "size": [)", size, "]}}");
 }
 std::string Sun(const std::string& degrees) {
-  return absl::StrCat(R"({"sun": {"direction": [0,-1,0], "angularDiameterDeg": )", degrees,
-                      "}}");
+  return absl::StrCat(R"({"sun": {"direction": [0,-1,0], "angularDiameterDeg": )", degrees, "}}");
 }
 
 // Prefixed "SceneLoader" so that --gtest_filter='Scene*' selects these too.
@@ -121,36 +119,34 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         BadCase{"NanPosition", InlineMesh(R"(0,"NaN",0, 1,0,0, 0,0,1)", "0,1,2"), kRect, "{}",
                 "meshes[0].inline.positions[1]", "must be finite (got NaN)"},
-        BadCase{"InfinityPosition", InlineMesh(R"(0,0,0, 1,"Infinity",0, 0,0,1)", "0,1,2"),
-                kRect, "{}", "meshes[0].inline.positions[4]", "(got Infinity)"},
-        BadCase{"NanTransform", WithTransform(R"(1,0,0,"NaN", 0,1,0,0, 0,0,1,0, 0,0,0,1)"),
-                kRect, "{}", "meshes[0].transform[3]", "(got NaN)"},
+        BadCase{"InfinityPosition", InlineMesh(R"(0,0,0, 1,"Infinity",0, 0,0,1)", "0,1,2"), kRect,
+                "{}", "meshes[0].inline.positions[4]", "(got Infinity)"},
+        BadCase{"NanTransform", WithTransform(R"(1,0,0,"NaN", 0,1,0,0, 0,0,1,0, 0,0,0,1)"), kRect,
+                "{}", "meshes[0].transform[3]", "(got NaN)"},
         BadCase{"InfinityTransform",
                 WithTransform(R"(1,0,0,0, 0,"-Infinity",0,0, 0,0,1,0, 0,0,0,1)"), kRect, "{}",
                 "meshes[0].transform[5]", "(got -Infinity)"},
-        BadCase{"NanLightCenter", kSquare, Rect(R"("NaN",10,0)", "0,-1,0", "0,0,1", "1,1"),
-                "{}", "light.rect.center[0]", "(got NaN)"},
-        BadCase{"InfinityLightCenter", kSquare,
-                Rect(R"(0,"Infinity",0)", "0,-1,0", "0,0,1", "1,1"), "{}",
-                "light.rect.center[1]", "(got Infinity)"},
+        BadCase{"NanLightCenter", kSquare, Rect(R"("NaN",10,0)", "0,-1,0", "0,0,1", "1,1"), "{}",
+                "light.rect.center[0]", "(got NaN)"},
+        BadCase{"InfinityLightCenter", kSquare, Rect(R"(0,"Infinity",0)", "0,-1,0", "0,0,1", "1,1"),
+                "{}", "light.rect.center[1]", "(got Infinity)"},
         BadCase{"ZeroRectWidth", kSquare, Rect("0,10,0", "0,-1,0", "0,0,1", "0,1"), "{}",
                 "light.rect.size[0]", "must be > 0 (got 0)"},
-        BadCase{"NegativeRectHeight", kSquare, Rect("0,10,0", "0,-1,0", "0,0,1", "1,-2"),
-                "{}", "light.rect.size[1]", "(got -2)"},
+        BadCase{"NegativeRectHeight", kSquare, Rect("0,10,0", "0,-1,0", "0,0,1", "1,-2"), "{}",
+                "light.rect.size[1]", "(got -2)"},
         BadCase{"RectSizeCount", kSquare, Rect("0,10,0", "0,-1,0", "0,0,1", "1"), "{}",
                 "light.rect.size", "(got 1)"},
         BadCase{"ZeroNormal", kSquare, Rect("0,10,0", "0,0,0", "0,0,1", "1,1"), "{}",
                 "light.rect.normal", "must be non-zero"},
-        BadCase{"UpParallelToNormal", kSquare, Rect("0,10,0", "0,-1,0", "0,3,0", "1,1"),
-                "{}", "light.rect.up", "parallel"},
+        BadCase{"UpParallelToNormal", kSquare, Rect("0,10,0", "0,-1,0", "0,3,0", "1,1"), "{}",
+                "light.rect.up", "parallel"},
         BadCase{"MissingUp", kSquare,
                 R"({"rect": {"center": [0,10,0], "normal": [0,-1,0], "size": [1,1]}})", "{}",
                 "light.rect.up", "must have 3 numbers (got 0)"},
         BadCase{"DiskRadiusZero", kSquare,
                 R"({"disk": {"center": [0,10,0], "normal": [0,-1,0], "radius": 0}})", "{}",
                 "light.disk.radius", "must be > 0 (got 0)"},
-        BadCase{"SunAngleZero", kSquare, Sun("0"), "{}", "light.sun.angularDiameterDeg",
-                "(got 0)"},
+        BadCase{"SunAngleZero", kSquare, Sun("0"), "{}", "light.sun.angularDiameterDeg", "(got 0)"},
         BadCase{"SunAngleNinety", kSquare, Sun("90"), "{}", "light.sun.angularDiameterDeg",
                 "must be in (0, 90) degrees (got 90)"},
         BadCase{"NoLight", kSquare, "{}", "{}", "light", "one of rect, disk, sun is required"},
@@ -170,10 +166,8 @@ INSTANTIATE_TEST_SUITE_P(
                 "must be in [0, 1] (got -0.1)"},
         BadCase{"EpsilonAboveOne", kSquare, kRect, R"({"epsilon": 1.5})", "bake.epsilon",
                 "(got 1.5)"},
-        BadCase{"EpsilonNan", kSquare, kRect, R"({"epsilon": "NaN"})", "bake.epsilon",
-                "(got NaN)"},
-        BadCase{"TileSizeZero", kSquare, kRect, R"({"tileSize": 0})", "bake.tileSize",
-                "(got 0)"},
+        BadCase{"EpsilonNan", kSquare, kRect, R"({"epsilon": "NaN"})", "bake.epsilon", "(got NaN)"},
+        BadCase{"TileSizeZero", kSquare, kRect, R"({"tileSize": 0})", "bake.tileSize", "(got 0)"},
         BadCase{"DepthBiasNegative", kSquare, kRect, R"({"depthBias": -1})", "bake.depthBias",
                 "must be >= 0 (got -1)"},
         BadCase{"SlopeBiasInfinite", kSquare, kRect, R"({"slopeBias": "Infinity"})",
@@ -184,8 +178,8 @@ INSTANTIATE_TEST_SUITE_P(
                 R"({"frustum": {"window": [1,-1,-1,1], "depthRange": [1,2]}})",
                 "bake.frustum.window", "sMin < sMax"},
         BadCase{"FrustumWindowCount", kSquare, kRect,
-                R"({"frustum": {"window": [1,2,3], "depthRange": [1,2]}})",
-                "bake.frustum.window", "(got 3)"},
+                R"({"frustum": {"window": [1,2,3], "depthRange": [1,2]}})", "bake.frustum.window",
+                "(got 3)"},
         BadCase{"FrustumNearZeroForRect", kSquare, kRect,
                 R"({"frustum": {"window": [-1,1,-1,1], "depthRange": [0,2]}})",
                 "bake.frustum.depthRange", "0 < near < far"},
@@ -200,16 +194,15 @@ INSTANTIATE_TEST_SUITE_P(
                 "meshes[0].inline.indices", "multiple of 3 (got 2)"},
         BadCase{"NoIndices", InlineMesh(kTri, ""), kRect, "{}", "meshes[0].inline.indices",
                 "no triangles"},
-        BadCase{"TransformFifteenNumbers",
-                WithTransform("1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0"), kRect, "{}",
-                "meshes[0].transform", "must have 0 or 16 numbers (got 15)"},
-        BadCase{"SingularTransform", WithTransform("1,0,0,0, 0,0,0,0, 0,0,1,0, 0,0,0,1"),
-                kRect, "{}", "meshes[0].transform", "invertible"},
+        BadCase{"TransformFifteenNumbers", WithTransform("1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0"), kRect,
+                "{}", "meshes[0].transform", "must have 0 or 16 numbers (got 15)"},
+        BadCase{"SingularTransform", WithTransform("1,0,0,0, 0,0,0,0, 0,0,1,0, 0,0,0,1"), kRect,
+                "{}", "meshes[0].transform", "invertible"},
         BadCase{"NearlySingularTransform",
                 WithTransform("1e6,0,0,0, 1e6,1e-9,0,0, 0,0,1,0, 0,0,0,1"), kRect, "{}",
                 "meshes[0].transform", "invertible"},
-        BadCase{"ColumnMajorTransform", WithTransform("1,0,0,0, 0,1,0,0, 0,0,1,0, 5,6,7,1"),
-                kRect, "{}", "meshes[0].transform", "translation in elements 3, 7, 11"},
+        BadCase{"ColumnMajorTransform", WithTransform("1,0,0,0, 0,1,0,0, 0,0,1,0, 5,6,7,1"), kRect,
+                "{}", "meshes[0].transform", "translation in elements 3, 7, 11"},
         BadCase{"MeshWithoutSource", R"({"role": "CASTER_ONLY"})", kRect, "{}", "meshes[0]",
                 "one of path, inline, assetSha256 is required"},
         BadCase{"SecondMeshBad", absl::StrCat(kSquare, ", ", InlineMesh(kTri, "0,1,5")), kRect,
@@ -247,9 +240,9 @@ TEST_F(SceneLoaderTest, NestedUnknownFieldIsNamed) {
 
 TEST_F(SceneLoaderTest, TwoLightShapesIsAnError) {
   // A oneof set twice: protobuf's parser refuses it and names the oneof.
-  absl::StatusOr<Scene> scene = Load(SceneJson(
-      kSquare,
-      R"({"rect": {"center": [0,10,0], "normal": [0,-1,0], "up": [0,0,1], "size": [1,1]},
+  absl::StatusOr<Scene> scene = Load(
+      SceneJson(kSquare,
+                R"({"rect": {"center": [0,10,0], "normal": [0,-1,0], "up": [0,0,1], "size": [1,1]},
           "disk": {"center": [0,10,0], "normal": [0,-1,0], "radius": 1}})"));
   ASSERT_EQ(scene.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(scene.status().message(),
@@ -259,8 +252,8 @@ TEST_F(SceneLoaderTest, TwoLightShapesIsAnError) {
 }
 
 TEST_F(SceneLoaderTest, PathAndInlineTogetherIsAnError) {
-  absl::StatusOr<Scene> scene = Load(SceneJson(
-      R"({"path": "a.ply", "inline": {"positions": [0,0,0], "indices": []}})"));
+  absl::StatusOr<Scene> scene =
+      Load(SceneJson(R"({"path": "a.ply", "inline": {"positions": [0,0,0], "indices": []}})"));
   ASSERT_EQ(scene.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(scene.status().message(), HasSubstr("meshes[0]"));
   EXPECT_THAT(scene.status().message(), HasSubstr("source"));
@@ -424,13 +417,13 @@ TEST_F(SceneLoaderTest, LimitsAreInclusive) {
 }
 
 TEST_F(SceneLoaderTest, SamplingPatternsAndAdaptiveAreRead) {
-  for (auto [name, pattern] : {std::pair{"SOBOL", SamplingPattern::kSobol},
-                               std::pair{"HALTON", SamplingPattern::kHalton},
-                               std::pair{"BLUE_NOISE", SamplingPattern::kBlueNoise}}) {
-    absl::StatusOr<Scene> scene = Load(SceneJson(
-        kSquare, kRect,
-        absl::StrCat(R"({"samples": 128, "sampling": ")", name,
-                     R"(", "adaptiveTolerance": 0.03, "adaptiveMinSamples": 8})")));
+  for (auto [name, pattern] :
+       {std::pair{"SOBOL", SamplingPattern::kSobol}, std::pair{"HALTON", SamplingPattern::kHalton},
+        std::pair{"BLUE_NOISE", SamplingPattern::kBlueNoise}}) {
+    absl::StatusOr<Scene> scene =
+        Load(SceneJson(kSquare, kRect,
+                       absl::StrCat(R"({"samples": 128, "sampling": ")", name,
+                                    R"(", "adaptiveTolerance": 0.03, "adaptiveMinSamples": 8})")));
     ASSERT_TRUE(scene.ok()) << scene.status();
     EXPECT_EQ(scene->bake.sampling, pattern);
     EXPECT_TRUE(scene->bake.adaptive());
@@ -476,12 +469,12 @@ TEST_F(SceneLoaderTest, OverridesReplaceSetFieldsOnly) {
   overrides.mutable_frustum()->add_window(2);
   overrides.mutable_frustum()->add_depth_range(0.5);
   overrides.mutable_frustum()->add_depth_range(30);
-  absl::StatusOr<Scene> scene = Load(
-      SceneJson(kSquare, kRect,
-                R"({"resolution": [512, 256], "samples": 256, "epsilon": 0.02, "tileSize": 16,
+  absl::StatusOr<Scene> scene =
+      Load(SceneJson(kSquare, kRect,
+                     R"({"resolution": [512, 256], "samples": 256, "epsilon": 0.02, "tileSize": 16,
                     "shadowMapResolution": 1024,
                     "frustum": {"window": [-9, 9, -9, 9], "depthRange": [1, 2]}})"),
-      overrides);
+           overrides);
   ASSERT_TRUE(scene.ok()) << scene.status();
   EXPECT_EQ(scene->bake.width, 100);
   EXPECT_EQ(scene->bake.height, 50);
@@ -498,11 +491,11 @@ TEST_F(SceneLoaderTest, OverridesReplaceSetFieldsOnly) {
 }
 
 TEST_F(SceneLoaderTest, RolesAreMapped) {
-  absl::StatusOr<Scene> scene = Load(SceneJson(absl::StrCat(
-      InlineMesh(kTri, "0,1,2", R"(, "role": "CASTER_ONLY")"), ", ",
-      InlineMesh(kTri, "0,1,2", R"(, "role": "RECEIVER_ONLY")"), ", ",
-      InlineMesh(kTri, "0,1,2", R"(, "role": "CASTER_AND_RECEIVER")"), ", ",
-      InlineMesh(kTri, "0,1,2"))));
+  absl::StatusOr<Scene> scene =
+      Load(SceneJson(absl::StrCat(InlineMesh(kTri, "0,1,2", R"(, "role": "CASTER_ONLY")"), ", ",
+                                  InlineMesh(kTri, "0,1,2", R"(, "role": "RECEIVER_ONLY")"), ", ",
+                                  InlineMesh(kTri, "0,1,2", R"(, "role": "CASTER_AND_RECEIVER")"),
+                                  ", ", InlineMesh(kTri, "0,1,2"))));
   ASSERT_TRUE(scene.ok()) << scene.status();
   ASSERT_EQ(scene->meshes.size(), 4u);
   EXPECT_EQ(scene->meshes[0].role, MeshRole::kCasterOnly);
@@ -513,14 +506,14 @@ TEST_F(SceneLoaderTest, RolesAreMapped) {
 
 TEST_F(SceneLoaderTest, TransformIsRowMajorWithTranslationInElements3711) {
   // A 90 degree turn about z, a scale of 2 and a translation of (5, 6, 7).
-  absl::StatusOr<Scene> scene = Load(SceneJson(WithTransform(
-      "0,-2,0,5, 2,0,0,6, 0,0,2,7, 0,0,0,1")));
+  absl::StatusOr<Scene> scene =
+      Load(SceneJson(WithTransform("0,-2,0,5, 2,0,0,6, 0,0,2,7, 0,0,0,1")));
   ASSERT_TRUE(scene.ok()) << scene.status();
   const std::vector<glm::dvec3>& p = scene->meshes[0].positions_world;
   ASSERT_EQ(p.size(), 3u);
-  EXPECT_EQ(p[0], glm::dvec3(5, 6, 7));      // (0,0,0)
-  EXPECT_EQ(p[1], glm::dvec3(5, 8, 7));      // (1,0,0) -> (0,2,0) + t
-  EXPECT_EQ(p[2], glm::dvec3(5, 6, 9));      // (0,0,1) -> (0,0,2) + t
+  EXPECT_EQ(p[0], glm::dvec3(5, 6, 7));  // (0,0,0)
+  EXPECT_EQ(p[1], glm::dvec3(5, 8, 7));  // (1,0,0) -> (0,2,0) + t
+  EXPECT_EQ(p[2], glm::dvec3(5, 6, 9));  // (0,0,1) -> (0,0,2) + t
 }
 
 TEST_F(SceneLoaderTest, TransformAppliesToMeshFiles) {
@@ -545,8 +538,8 @@ TEST_F(SceneLoaderTest, FarFromOriginKeepsDoublePrecision) {
   for (double x : model) {
     absl::StrAppend(&positions, positions.empty() ? "" : ",", absl::StrFormat("%.17g", x));
   }
-  absl::StatusOr<Scene> scene = Load(SceneJson(InlineMesh(
-      positions, "0,1,2", absl::StrCat(R"(, "transform": [)", transform, "]"))));
+  absl::StatusOr<Scene> scene = Load(SceneJson(
+      InlineMesh(positions, "0,1,2", absl::StrCat(R"(, "transform": [)", transform, "]"))));
   ASSERT_TRUE(scene.ok()) << scene.status();
   const std::vector<glm::dvec3>& p = scene->meshes[0].positions_world;
   for (int v = 0; v < 3; ++v) {
@@ -586,15 +579,15 @@ TEST_F(SceneLoaderTest, RectFrameIsOrthonormalRightHandedAndFollowsUp) {
 }
 
 TEST_F(SceneLoaderTest, DiskAndSunLights) {
-  absl::StatusOr<Scene> disk = Load(SceneJson(
-      kSquare, R"({"disk": {"center": [2,10,1], "normal": [0,-3,0], "radius": 1.5}})"));
+  absl::StatusOr<Scene> disk = Load(
+      SceneJson(kSquare, R"({"disk": {"center": [2,10,1], "normal": [0,-3,0], "radius": 1.5}})"));
   ASSERT_TRUE(disk.ok()) << disk.status();
   EXPECT_EQ(disk->light.shape, LightShape::kDisk);
   EXPECT_EQ(disk->light.radius, 1.5);
   EXPECT_EQ(disk->light.frame.center, glm::dvec3(2, 10, 1));
   EXPECT_EQ(disk->light.frame.n, glm::dvec3(0, -1, 0));
-  EXPECT_NEAR(glm::dot(glm::cross(disk->light.frame.u, disk->light.frame.v),
-                       disk->light.frame.n), 1, 1e-12);
+  EXPECT_NEAR(glm::dot(glm::cross(disk->light.frame.u, disk->light.frame.v), disk->light.frame.n),
+              1, 1e-12);
 
   // A sun 2 degrees across, with a direction of huge components (no overflow in its length),
   // and a frustum that starts behind the light plane (allowed for the sun).
@@ -625,10 +618,10 @@ TEST_F(SceneLoaderTest, ZeroAreaTrianglesAreKept) {
 TEST_F(SceneLoaderTest, RelativeMeshPathsResolveAgainstTheSceneFolder) {
   Write("models/thing.ply", kPlyQuad);
   const std::string absolute = Write("elsewhere/quad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-  const std::string scene_path = Write(
-      "scenes/deep/scene.json",
-      SceneJson(absl::StrCat(R"({"path": "../../models/thing.ply"}, {"path": ")", absolute,
-                             R"("})")));
+  const std::string scene_path =
+      Write("scenes/deep/scene.json",
+            SceneJson(absl::StrCat(R"({"path": "../../models/thing.ply"}, {"path": ")", absolute,
+                                   R"("})")));
   // Load from another working directory: the scene's folder, not the cwd, must count.
   const std::filesystem::path cwd = std::filesystem::current_path();
   std::filesystem::current_path(std::filesystem::temp_directory_path());
@@ -696,9 +689,8 @@ TEST_F(SceneLoaderTest, ParseSceneFileAppliesOverridesAndLoadsNoMesh) {
 }
 
 TEST_F(SceneLoaderTest, ParseSceneFileErrorsAreThoseOfLoadSceneFile) {
-  for (const std::string& json :
-       {std::string(R"({"name": "x", "meshes": [})"), std::string(""),
-        absl::StrCat(R"({"meshs": [], "light": )", kRect, "}")}) {
+  for (const std::string& json : {std::string(R"({"name": "x", "meshes": [})"), std::string(""),
+                                  absl::StrCat(R"({"meshs": [], "light": )", kRect, "}")}) {
     SCOPED_TRACE(json);
     scene_path_ = Write("scene.json", json);
     const absl::Status parsed = ParseSceneFile(scene_path_).status();
@@ -736,8 +728,8 @@ std::string AssetJson(const std::string& sha256) {
 }
 
 void ExpectSameBits(double a, double b, const std::string& what) {
-  EXPECT_EQ(std::bit_cast<uint64_t>(a), std::bit_cast<uint64_t>(b)) << what << ": " << a
-                                                                    << " vs " << b;
+  EXPECT_EQ(std::bit_cast<uint64_t>(a), std::bit_cast<uint64_t>(b))
+      << what << ": " << a << " vs " << b;
 }
 
 void ExpectSameBits(const glm::dvec3& a, const glm::dvec3& b, const std::string& what) {
@@ -872,13 +864,13 @@ TEST_F(SceneAssetTest, SceneFromAssetsEqualsSceneFromMeshFiles) {
 
   ExpectSameScene(*from_files, *from_assets);
   EXPECT_EQ(from_assets->bake.samples, 33);
-  EXPECT_EQ(from_assets->meshes[0].label,
-            absl::StrCat("meshes[0] (asset ", message->meshes(0).asset_sha256().substr(0, 12),
-                         ")"));
+  EXPECT_EQ(
+      from_assets->meshes[0].label,
+      absl::StrCat("meshes[0] (asset ", message->meshes(0).asset_sha256().substr(0, 12), ")"));
   EXPECT_EQ(from_assets->meshes[1].label, "meshes[1] (inline)");
-  EXPECT_EQ(contexts_, (std::vector<std::string>{
-                           absl::StrCat(scene_path_, ": meshes[0].assetSha256"),
-                           absl::StrCat(scene_path_, ": meshes[2].assetSha256")}));
+  EXPECT_EQ(contexts_,
+            (std::vector<std::string>{absl::StrCat(scene_path_, ": meshes[0].assetSha256"),
+                                      absl::StrCat(scene_path_, ": meshes[2].assetSha256")}));
 }
 
 TEST_F(SceneAssetTest, SceneFileWithAnAssetIsRefused) {
@@ -888,9 +880,8 @@ TEST_F(SceneAssetTest, SceneFileWithAnAssetIsRefused) {
 }
 
 TEST_F(SceneAssetTest, ProtoWithoutResolverRefusesAssets) {
-  absl::StatusOr<pdsm::v1::Scene> message =
-      ParseSceneFile(Write("scene.json", SceneJson(absl::StrCat(kSquare, ", ",
-                                                               AssetJson(Sha256Hex("abc"))))));
+  absl::StatusOr<pdsm::v1::Scene> message = ParseSceneFile(
+      Write("scene.json", SceneJson(absl::StrCat(kSquare, ", ", AssetJson(Sha256Hex("abc"))))));
   ASSERT_TRUE(message.ok()) << message.status();
   for (const MeshAssetResolver& none : {MeshAssetResolver(), MeshAssetResolver(nullptr)}) {
     absl::StatusOr<Scene> scene = SceneFromProto(*message, "job 7", "", none);
@@ -949,11 +940,11 @@ TEST_F(SceneAssetTest, AssetMeshesStillTakeTransformAndRole) {
   const std::string bytes = EncodeMeshAsset(triangle);
   const std::string sha256 = Sha256Hex(bytes);
   ASSERT_TRUE(store_->Put(sha256, bytes).ok());
-  absl::StatusOr<pdsm::v1::Scene> message = ParseSceneFile(Write(
-      "scene.json",
-      SceneJson(absl::StrCat(R"({"assetSha256": ")", sha256,
-                             R"(", "role": "CASTER_ONLY", )"
-                             R"("transform": [1,0,0,5, 0,1,0,6, 0,0,1,7, 0,0,0,1]})"))));
+  absl::StatusOr<pdsm::v1::Scene> message = ParseSceneFile(
+      Write("scene.json",
+            SceneJson(absl::StrCat(R"({"assetSha256": ")", sha256,
+                                   R"(", "role": "CASTER_ONLY", )"
+                                   R"("transform": [1,0,0,5, 0,1,0,6, 0,0,1,7, 0,0,0,1]})"))));
   ASSERT_TRUE(message.ok()) << message.status();
   absl::StatusOr<Scene> scene = SceneFromProto(*message, "job 7", "", resolver_);
   ASSERT_TRUE(scene.ok()) << scene.status();

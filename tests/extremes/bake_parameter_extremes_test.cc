@@ -101,8 +101,9 @@ TEST(ExtremesEpsilon, ZeroOneMillionthAndOne) {
         for (const Vertex& v : exact) depths.push_back(v.z);
         for (int k = 0; k <= 64; ++k) depths.push_back(g.z_near + (g.z_far - g.z_near) * k / 50.0);
         for (double z : depths) {
-          max_diff = std::max(max_diff, std::abs(static_cast<double>(EvaluateAttenuation(stored, z)) -
-                                                 EvaluateAttenuation(exact, z)));
+          max_diff =
+              std::max(max_diff, std::abs(static_cast<double>(EvaluateAttenuation(stored, z)) -
+                                          EvaluateAttenuation(exact, z)));
         }
       }
     }

@@ -97,7 +97,8 @@ TEST(ExtremesEvents, HundredThousandEventsInOnePixelLossless) {
   double max_error = 0;
   for (int k = 0; k < kEvents; ++k) {
     const double expected = static_cast<double>(walk.hidden_after[k]) / kSamples;
-    max_error = std::max(max_error, std::abs(EvaluateAttenuation(function, walk.depth[k]) - expected));
+    max_error =
+        std::max(max_error, std::abs(EvaluateAttenuation(function, walk.depth[k]) - expected));
   }
   EXPECT_EQ(max_error, 0.0);
   EXPECT_EQ(EvaluateAttenuation(function, 0.5), 0.0f);
@@ -113,8 +114,8 @@ TEST(ExtremesEvents, HundredThousandEventsInOnePixelCompressed) {
   for (int k = 0; k + 1 < kEvents; ++k) {
     // A is constant between events: check just after each and halfway to the next.
     const double expected = static_cast<double>(walk.hidden_after[k]) / kSamples;
-    for (double z : {static_cast<double>(walk.depth[k]),
-                     0.5 * (walk.depth[k] + walk.depth[k + 1])}) {
+    for (double z :
+         {static_cast<double>(walk.depth[k]), 0.5 * (walk.depth[k] + walk.depth[k + 1])}) {
       max_error = std::max(max_error, std::abs(EvaluateAttenuation(function, z) - expected));
     }
   }

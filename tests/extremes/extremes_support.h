@@ -13,13 +13,13 @@
 #include <gtest/gtest.h>
 #include <glm/glm.hpp>
 
-#include "worker/local_bake.h"
 #include "core/geometry/light_frame.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_query.h"
 #include "core/reference/exact_visibility.h"
 #include "core/scene/scene.h"
 #include "tests/test_support.h"
+#include "worker/local_bake.h"
 
 namespace pdsm::extremes {
 

@@ -12,9 +12,10 @@ namespace {
 
 // A 0.5 x 0.5 occluder 5e-4 below the 1 x 1 light hides a quarter of the light from every
 // point of the scene: with 16 stratified samples (a 4 x 4 grid of cells) it covers exactly the
-// four central cells, so the bake's share is exact too. Rays are scanned from the plan's scan floor (the depth where the shadow
-// map reaches its texel budget), so the bake no longer needs a shadow map of 1e5 texels per
-// side (it used to fail with RESOURCE_EXHAUSTED); points nearer than the floor read NaN.
+// four central cells, so the bake's share is exact too. Rays are scanned from the plan's scan floor
+// (the depth where the shadow map reaches its texel budget), so the bake no longer needs a shadow
+// map of 1e5 texels per side (it used to fail with RESOURCE_EXHAUSTED); points nearer than the
+// floor read NaN.
 TEST(ExtremesGeometry, OccluderWithin1e3OfTheLightPlane) {
   Scene control = PlateScene();
   control.bake.samples = 16;
@@ -38,7 +39,9 @@ TEST(ExtremesGeometry, OccluderWithin1e3OfTheLightPlane) {
   control.bake.frustum = FrustumOverride{baked->image.header.geometry.s_min,
                                          baked->image.header.geometry.s_max,
                                          baked->image.header.geometry.t_min,
-                                         baked->image.header.geometry.t_max, 2.5, 5.0};
+                                         baked->image.header.geometry.t_max,
+                                         2.5,
+                                         5.0};
   const std::optional<Baked> control_baked = Bake(control);
   ASSERT_TRUE(control_baked);
   const Errors c = CompareWithExact(control_baked->image, control, Grid(2.9, 30, 0.0));
@@ -75,8 +78,7 @@ TEST(ExtremesGeometry, GeometryBehindAndCrossingTheLightPlane) {
   const std::optional<Baked> baked = Bake(scene);
   ASSERT_TRUE(baked);
   const Errors e = CompareWithExact(baked->image, scene, Grid(2.9, 30, 0.0));
-  std::printf("behind/crossing: n=%zu nan %zu mean %.4f max %.4f\n", e.count, e.nan, e.mean,
-              e.max);
+  std::printf("behind/crossing: n=%zu nan %zu mean %.4f max %.4f\n", e.count, e.nan, e.mean, e.max);
   EXPECT_EQ(e.nan, 0u);
   EXPECT_LT(e.mean, 0.02);
   // Not everything is in shadow: the quad behind the light casts nothing.

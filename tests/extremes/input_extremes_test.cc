@@ -44,11 +44,11 @@ void PrintTo(const BadNumber& bad, std::ostream* os) {
 std::string SceneWith(const BadNumber& bad) {
   std::string text = kTemplate;
   const std::pair<const char*, const char*> good[] = {
-      {"$POS", "3"}, {"$TX", "0"}, {"$CY", "5"}, {"$SIZE", "1"},
+      {"$POS", "3"},    {"$TX", "0"},       {"$CY", "5"},    {"$SIZE", "1"},
       {"$EPS", "0.01"}, {"$BIAS", "0.001"}, {"$WIN", "-0.7"}};
   for (const auto& [key, value] : good) {
-    text = absl::StrReplaceAll(text, {{key, key == std::string(bad.placeholder) ? bad.value
-                                                                                : value}});
+    text =
+        absl::StrReplaceAll(text, {{key, key == std::string(bad.placeholder) ? bad.value : value}});
   }
   return text;
 }
@@ -74,8 +74,7 @@ TEST_P(ExtremesInput, RefusedNamingTheField) {
   ASSERT_FALSE(scene.ok()) << GetParam().placeholder << " = " << GetParam().value;
   EXPECT_EQ(scene.status().code(), absl::StatusCode::kInvalidArgument) << scene.status();
   EXPECT_NE(scene.status().message().find(path), std::string::npos) << scene.status();
-  EXPECT_NE(scene.status().message().find(GetParam().field), std::string::npos)
-      << scene.status();
+  EXPECT_NE(scene.status().message().find(GetParam().field), std::string::npos) << scene.status();
 }
 
 // Test names say which placeholder and which value: "POS_NaN", "SIZE_1e400".

@@ -70,8 +70,7 @@ TEST(ExtremesLight, GrazingLight) {
   scene.meshes = {Quad(-3, 3, -3, 3, 0.0, MeshRole::kReceiverOnly), wall};
   const double tilt = 5.0 * M_PI / 180.0;
   const glm::dvec3 up(0, 1, 0);
-  scene.light.frame =
-      MakeLightFrame({-8, 0.8, 0}, {std::cos(tilt), -std::sin(tilt), 0}, &up);
+  scene.light.frame = MakeLightFrame({-8, 0.8, 0}, {std::cos(tilt), -std::sin(tilt), 0}, &up);
   scene.light.half_width = scene.light.half_height = 0.25;
   scene.bake.width = scene.bake.height = 64;
   scene.bake.samples = 64;
@@ -102,7 +101,8 @@ TEST(ExtremesLight, LightFacingAway) {
   EXPECT_EQ(baked->summary.tiles_all_lit, baked->summary.tiles);
   EXPECT_EQ(VertexCount(baked->image), 0u);
   int nan = 0;
-  for (const glm::dvec3& p : Grid(2.9, 10, 0.0)) nan += std::isnan(QueryAttenuation(baked->image, p));
+  for (const glm::dvec3& p : Grid(2.9, 10, 0.0))
+    nan += std::isnan(QueryAttenuation(baked->image, p));
   EXPECT_EQ(nan, 100);
   // In front of it, lit.
   EXPECT_EQ(QueryAttenuation(baked->image, {0, 6.5, 0}), 0.0);
@@ -131,12 +131,11 @@ TEST(ExtremesLight, TranslatedByAMillionAnswersAsAtTheOrigin) {
   // Measured: 0 (the functions are the same bits).
   EXPECT_LE(max_diff, 1e-6);
   EXPECT_EQ(near_bake->image.vertices.size(), far_bake->image.vertices.size());
-  const Errors e = CompareWithExact(far_bake->image, far_scene,
-                                    [&] {
-                                      std::vector<glm::dvec3> pts = Grid(2.9, 20, 0.0);
-                                      for (glm::dvec3& p : pts) p += offset;
-                                      return pts;
-                                    }());
+  const Errors e = CompareWithExact(far_bake->image, far_scene, [&] {
+    std::vector<glm::dvec3> pts = Grid(2.9, 20, 0.0);
+    for (glm::dvec3& p : pts) p += offset;
+    return pts;
+  }());
   std::printf("translated: n=%zu mean %.4f max %.4f\n", e.count, e.mean, e.max);
   EXPECT_LT(e.mean, 0.02);
 }

@@ -12,9 +12,9 @@
 
 #include <chrono>
 #include <fstream>
-#include <sstream>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -106,8 +106,8 @@ class ServiceCluster {
     if (options_.tls) {
       CommandResult r = RunCommand(
           "openssl req -x509 -newkey rsa:2048 -nodes -days 1 -subj /CN=localhost"
-          " -addext subjectAltName=IP:127.0.0.1,DNS:localhost -keyout " + dir_.File("key.pem") +
-              " -out " + dir_.File("cert.pem"),
+          " -addext subjectAltName=IP:127.0.0.1,DNS:localhost -keyout " +
+              dir_.File("key.pem") + " -out " + dir_.File("cert.pem"),
           dir_);
       EXPECT_EQ(r.exit_code, 0) << r.err;
     }
@@ -124,16 +124,20 @@ class ServiceCluster {
   bool StartCoordinator() {
     const std::string ready = dir_.File("ready");
     std::remove(ready.c_str());
-    std::vector<std::string> argv = {PDSM_COORDINATOR, "--listen",
+    std::vector<std::string> argv = {PDSM_COORDINATOR,
+                                     "--listen",
                                      address_.empty() ? "127.0.0.1:0" : address_,
-                                     "--data-dir", dir_.File("data"), "--ready-file", ready};
+                                     "--data-dir",
+                                     dir_.File("data"),
+                                     "--ready-file",
+                                     ready};
     if (!options_.client_token.empty()) {
       argv.insert(argv.end(), {"--client-token-file", dir_.File("client_token"),
                                "--worker-token-file", dir_.File("worker_token")});
     }
     if (options_.tls) {
-      argv.insert(argv.end(), {"--tls-cert", dir_.File("cert.pem"), "--tls-key",
-                               dir_.File("key.pem")});
+      argv.insert(argv.end(),
+                  {"--tls-cert", dir_.File("cert.pem"), "--tls-key", dir_.File("key.pem")});
     }
     argv.insert(argv.end(), options_.coordinator_args.begin(), options_.coordinator_args.end());
     coordinator_ = std::make_unique<ChildProcess>(argv, dir_.File("coordinator.log"));
@@ -156,8 +160,12 @@ class ServiceCluster {
 
   // Starts a worker; returns its index.
   size_t AddWorker(int threads = 1) {
-    std::vector<std::string> argv = {PDSM_WORKER, "--coordinator", address_, "--threads",
-                                     std::to_string(threads), "--cache-dir",
+    std::vector<std::string> argv = {PDSM_WORKER,
+                                     "--coordinator",
+                                     address_,
+                                     "--threads",
+                                     std::to_string(threads),
+                                     "--cache-dir",
                                      dir_.File("cache" + std::to_string(workers_.size()))};
     if (!options_.worker_token.empty()) {
       argv.insert(argv.end(), {"--token-file", dir_.File("worker_token")});
@@ -210,8 +218,7 @@ class ServiceCluster {
   }
 
   template <typename Predicate>
-  pdsm::v1::Job WaitUntil(const std::string& job_id, std::chrono::seconds timeout,
-                          Predicate done) {
+  pdsm::v1::Job WaitUntil(const std::string& job_id, std::chrono::seconds timeout, Predicate done) {
     const auto end = std::chrono::steady_clock::now() + timeout;
     pdsm::v1::Job job;
     while (std::chrono::steady_clock::now() < end) {
@@ -248,8 +255,8 @@ class ServiceCluster {
 
 // A scene for the service tests: the plates example with one caster read from an OBJ file
 // (so mesh assets travel), written into `dir`. Returns the scene path.
-inline std::string WriteServiceScene(const TempDir& dir, int resolution, int samples,
-                                     int tile_size, int sm_resolution = 512) {
+inline std::string WriteServiceScene(const TempDir& dir, int resolution, int samples, int tile_size,
+                                     int sm_resolution = 512) {
   WriteText(dir.File("box.obj"),
             "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\n"
             "v -1 0.5 -1\nv 1 0.5 -1\nv 1 0.5 1\nv -1 0.5 1\n"
@@ -265,7 +272,8 @@ inline std::string WriteServiceScene(const TempDir& dir, int resolution, int sam
      "transform": [1,0,0,0.5, 0,1,0,2, 0,0,1,0.5, 0,0,0,1]}
   ],
   "light": {"rect": {"center": [0,10,0], "normal": [0,-1,0], "up": [0,0,1], "size": [3,3]}},
-  "bake": {"resolution": [)" + std::to_string(resolution) + "," + std::to_string(resolution) +
+  "bake": {"resolution": [)" +
+                      std::to_string(resolution) + "," + std::to_string(resolution) +
                       R"(], "samples": )" + std::to_string(samples) +
                       R"(, "shadowMapResolution": )" + std::to_string(sm_resolution) +
                       R"(, "tileSize": )" + std::to_string(tile_size) + R"(, "epsilon": 0.01}

@@ -50,8 +50,7 @@ TEST(Service, SubmitRefusesBadScenesBeforeSendingAnything) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find(bad + ": meshes[1].path"), std::string::npos) << r.err;
 
-  r = submit_with("\"path\": \"box.obj\"",
-                  "\"assetSha256\": \"" + std::string(64, 'a') + "\"");
+  r = submit_with("\"path\": \"box.obj\"", "\"assetSha256\": \"" + std::string(64, 'a') + "\"");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("meshes[1].assetSha256"), std::string::npos) << r.err;
 }
@@ -84,10 +83,10 @@ TEST(Service, ThreeWorkersMatchTheLocalBakeByteForByte) {
   WriteText(cluster.dir().File("points.csv"), "0,0,0\n1.2,0.01,-0.3\n-1.5,2,-1\n50,0,50\n");
   CommandResult remote =
       cluster.Pdsm("query --job " + job_id + " --points " + cluster.dir().File("points.csv"));
-  CommandResult local = RunCommand(std::string(PDSM_CLI) + " query " +
-                                       cluster.dir().File("local.exr") + " --points " +
-                                       cluster.dir().File("points.csv"),
-                                   cluster.dir());
+  CommandResult local =
+      RunCommand(std::string(PDSM_CLI) + " query " + cluster.dir().File("local.exr") +
+                     " --points " + cluster.dir().File("points.csv"),
+                 cluster.dir());
   ASSERT_EQ(remote.exit_code, 0) << remote.err;
   EXPECT_EQ(remote.out, local.out);
 
@@ -188,9 +187,8 @@ TEST(Service, TerminatedWorkerHandsBackItsTaskAndExitsZero) {
   const std::string expected = LocalBakeBytes(cluster.dir(), scene);
   const size_t leaving = cluster.AddWorker();
   const std::string job_id = cluster.Submit(scene);
-  const pdsm::v1::Job running = cluster.WaitUntil(job_id, seconds(60), [](const auto& j) {
-    return j.samples_done() > 0 || Ended(j);
-  });
+  const pdsm::v1::Job running = cluster.WaitUntil(
+      job_id, seconds(60), [](const auto& j) { return j.samples_done() > 0 || Ended(j); });
   ASSERT_FALSE(Ended(running));
   cluster.worker(leaving).Signal(SIGTERM);
   const int status = cluster.worker(leaving).Wait(std::chrono::seconds(20));
@@ -214,9 +212,8 @@ TEST(Service, CoordinatorKilledMidJobResumesWithoutRecomputingFinishedTiles) {
   ASSERT_EQ(cluster.WaitForEnd(done_before).state(), pdsm::v1::SUCCEEDED);
 
   const std::string job_id = cluster.Submit(scene);
-  const pdsm::v1::Job partial = cluster.WaitUntil(job_id, seconds(60), [](const auto& j) {
-    return j.tiles_done() >= 8 || Ended(j);
-  });
+  const pdsm::v1::Job partial = cluster.WaitUntil(
+      job_id, seconds(60), [](const auto& j) { return j.tiles_done() >= 8 || Ended(j); });
   ASSERT_FALSE(Ended(partial)) << "the job ended before the coordinator could be killed";
   cluster.coordinator().Signal(SIGKILL);
   cluster.coordinator().Wait(seconds(10));
@@ -240,9 +237,8 @@ TEST(Service, CoordinatorKilledMidAdaptiveJobGivesTheSameBytes) {
   const std::string expected = LocalBakeBytes(cluster.dir(), scene);
   cluster.AddWorker();
   const std::string job_id = cluster.Submit(scene);
-  const pdsm::v1::Job partial = cluster.WaitUntil(job_id, seconds(60), [](const auto& j) {
-    return j.tiles_done() >= 8 || Ended(j);
-  });
+  const pdsm::v1::Job partial = cluster.WaitUntil(
+      job_id, seconds(60), [](const auto& j) { return j.tiles_done() >= 8 || Ended(j); });
   ASSERT_FALSE(Ended(partial)) << "the job ended before the coordinator could be killed";
   cluster.coordinator().Signal(SIGKILL);
   cluster.coordinator().Wait(seconds(10));
@@ -259,9 +255,8 @@ TEST(Service, CancelStopsTheJobAndFreesTheWorkers) {
   cluster.AddWorker();
   const std::string big = WriteServiceScene(cluster.dir(), 512, 1024, 32, 2048);
   const std::string job_id = cluster.Submit(big);
-  cluster.WaitUntil(job_id, seconds(60), [](const pdsm::v1::Job& j) {
-    return j.samples_done() > 0 || Ended(j);
-  });
+  cluster.WaitUntil(job_id, seconds(60),
+                    [](const pdsm::v1::Job& j) { return j.samples_done() > 0 || Ended(j); });
   CommandResult cancel = cluster.Pdsm("cancel " + job_id);
   ASSERT_EQ(cancel.exit_code, 0) << cancel.err;
   EXPECT_EQ(cluster.WaitForEnd(job_id, seconds(5)).state(), pdsm::v1::CANCELLED);
@@ -350,14 +345,13 @@ TEST(Service, BadCallersAndBadJobsGetTheRightStatusAndDisturbNothing) {
 
   pdsm::v1::Scene oversized = too_big;
   oversized.mutable_bake()->clear_resolution();
-  for (int i = 0; i < 200'000; ++i) mesh = oversized.mutable_meshes(0)->mutable_inline_(),
-                                    mesh->add_positions(0.5);
+  for (int i = 0; i < 200'000; ++i)
+    mesh = oversized.mutable_meshes(0)->mutable_inline_(), mesh->add_positions(0.5);
   EXPECT_EQ(submit(oversized).error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
 
   // The CLI without a token says what is missing and exits non-zero.
-  CommandResult no_token = RunCommand(std::string(PDSM_CLI) + " status " + good + " --server " +
-                                          cluster.address(),
-                                      cluster.dir());
+  CommandResult no_token = RunCommand(
+      std::string(PDSM_CLI) + " status " + good + " --server " + cluster.address(), cluster.dir());
   EXPECT_NE(no_token.exit_code, 0);
   EXPECT_NE(no_token.err.find("--token-file"), std::string::npos) << no_token.err;
 
@@ -378,8 +372,7 @@ TEST(Service, TlsCarriesTheWholeBakeAndPlaintextClientsAreRefused) {
   const std::string scene = WriteServiceScene(cluster.dir(), 64, 16, 32);
   const std::string expected = LocalBakeBytes(cluster.dir(), scene);
   const std::string job_id = cluster.Submit(scene);
-  ASSERT_EQ(cluster.WaitForEnd(job_id).state(), pdsm::v1::SUCCEEDED)
-      << cluster.Log("worker0.log");
+  ASSERT_EQ(cluster.WaitForEnd(job_id).state(), pdsm::v1::SUCCEEDED) << cluster.Log("worker0.log");
   EXPECT_TRUE(FetchBytes(cluster, job_id) == expected);
 
   // A client that does not speak TLS gets no answer, let alone a job.
@@ -389,8 +382,7 @@ TEST(Service, TlsCarriesTheWholeBakeAndPlaintextClientsAreRefused) {
   pdsm::v1::GetJobRequest request;
   request.set_job_id(job_id);
   pdsm::v1::Job job;
-  EXPECT_EQ(plaintext->GetJob(&context, request, &job).error_code(),
-            grpc::StatusCode::UNAVAILABLE);
+  EXPECT_EQ(plaintext->GetJob(&context, request, &job).error_code(), grpc::StatusCode::UNAVAILABLE);
 }
 
 // grpc.health.v1.Health/Check over a generic stub (the health proto is not in our schema):
@@ -410,8 +402,8 @@ TEST(Service, AnswersTheStandardHealthCheckWithoutAToken) {
   std::condition_variable cv;
   bool done = false;
   grpc::Status status;
-  stub.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request,
-                 &response, [&](grpc::Status s) {
+  stub.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,
+                 [&](grpc::Status s) {
                    std::lock_guard<std::mutex> lock(mu);
                    status = s;
                    done = true;

@@ -25,16 +25,15 @@ constexpr double kMaxOutlierFraction = 1e-3;
 constexpr char kSphere[] = "--sphere -1.5,1.0,-1.0,0.6";
 constexpr char kCamera[] = "--camera 4,7,6,0,1,0,40";
 
-FloatImage RenderAttenuation(const std::string& mode, const std::string& extra,
-                             const TempDir& dir, bool surfaces_only = false) {
+FloatImage RenderAttenuation(const std::string& mode, const std::string& extra, const TempDir& dir,
+                             bool surfaces_only = false) {
   const std::string pfm = dir.File(mode + ".pfm");
-  CommandResult r = RunView("plates",
-                            "--pdsm " + SmallBake("plates", surfaces_only) +
-                                " --headless --size 160x120 " +
-                                kCamera + " --mode " + mode + " --screenshot " +
-                                dir.File(mode + ".png") + " --save-attenuation " + pfm + " " +
-                                extra,
-                            dir);
+  CommandResult r =
+      RunView("plates",
+              "--pdsm " + SmallBake("plates", surfaces_only) + " --headless --size 160x120 " +
+                  kCamera + " --mode " + mode + " --screenshot " + dir.File(mode + ".png") +
+                  " --save-attenuation " + pfm + " " + extra,
+              dir);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   absl::StatusOr<FloatImage> image = view::ReadPfm(pfm);
   EXPECT_TRUE(image.ok()) << image.status();
@@ -108,8 +107,8 @@ TEST(ViewAgreement, GpuPdsmMatchesCpuQueryPerPixel) {
 // for a full file; on the dynamic sphere both say "unknown" (NaN on the CPU) -- the same
 // pixels, checked by the outside-pixel comparison.
 TEST(ViewAgreement, SurfacesOnlyPdsmGpuMatchesCpu) {
-  const size_t surface = ExpectGpuMatchesCpu(/*surfaces_only=*/true,
-                                             "agreement_surfaces_only_diff.png");
+  const size_t surface =
+      ExpectGpuMatchesCpu(/*surfaces_only=*/true, "agreement_surfaces_only_diff.png");
   TempDir dir;
   const FloatImage gpu = RenderAttenuation("pdsm", kSphere, dir, /*surfaces_only=*/true);
   const std::vector<bool> sphere = SphereMask("pdsm", dir);
@@ -164,11 +163,11 @@ TEST(ViewAgreement, DynamicMeshReceivesPdsmShadow) {
             "v -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
             "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n"
             "f 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n");
-  const FloatImage with = RenderAttenuation(
-      "pdsm",
-      "--object " + dir.File("box.obj") +
-          " --object-transform 0.5,0,0,-1.5,0,0.5,0,1.0,0,0,0.5,-1.0,0,0,0,1",
-      dir);
+  const FloatImage with =
+      RenderAttenuation("pdsm",
+                        "--object " + dir.File("box.obj") +
+                            " --object-transform 0.5,0,0,-1.5,0,0.5,0,1.0,0,0,0.5,-1.0,0,0,0,1",
+                        dir);
   const std::vector<bool> box = SphereMask("pdsm", dir);
   ASSERT_EQ(box.size(), with.values.size());
   size_t pixels = 0, umbra = 0;

@@ -11,8 +11,8 @@ namespace {
 CommandResult Headless(const std::string& example, const std::string& pdsm,
                        const std::string& extra, const TempDir& dir) {
   return RunView(example,
-                 "--pdsm " + pdsm + " --headless --size 32x24 --screenshot " +
-                     dir.File("out.png") + " " + extra,
+                 "--pdsm " + pdsm + " --headless --size 32x24 --screenshot " + dir.File("out.png") +
+                     " " + extra,
                  dir);
 }
 
@@ -21,7 +21,8 @@ TEST(ViewBadInput, CorruptPdsmNamesTheFile) {
   std::string bytes = ReadBytes(SmallBake("plates"));
   ASSERT_GT(bytes.size(), 2000u);
   // Keep the EXR header, scramble the tile data.
-  for (size_t i = bytes.size() / 2; i < bytes.size(); i += 7) bytes[i] = static_cast<char>(~bytes[i]);
+  for (size_t i = bytes.size() / 2; i < bytes.size(); i += 7)
+    bytes[i] = static_cast<char>(~bytes[i]);
   const std::string corrupt = dir.File("corrupt.exr");
   WriteText(corrupt, bytes);
   CommandResult r = Headless("plates", corrupt, "", dir);
@@ -56,10 +57,10 @@ TEST(ViewBadInput, LightEditedAfterTheBakeIsRefused) {
   scene.replace(scene.find(from), from.size(), "\"size\": [4,3]");
   const std::string edited = dir.File("scene.json");
   WriteText(edited, scene);
-  CommandResult r = RunCommand(std::string(PDSM_VIEW) + " " + edited + " --pdsm " +
-                                   SmallBake("plates") + " --headless --screenshot " +
-                                   dir.File("out.png"),
-                               dir);
+  CommandResult r =
+      RunCommand(std::string(PDSM_VIEW) + " " + edited + " --pdsm " + SmallBake("plates") +
+                     " --headless --screenshot " + dir.File("out.png"),
+                 dir);
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("light size"), std::string::npos) << r.err;
 }
@@ -85,10 +86,10 @@ TEST(ViewBadInput, MissingFilesAndBadFlags) {
   EXPECT_NE(r.err.find("--mode"), std::string::npos) << r.err;
 
   WriteText(dir.File("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-  r = Headless("plates", SmallBake("plates"),
-               "--object " + dir.File("tri.obj") +
-                   " --object-transform 1,0,0,0,0,0,0,0,0,0,1,0,0,0,0,1",
-               dir);
+  r = Headless(
+      "plates", SmallBake("plates"),
+      "--object " + dir.File("tri.obj") + " --object-transform 1,0,0,0,0,0,0,0,0,0,1,0,0,0,0,1",
+      dir);
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("--object-transform[0]"), std::string::npos) << r.err;
 

@@ -34,14 +34,14 @@ std::string WriteFarPlates(const TempDir& dir) {
   return dir.File("far.json");
 }
 
-view::FloatImage Render(const std::string& scene, const std::string& pdsm,
-                        const std::string& mode, const std::string& camera, const TempDir& dir) {
+view::FloatImage Render(const std::string& scene, const std::string& pdsm, const std::string& mode,
+                        const std::string& camera, const TempDir& dir) {
   const std::string pfm = dir.File(mode + std::to_string(std::hash<std::string>()(scene)) + ".pfm");
-  CommandResult r = RunCommand(std::string(PDSM_VIEW) + " " + scene + " --pdsm " + pdsm +
-                                   " --headless --size 160x120 --camera " + camera +
-                                   " --mode " + mode + " --screenshot " + dir.File("x.png") +
-                                   " --save-attenuation " + pfm,
-                               dir);
+  CommandResult r =
+      RunCommand(std::string(PDSM_VIEW) + " " + scene + " --pdsm " + pdsm +
+                     " --headless --size 160x120 --camera " + camera + " --mode " + mode +
+                     " --screenshot " + dir.File("x.png") + " --save-attenuation " + pfm,
+                 dir);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   absl::StatusOr<view::FloatImage> image = view::ReadPfm(pfm);
   EXPECT_TRUE(image.ok()) << image.status();
@@ -66,8 +66,8 @@ TEST(ViewFarWorld, GpuMatchesCpuAndTheSceneAtTheOrigin) {
   const std::string far_camera = "1000004,7,-1999994,1000000,1,-2000000,40";
   const view::FloatImage gpu = Render(far_scene, dir.File("far.exr"), "pdsm", far_camera, dir);
   const view::FloatImage cpu = Render(far_scene, dir.File("far.exr"), "cpu", far_camera, dir);
-  const view::FloatImage near = Render(ExamplePath("plates"), SmallBake("plates"), "pdsm",
-                                       "4,7,6,0,1,0,40", dir);
+  const view::FloatImage near =
+      Render(ExamplePath("plates"), SmallBake("plates"), "pdsm", "4,7,6,0,1,0,40", dir);
   ASSERT_EQ(gpu.values.size(), cpu.values.size());
   ASSERT_EQ(gpu.values.size(), near.values.size());
   size_t surface = 0, gpu_cpu_outliers = 0, far_near_outliers = 0, shadowed = 0;

@@ -40,14 +40,15 @@ void WriteFailureImages(const view::RgbImage& actual, const view::RgbImage& gold
     }
   }
   ASSERT_TRUE(view::WritePng(base + "_diff.png", diff).ok());
-  ADD_FAILURE() << "golden " << GoldenPath(name) << " differs; see " << base
-                << "_actual.png and " << base << "_diff.png";
+  ADD_FAILURE() << "golden " << GoldenPath(name) << " differs; see " << base << "_actual.png and "
+                << base << "_diff.png";
 }
 
 void ExpectMatchesGolden(const std::string& png, const std::string& name) {
   absl::StatusOr<view::RgbImage> actual = view::ReadPng(png);
   ASSERT_TRUE(actual.ok()) << actual.status();
-  if (const char* update = std::getenv("PDSM_UPDATE_GOLDENS"); update && std::string(update) == "1") {
+  if (const char* update = std::getenv("PDSM_UPDATE_GOLDENS");
+      update && std::string(update) == "1") {
     ASSERT_TRUE(view::WritePng(GoldenPath(name), *actual).ok());
     GTEST_SKIP() << "updated " << GoldenPath(name);
   }
@@ -75,12 +76,13 @@ void ExpectMatchesGolden(const std::string& png, const std::string& name) {
 TEST(ViewGolden, PlatesEveryMode) {
   TempDir dir;
   const std::string png = dir.File("plates.png");
-  CommandResult r = RunView(
-      "plates",
-      "--pdsm " + SmallBake("plates") +
-          " --headless --size 160x120 --camera 4,7,6,0,1,0,40 --sphere 2,0.8,2.5,0.5"
-          " --compare pdsm,cpu,hard,pcf,pcss,vsm,multi-sm --screenshot " + png,
-      dir);
+  CommandResult r =
+      RunView("plates",
+              "--pdsm " + SmallBake("plates") +
+                  " --headless --size 160x120 --camera 4,7,6,0,1,0,40 --sphere 2,0.8,2.5,0.5"
+                  " --compare pdsm,cpu,hard,pcf,pcss,vsm,multi-sm --screenshot " +
+                  png,
+              dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("pdsm,cpu,hard,pcf,pcss,vsm,multi-sm"), std::string::npos) << r.out;
   ExpectMatchesGolden(png, "view_plates_modes");
@@ -93,7 +95,8 @@ TEST(ViewGolden, SunPillarsPdsmHardMultiSm) {
   CommandResult r = RunView("sun_pillars",
                             "--pdsm " + SmallBake("sun_pillars") +
                                 " --headless --size 160x120 --compare pdsm,hard,multi-sm "
-                                "--screenshot " + png,
+                                "--screenshot " +
+                                png,
                             dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   ExpectMatchesGolden(png, "view_sun_pillars_modes");

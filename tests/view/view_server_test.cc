@@ -41,12 +41,12 @@ TEST(ViewServer, JobOnTheServiceLooksLikeTheLocalBake) {
 
   // Started at once: the viewer waits for the job to finish (WatchJob), then fetches.
   const std::string view_args = " --headless --size 96x72 --screenshot ";
-  CommandResult remote = RunCommand(
-      std::string(PDSM_VIEW) + " " + scene + " --server " + cluster.address() + " --job " +
-          job_id + " --token-file " + cluster.dir().File("client_token") + view_args +
-          cluster.dir().File("remote.png") + " --save-attenuation " +
-          cluster.dir().File("remote.pfm"),
-      cluster.dir());
+  CommandResult remote =
+      RunCommand(std::string(PDSM_VIEW) + " " + scene + " --server " + cluster.address() +
+                     " --job " + job_id + " --token-file " + cluster.dir().File("client_token") +
+                     view_args + cluster.dir().File("remote.png") + " --save-attenuation " +
+                     cluster.dir().File("remote.pfm"),
+                 cluster.dir());
   ASSERT_EQ(remote.exit_code, 0) << remote.err << cluster.Log("coordinator.log");
   EXPECT_NE(remote.err.find("SUCCEEDED"), std::string::npos) << remote.err;
 
@@ -54,11 +54,11 @@ TEST(ViewServer, JobOnTheServiceLooksLikeTheLocalBake) {
                                       cluster.dir().File("local.exr") + " --no-preview",
                                   cluster.dir());
   ASSERT_EQ(bake.exit_code, 0) << bake.err;
-  CommandResult local = RunCommand(std::string(PDSM_VIEW) + " " + scene + " --pdsm " +
-                                       cluster.dir().File("local.exr") + view_args +
-                                       cluster.dir().File("local.png") + " --save-attenuation " +
-                                       cluster.dir().File("local.pfm"),
-                                   cluster.dir());
+  CommandResult local =
+      RunCommand(std::string(PDSM_VIEW) + " " + scene + " --pdsm " +
+                     cluster.dir().File("local.exr") + view_args + cluster.dir().File("local.png") +
+                     " --save-attenuation " + cluster.dir().File("local.pfm"),
+                 cluster.dir());
   ASSERT_EQ(local.exit_code, 0) << local.err;
   // The service's PDSM has the local bake's bytes, so the renders are identical.
   EXPECT_TRUE(ReadBytes(cluster.dir().File("remote.pfm")) ==
@@ -66,11 +66,11 @@ TEST(ViewServer, JobOnTheServiceLooksLikeTheLocalBake) {
 
   // A wrong token is refused before anything is drawn.
   WriteText(cluster.dir().File("bad_token"), "nope\n");
-  CommandResult refused = RunCommand(
-      std::string(PDSM_VIEW) + " " + scene + " --server " + cluster.address() + " --job " +
-          job_id + " --token-file " + cluster.dir().File("bad_token") + view_args +
-          cluster.dir().File("refused.png"),
-      cluster.dir());
+  CommandResult refused =
+      RunCommand(std::string(PDSM_VIEW) + " " + scene + " --server " + cluster.address() +
+                     " --job " + job_id + " --token-file " + cluster.dir().File("bad_token") +
+                     view_args + cluster.dir().File("refused.png"),
+                 cluster.dir());
   EXPECT_NE(refused.exit_code, 0);
   EXPECT_FALSE(std::filesystem::exists(cluster.dir().File("refused.png")));
 }
@@ -142,8 +142,7 @@ class TaskHolder {
 // tiles and then has nothing to lease: the partial state is fixed (4 of 9 tiles, RUNNING)
 // while the viewer looks at it, and the view has baked and pending tiles side by side.
 TEST(ViewServer, RunningJobShowsItsFinishedTilesAsTheyWillBe) {
-  ServiceCluster cluster(
-      CoordinatorArgs({"--samples-per-task", "4", "--lease-seconds", "600"}));
+  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "4", "--lease-seconds", "600"}));
   ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
   // 96x96 pixels in tiles of 32: 9 tiles of 8 tasks each.
   std::string text = ReadBytes(WriteSmallPlates(cluster.dir()));
@@ -167,13 +166,13 @@ TEST(ViewServer, RunningJobShowsItsFinishedTilesAsTheyWillBe) {
   ASSERT_EQ(job.state(), pdsm::v1::RUNNING) << cluster.Log("coordinator.log");
   ASSERT_EQ(job.tiles_total(), 9);
   ASSERT_EQ(job.tiles_done(), 4) << cluster.Log("coordinator.log");
-  const std::string view = std::string(PDSM_VIEW) + " " + scene + " --server " +
-                           cluster.address() + " --job " + job_id +
+  const std::string view = std::string(PDSM_VIEW) + " " + scene + " --server " + cluster.address() +
+                           " --job " + job_id +
                            " --headless --size 128x96 --camera 4,7,6,0,1,0,40 --screenshot ";
-  CommandResult partial = RunCommand(view + cluster.dir().File("partial.png") +
-                                         " --partial --save-attenuation " +
-                                         cluster.dir().File("partial.pfm"),
-                                     cluster.dir());
+  CommandResult partial =
+      RunCommand(view + cluster.dir().File("partial.png") + " --partial --save-attenuation " +
+                     cluster.dir().File("partial.pfm"),
+                 cluster.dir());
   // The CPU evaluation of the same partial PDSM flags the same pixels as not baked yet.
   CommandResult partial_cpu = RunCommand(view + cluster.dir().File("partial_cpu.png") +
                                              " --partial --mode cpu --save-attenuation " +

@@ -6,9 +6,9 @@
 #include <map>
 #include <string>
 
-#include "worker/local_bake.h"
 #include "core/scene/scene_loader.h"
 #include "tests/test_support.h"
+#include "worker/local_bake.h"
 
 namespace pdsm::testing {
 

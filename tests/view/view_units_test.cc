@@ -70,14 +70,14 @@ TEST(ViewUnits, ShadowMapProjectionFollowsTheBakeGeometry) {
     header.geometry.z_near = 2, header.geometry.z_far = 20;
     header.light_half_width = 1.5, header.light_half_height = 0.5;
     header.tan_half_angle = 0.02;
-    header.light_shape = projection == Projection::kPerspective ? LightShape::kRect : LightShape::kSun;
+    header.light_shape =
+        projection == Projection::kPerspective ? LightShape::kRect : LightShape::kSun;
     const view::ShadowMapLayout layout = view::MakeShadowMapLayout(header, 256, true);
     for (int i = 0; i < 500; ++i) {
       const glm::dvec2 sample(unit(rng) * 0.02, unit(rng) * 0.02);
       const glm::dvec3 p(unit(rng) * 3, unit(rng) * 3, 2 + 18 * (0.5 + 0.5 * unit(rng)));
-      const glm::dvec2 st = projection == Projection::kPerspective
-                                ? (glm::dvec2(p) - sample) / p.z
-                                : glm::dvec2(p) - sample * p.z;
+      const glm::dvec2 st = projection == Projection::kPerspective ? (glm::dvec2(p) - sample) / p.z
+                                                                   : glm::dvec2(p) - sample * p.z;
       const glm::dvec2 expected_ndc = 2.0 * (st - layout.window_min) / layout.window_size - 1.0;
       const glm::vec4 clip = view::ShadowClipFromLight(header, layout, sample) * glm::vec4(p, 1);
       EXPECT_NEAR(clip.x / clip.w, expected_ndc.x, 1e-4);
