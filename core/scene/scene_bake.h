@@ -1,0 +1,25 @@
+// The bake parameters of a scene message (after any overrides), validated into BakeSettings
+// with every default filled in. Internal to core/scene (not a public API); see scene_loader.h
+// for that.
+#ifndef PDSM_CORE_SCENE_SCENE_BAKE_H_
+#define PDSM_CORE_SCENE_SCENE_BAKE_H_
+
+#include "absl/status/statusor.h"
+#include "core/scene/field_checker.h"
+#include "core/scene/scene.h"
+#include "pdsm/v1/scene.pb.h"
+
+namespace pdsm::internal {
+
+// The settings `bake` asks for, unset fields at their defaults (scene.h). `shape` is the
+// scene's light: a sun's orthographic frustum may start behind its plane. An adaptive bake
+// (adaptiveTolerance > 0) defaults to SOBOL sampling, refuses STRATIFIED, and has its minimum
+// sample count capped at `samples`. Errors (from `checks`, fields under "bake."): a count or
+// size out of its [1, max] range (scene.h's kMax*), a value outside its interval, an unknown
+// enum value, a malformed frustum.
+absl::StatusOr<BakeSettings> BuildBake(const FieldChecker& checks, const pdsm::v1::BakeParams& bake,
+                                       LightShape shape);
+
+}  // namespace pdsm::internal
+
+#endif  // PDSM_CORE_SCENE_SCENE_BAKE_H_

@@ -1,0 +1,37 @@
+// One mesh of a scene message, loaded (inline, from a file or from an uploaded asset),
+// transformed to world space and validated into a TriangleMesh. Internal to core/scene (not a
+// public API); see scene_loader.h for that.
+#ifndef PDSM_CORE_SCENE_SCENE_MESH_H_
+#define PDSM_CORE_SCENE_SCENE_MESH_H_
+
+#include <string>
+
+#include "absl/status/statusor.h"
+#include "core/scene/field_checker.h"
+#include "core/scene/scene.h"
+#include "core/scene/scene_loader.h"
+#include "pdsm/v1/scene.pb.h"
+
+namespace pdsm::internal {
+
+// Where BuildMesh may read mesh data from, besides the message itself.
+struct MeshSources {
+  std::string base_dir;                       // resolves relative paths; empty: files refused
+  const MeshAssetResolver* assets = nullptr;  // loads assetSha256 meshes; null: assets refused
+};
+
+// `path` as is when absolute, else against `base_dir`, normalized lexically.
+std::string ResolveAgainst(const std::string& base_dir, const std::string& path);
+
+// meshes[index] of a scene. World positions are computed in double in a fixed order of
+// operations, so every build gives the same bits. Errors (from `checks`, fields under
+// "meshes[index]."): an unknown role, no source, a malformed transform (not 0 or 16 finite
+// numbers, a projective last row, a singular 3x3 part), a transform that moves a vertex out of
+// the finite range, bad inline data, a source `sources` refuses, and the errors of
+// LoadMeshFile and of the asset resolver as they are.
+absl::StatusOr<TriangleMesh> BuildMesh(const FieldChecker& checks, const MeshSources& sources,
+                                       int index, const pdsm::v1::Mesh& mesh);
+
+}  // namespace pdsm::internal
+
+#endif  // PDSM_CORE_SCENE_SCENE_MESH_H_
