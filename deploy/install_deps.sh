@@ -16,8 +16,9 @@ packages=(
   libboost-dev libsqlite3-dev libssl-dev
   # TLS certificates for the service tests
   openssl
-  # clang: the thread-safety analysis test (scripts/check_thread_safety.py)
-  clang
+  # clang: the thread-safety analysis test (scripts/check_thread_safety.py); clang-format:
+  # the format check (tests/CMakeLists.txt)
+  clang clang-format
   # pdsm-view's window; Embree occlusion rays for `pdsm reference`
   libglfw3-dev libembree-dev
   # the windowed pdsm-view test runs under a virtual X server; sweep.png is drawn by gnuplot
