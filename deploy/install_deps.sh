@@ -19,8 +19,8 @@ packages=(
   # clang: the thread-safety analysis test (scripts/check_thread_safety.py); clang-format:
   # the format check (tests/CMakeLists.txt)
   clang clang-format
-  # pdsm-view's window; Embree occlusion rays for `pdsm reference`
-  libglfw3-dev libembree-dev
+  # pdsm-view's window; Embree occlusion rays for `pdsm reference`; caster clusters
+  libglfw3-dev libembree-dev libmeshoptimizer-dev
   # the windowed pdsm-view test runs under a virtual X server; sweep.png is drawn by gnuplot
   xvfb xauth gnuplot-nox
   # tests/deploy/check_manifests.py: parses the deployment manifests

@@ -281,6 +281,7 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
     if (Casts(mesh.role)) AppendMesh(mesh, g.frame, &plan.casters);
     if (Receives(mesh.role)) AppendMesh(mesh, g.frame, &plan.receivers);
   }
+  plan.caster_clusters = ClusterCasters(&plan.casters);
   return plan;
 }
 

@@ -11,6 +11,7 @@
 #include <glm/glm.hpp>
 
 #include "absl/status/statusor.h"
+#include "core/bake/caster_clusters.h"
 #include "core/bake/shadow_map_lattice.h"
 #include "core/pdsm/pdsm_image.h"
 #include "core/scene/scene.h"
@@ -41,7 +42,8 @@ struct BakePlan {
   double z_scan_floor = 0;
   std::vector<TileRect> tiles;  // row-major grid of header.tile_size
   int tiles_x = 0, tiles_y = 0;
-  LightSpaceMesh casters;
+  LightSpaceMesh casters;  // triangles in spatial order, cut into caster_clusters
+  std::vector<CasterCluster> caster_clusters;
   LightSpaceMesh receivers;
 
   const PdsmGeometry& geometry() const { return header.geometry; }

@@ -69,18 +69,20 @@ std::vector<HalfSpace> ShadowingRegion(const BakePlan& plan, const TileSpan& spa
   return region;
 }
 
-// The nearest depth at which a point of `tri` can shadow a ray of `span` (docs/algorithms.md).
-// With g_hi = x_P - s_hi z_P > 0, a perspective shadow needs a (1 - l) >= g_hi, so
+// The nearest depth at which a point of the convex hull of `points` (a triangle's 3 vertices,
+// a box's 8 corners) can shadow a ray of `span` (docs/algorithms.md). With
+// g_hi = x_P - s_hi z_P > 0, a perspective shadow needs a (1 - l) >= g_hi, so
 // l <= 1 - g_hi / max(a) and z_Q = z_P / l >= z_P / (1 - g_hi / max(a)); the sun needs
-// z_Q - z_P >= g_hi / max(-a). Each g is linear, so its minimum over the triangle is at a
-// vertex; the largest of the four bounds holds. +infinity: the triangle cannot shadow.
+// z_Q - z_P >= g_hi / max(-a). Each g is linear, so its minimum over the hull is at a
+// vertex; the largest of the four bounds holds. +infinity: the hull cannot shadow. The result
+// only grows as the hull shrinks (each minimum grows), so a box's is a bound of its triangles'.
 double NearestShadowedDepth(const BakePlan& plan, const SampleExtent& e, const TileSpan& span,
-                            const glm::dvec3 tri[3]) {
+                            const glm::dvec3* points, int count) {
   const bool sun = plan.geometry().projection == Projection::kOrthographic;
   double g_min[4] = {kInf, kInf, kInf, kInf};
   double z_min = kInf;
-  for (int k = 0; k < 3; ++k) {
-    const glm::dvec3& p = tri[k];
+  for (int k = 0; k < count; ++k) {
+    const glm::dvec3& p = points[k];
     const double zs = sun ? 1.0 : p.z;  // perspective measures offsets at the point's depth
     g_min[0] = std::min(g_min[0], p.x - span.s_hi * zs);
     g_min[1] = std::min(g_min[1], span.s_lo * zs - p.x);
@@ -140,15 +142,82 @@ bool OutsideRegion(const std::vector<HalfSpace>& region, const std::array<glm::d
                      [&](const HalfSpace& h) { return h(p[0]) > 0 && h(p[1]) > 0 && h(p[2]) > 0; });
 }
 
+std::array<glm::dvec3, 8> Corners(const glm::dvec3& lo, const glm::dvec3& hi) {
+  std::array<glm::dvec3, 8> corners;
+  for (int k = 0; k < 8; ++k) {
+    corners[k] = {(k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z};
+  }
+  return corners;
+}
+
+// Whether the whole box lies outside one half-space, so that no triangle inside it can shadow
+// the rays. A linear function's minimum over a box is at a corner; the margin (far above the
+// dot products' rounding) keeps the test from dropping a triangle that the per-triangle test
+// keeps: clusters only save work, the triangles kept are the same.
+bool BoxOutsideRegion(const std::vector<HalfSpace>& region, const glm::dvec3& lo,
+                      const glm::dvec3& hi) {
+  const std::array<glm::dvec3, 8> corners = Corners(lo, hi);
+  return std::any_of(region.begin(), region.end(), [&](const HalfSpace& h) {
+    return std::all_of(corners.begin(), corners.end(), [&](const glm::dvec3& p) {
+      const double scale = glm::dot(glm::abs(h.coef), glm::abs(p)) + std::abs(h.constant);
+      return h(p) > 1e-12 * scale;
+    });
+  });
+}
+
+// NearestShadowedDepth's lower bound over every triangle inside the box, lowered by a relative
+// margin far above rounding: skipping a box whose bound does not beat the best so far never
+// skips a triangle that would.
+double NearestShadowedDepthOfBox(const BakePlan& plan, const SampleExtent& e, const TileSpan& span,
+                                 const glm::dvec3& lo, const glm::dvec3& hi) {
+  const std::array<glm::dvec3, 8> corners = Corners(lo, hi);
+  const double z = NearestShadowedDepth(plan, e, span, corners.data(), 8);
+  return std::isfinite(z) ? z - 1e-9 * std::abs(z) : z;
+}
+
+// The kept triangles of a tile (in the casters' order), grouped by the cluster they came from,
+// each group with the bounding box of its kept triangles.
+struct KeptTriangles {
+  std::vector<uint32_t> triangles;
+  std::vector<glm::dvec3> vertices;  // 3 per kept triangle
+  struct Group {
+    uint32_t begin, end;  // into triangles
+    glm::dvec3 lo, hi;
+  };
+  std::vector<Group> groups;
+};
+
+// The triangles of the casters not wholly outside one of the region's half-spaces, tested
+// cluster by cluster; `first_only` stops at the first one.
+KeptTriangles KeepInside(const BakePlan& plan, const std::vector<HalfSpace>& region,
+                         bool first_only) {
+  KeptTriangles out;
+  for (const CasterCluster& c : plan.caster_clusters) {
+    if (BoxOutsideRegion(region, c.lo, c.hi)) continue;
+    KeptTriangles::Group group{static_cast<uint32_t>(out.triangles.size()), 0, glm::dvec3(kInf),
+                               glm::dvec3(-kInf)};
+    for (uint32_t k = c.first_triangle; k < c.first_triangle + c.triangle_count; ++k) {
+      const std::array<glm::dvec3, 3> p = CasterTriangle(plan.casters, k);
+      if (OutsideRegion(region, p)) continue;
+      out.triangles.push_back(k);
+      for (const glm::dvec3& v : p) {
+        out.vertices.push_back(v);
+        group.lo = glm::min(group.lo, v);
+        group.hi = glm::max(group.hi, v);
+      }
+      if (first_only) return out;
+    }
+    group.end = static_cast<uint32_t>(out.triangles.size());
+    if (group.end > group.begin) out.groups.push_back(group);
+  }
+  return out;
+}
+
 }  // namespace
 
 bool TileHasCasters(const BakePlan& plan, const TileRect& tile) {
   const std::vector<HalfSpace> region = ShadowingRegion(plan, SpanOf(plan.geometry(), tile));
-  const LightSpaceMesh& mesh = plan.casters;
-  for (size_t k = 0; k < mesh.TriangleCount(); ++k) {
-    if (!OutsideRegion(region, CasterTriangle(mesh, k))) return true;
-  }
-  return false;
+  return !KeepInside(plan, region, /*first_only=*/true).triangles.empty();
 }
 
 TileReach ComputeTileReach(const BakePlan& plan, const TileRect& tile) {
@@ -156,14 +225,8 @@ TileReach ComputeTileReach(const BakePlan& plan, const TileRect& tile) {
   reach.z_near = kInf;
   const PdsmGeometry& g = plan.geometry();
   const std::vector<HalfSpace> region = ShadowingRegion(plan, SpanOf(g, tile));
-  const LightSpaceMesh& mesh = plan.casters;
-  std::vector<glm::dvec3> kept;  // 3 vertices per kept triangle
-  for (size_t k = 0; k < mesh.TriangleCount(); ++k) {
-    const std::array<glm::dvec3, 3> p = CasterTriangle(mesh, k);
-    if (OutsideRegion(region, p)) continue;
-    reach.triangles.push_back(static_cast<uint32_t>(k));
-    kept.insert(kept.end(), p.begin(), p.end());
-  }
+  KeptTriangles kept = KeepInside(plan, region, /*first_only=*/false);
+  reach.triangles = std::move(kept.triangles);
   if (reach.triangles.empty()) return reach;
 
   // Per block of rays: the nearest depth any kept triangle can shadow them from. The block's
@@ -177,9 +240,17 @@ TileReach ComputeTileReach(const BakePlan& plan, const TileRect& tile) {
     span.s_hi += plan.lattice.pitch_s;
     span.t_lo -= plan.lattice.pitch_t;
     span.t_hi += plan.lattice.pitch_t;
+    // The minimum over the kept triangles, a cluster's at a time: a cluster whose box cannot
+    // beat the best so far is skipped whole. (A box that cannot shadow at all is still walked:
+    // a triangle on its edge may round the other way, and the walk keeps the result exact.)
     double z_begin = kInf;
-    for (size_t k = 0; k < kept.size(); k += 3) {
-      z_begin = std::min(z_begin, NearestShadowedDepth(plan, extent, span, &kept[k]));
+    for (const KeptTriangles::Group& group : kept.groups) {
+      const double bound = NearestShadowedDepthOfBox(plan, extent, span, group.lo, group.hi);
+      if (std::isfinite(bound) && !(bound < z_begin)) continue;
+      for (uint32_t t = group.begin; t < group.end; ++t) {
+        z_begin =
+            std::min(z_begin, NearestShadowedDepth(plan, extent, span, &kept.vertices[3 * t], 3));
+      }
     }
     // No caster can shadow these rays (before the sun's rays end): all lit.
     if (std::isinf(z_begin) || z_begin > z_last) continue;

@@ -8,9 +8,11 @@
 #include <numbers>
 #include <optional>
 #include <random>
+#include <set>
 #include <vector>
 
 #include "core/bake/bake_plan.h"
+#include "core/bake/caster_clusters.h"
 #include "core/geometry/light_frame.h"
 #include "core/scene/scene.h"
 
@@ -505,6 +507,83 @@ TEST(ScanFloor, NearLightOccluderStaysWithinTheBudgets) {
   }
   EXPECT_GT(largest, 0);
   EXPECT_LE(static_cast<double>(largest), budget);
+}
+
+// The clusters only save work: the reach is the same, triangle for triangle and depth for
+// depth, as with one cluster holding every caster (which prunes nothing: brute force), on
+// scenes dense enough that boxes are pruned.
+TEST_P(TileReachTest, ClustersGiveTheBruteForceReachExactly) {
+  for (uint64_t seed : {3u, 17u, 99u}) {
+    const BakePlan plan = Plan(MakeScene(GetParam(), seed, 1500));
+    ASSERT_GT(plan.caster_clusters.size(), 5u);
+    BakePlan brute = plan;
+    CasterCluster all;
+    all.first_triangle = 0;
+    all.triangle_count = static_cast<uint32_t>(plan.casters.TriangleCount());
+    all.lo = glm::dvec3(kInf);
+    all.hi = glm::dvec3(-kInf);
+    for (const glm::vec3& p : plan.casters.positions) {
+      all.lo = glm::min(all.lo, glm::dvec3(p));
+      all.hi = glm::max(all.hi, glm::dvec3(p));
+    }
+    brute.caster_clusters = {all};
+    int compared_blocks = 0;
+    for (const TileRect& tile : plan.tiles) {
+      const TileReach a = ComputeTileReach(plan, tile), b = ComputeTileReach(brute, tile);
+      ASSERT_EQ(a.triangles, b.triangles) << "seed " << seed << " tile " << tile.index;
+      ASSERT_EQ(a.blocks.size(), b.blocks.size()) << "seed " << seed << " tile " << tile.index;
+      for (size_t k = 0; k < a.blocks.size(); ++k) {
+        ASSERT_EQ(a.blocks[k].z_begin, b.blocks[k].z_begin) << "seed " << seed;
+        ++compared_blocks;
+      }
+      EXPECT_EQ(TileHasCasters(plan, tile), TileHasCasters(brute, tile));
+    }
+    EXPECT_GT(compared_blocks, 20);
+  }
+}
+
+TEST(CasterClusters, EveryTriangleOnceInSpatialRunsWithTheirBounds) {
+  LightSpaceMesh mesh;
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<float> u(-100.0f, 100.0f);
+  std::vector<std::array<glm::vec3, 3>> original;
+  for (int t = 0; t < 1000; ++t) {
+    const glm::vec3 c(u(rng), u(rng), 50 + u(rng) / 4);
+    std::array<glm::vec3, 3> tri = {c, c + glm::vec3(1, 0, 0), c + glm::vec3(0, 1, 0.5f)};
+    for (const glm::vec3& p : tri) {
+      mesh.indices.push_back(static_cast<uint32_t>(mesh.positions.size()));
+      mesh.positions.push_back(p);
+    }
+    original.push_back(tri);
+  }
+  const std::vector<CasterCluster> clusters = ClusterCasters(&mesh);
+  ASSERT_EQ(clusters.size(), (1000 + kClusterTriangles - 1) / kClusterTriangles);
+  std::multiset<std::array<float, 9>> before, after;
+  const auto key = [](const std::array<glm::vec3, 3>& t) {
+    return std::array<float, 9>{t[0].x, t[0].y, t[0].z, t[1].x, t[1].y,
+                                t[1].z, t[2].x, t[2].y, t[2].z};
+  };
+  for (const auto& t : original) before.insert(key(t));
+  uint32_t next = 0;
+  double box_volume = 0;
+  for (const CasterCluster& c : clusters) {
+    EXPECT_EQ(c.first_triangle, next);
+    next += c.triangle_count;
+    for (uint32_t t = c.first_triangle; t < c.first_triangle + c.triangle_count; ++t) {
+      std::array<glm::vec3, 3> tri;
+      for (int v = 0; v < 3; ++v) {
+        tri[v] = mesh.positions[mesh.indices[3 * t + v]];
+        EXPECT_TRUE(glm::all(glm::lessThanEqual(c.lo, glm::dvec3(tri[v]))));
+        EXPECT_TRUE(glm::all(glm::lessThanEqual(glm::dvec3(tri[v]), c.hi)));
+      }
+      after.insert(key(tri));  // the vertex order of each triangle is kept
+    }
+    box_volume += (c.hi.x - c.lo.x) * (c.hi.y - c.lo.y);
+  }
+  EXPECT_EQ(next, 1000u);
+  EXPECT_EQ(before, after);
+  // Spatial runs: the boxes together cover far less than 8 boxes of the whole 200 x 200 field.
+  EXPECT_LT(box_volume, 8 * 200.0 * 200.0 / 4);
 }
 
 TEST_P(TileReachTest, NoCastersMeansEmptyReach) {
