@@ -33,6 +33,7 @@ using GetProcAddressFn = GlProc (*)(const char* name);
   X(PFNGLREADPIXELSPROC, ReadPixels)                           \
   X(PFNGLDRAWBUFFERSPROC, DrawBuffers)                         \
   X(PFNGLDRAWELEMENTSPROC, DrawElements)                       \
+  X(PFNGLMULTIDRAWELEMENTSPROC, MultiDrawElements)             \
   X(PFNGLGENBUFFERSPROC, GenBuffers)                           \
   X(PFNGLDELETEBUFFERSPROC, DeleteBuffers)                     \
   X(PFNGLBINDBUFFERPROC, BindBuffer)                           \

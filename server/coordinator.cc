@@ -126,7 +126,9 @@ absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<in
   spec.priority = record.priority;
   spec.sequence = record.sequence;
   spec.plan = shared_plan;
-  spec.samples_per_task = std::max(1, options_.samples_per_task);
+  spec.samples_per_task = options_.samples_per_task > 0
+                              ? options_.samples_per_task
+                              : std::clamp((shared_plan->header.samples + 7) / 8, 1, 64);
   spec.done_tiles = done_tiles;
   spec.started = record.state == pdsm::v1::RUNNING;
   spec.output = job;
@@ -303,13 +305,14 @@ std::optional<pdsm::v1::Task> Coordinator::LeaseTask(const std::string& worker_i
   const std::optional<TaskLease> lease = engine_.Lease(worker_id);
   if (!lease) return std::nullopt;
   const std::shared_ptr<StoredJob> job = Active(lease->job_id);
-  spdlog::debug("job {} tile {}: samples [{}, {}) leased to {} (lease {})", lease->job_id,
-                lease->tile_index, lease->sample_begin, lease->sample_end, worker_id,
-                lease->lease_id);
+  spdlog::debug("job {} tile group {} ({} tiles): samples [{}, {}) leased to {} (lease {})",
+                lease->job_id, lease->group_index, lease->tiles.size(), lease->sample_begin,
+                lease->sample_end, worker_id, lease->lease_id);
   pdsm::v1::Task task;
   task.set_job_id(lease->job_id);
   task.set_lease_id(lease->lease_id);
-  task.set_tile_index(lease->tile_index);
+  task.set_group_index(lease->group_index);
+  task.mutable_tile_indices()->Assign(lease->tiles.begin(), lease->tiles.end());
   task.set_sample_begin(lease->sample_begin);
   task.set_sample_end(lease->sample_end);
   task.set_lease_ms(options_.lease_ms);
@@ -324,22 +327,33 @@ absl::StatusOr<int64_t> Coordinator::ExtendLease(const std::string& worker_id, u
   return options_.lease_ms;
 }
 
-absl::StatusOr<bool> Coordinator::ReportResult(const std::string& worker_id, uint64_t lease_id,
-                                               const pdsm::v1::TileEventsData& data) {
+absl::StatusOr<bool> Coordinator::ReportResult(
+    const std::string& worker_id, uint64_t lease_id,
+    const google::protobuf::RepeatedPtrField<pdsm::v1::TileEventsData>& tiles) {
   const std::optional<TaskLease> lease = engine_.FindLease(lease_id);
   const std::shared_ptr<const BakePlan> plan = lease ? engine_.Plan(lease->job_id) : nullptr;
   if (!plan) {
-    engine_.Report(worker_id, lease_id, TileEvents{});  // counts the drop
+    engine_.Report(worker_id, lease_id, {});  // counts the drop
     return false;
+  }
+  if (static_cast<size_t>(tiles.size()) != lease->tiles.size()) {
+    return absl::InvalidArgumentError(absl::StrCat("tiles: the task has ", lease->tiles.size(),
+                                                   " tiles, the result ", tiles.size()));
   }
   // Decoded before the engine sees it: the one per-event pass of the coordinator's hot path,
   // outside every lock, and what keeps a hostile result from reaching the tile.
-  absl::StatusOr<TileEvents> events = TileEventsFromProto(data, plan->tiles.at(lease->tile_index));
-  if (!events.ok()) return events.status();
-  const bool accepted = engine_.Report(worker_id, lease_id, *std::move(events));
+  std::vector<TileEvents> events;
+  events.reserve(lease->tiles.size());
+  for (size_t i = 0; i < lease->tiles.size(); ++i) {
+    absl::StatusOr<TileEvents> decoded =
+        TileEventsFromProto(tiles[static_cast<int>(i)], plan->tiles.at(lease->tiles[i]));
+    if (!decoded.ok()) return decoded.status();
+    events.push_back(*std::move(decoded));
+  }
+  const bool accepted = engine_.Report(worker_id, lease_id, std::move(events));
   if (!accepted) {
-    spdlog::debug("job {} tile {}: dropped a late or duplicate result from {}", lease->job_id,
-                  lease->tile_index, worker_id);
+    spdlog::debug("job {} tile group {}: dropped a late or duplicate result from {}", lease->job_id,
+                  lease->group_index, worker_id);
   }
   return accepted;
 }

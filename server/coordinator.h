@@ -43,7 +43,9 @@ namespace pdsm {
 
 struct CoordinatorOptions {
   std::string data_dir;
-  int samples_per_task = 64;  // light samples per task (a tile's batch)
+  // Light samples per task (a group's batch). 0: the job's samples / 8, within [1, 64], so
+  // that even a one-group job is at least 8 tasks the farm's workers share.
+  int samples_per_task = 0;
   int64_t lease_ms = 30'000;
   int max_open_tiles = 64;  // bounds the memory of partial results
   int max_task_failures = 3;
@@ -83,10 +85,12 @@ class Coordinator {
   std::optional<pdsm::v1::Task> LeaseTask(const std::string& worker_id);
   // The lease's length in ms. FAILED_PRECONDITION when the lease is not current.
   absl::StatusOr<int64_t> ExtendLease(const std::string& worker_id, uint64_t lease_id);
-  // False when the result was dropped (late, duplicate, job gone). INVALID_ARGUMENT when the
-  // events do not fit the task's tile.
-  absl::StatusOr<bool> ReportResult(const std::string& worker_id, uint64_t lease_id,
-                                    const pdsm::v1::TileEventsData& events);
+  // `tiles`: one per tile of the task, in its order. False when the result was dropped (late,
+  // duplicate, job gone). INVALID_ARGUMENT when there are not as many as the task's tiles or
+  // one does not fit its tile.
+  absl::StatusOr<bool> ReportResult(
+      const std::string& worker_id, uint64_t lease_id,
+      const google::protobuf::RepeatedPtrField<pdsm::v1::TileEventsData>& tiles);
   void ReportFailure(const std::string& worker_id, uint64_t lease_id, const std::string& reason,
                      bool handed_back);
   // FAILED_PRECONDITION when the job is not running.

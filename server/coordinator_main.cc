@@ -164,8 +164,9 @@ int main(int argc, char** argv) {
   app.add_option("--tls-cert", flags.tls_cert, "PEM certificate chain: serve TLS");
   app.add_option("--tls-key", flags.tls_key, "PEM private key of --tls-cert");
   app.add_option("--ready-file", flags.ready_file, "Write the listening address here once serving");
-  app.add_option("--samples-per-task", o.samples_per_task, "Light samples per task")
-      ->check(CLI::Range(1, 65536))
+  app.add_option("--samples-per-task", o.samples_per_task,
+                 "Light samples per task (0: the job's samples / 8, within [1, 64])")
+      ->check(CLI::Range(0, 65536))
       ->capture_default_str();
   app.add_option("--lease-seconds", flags.lease_seconds,
                  "Lease length; a silent worker's task is re-issued after it")

@@ -90,7 +90,7 @@ grpc::ServerUnaryReactor* WorkersService::ReportResult(grpc::CallbackServerConte
     return Answer(context, s);
   }
   absl::StatusOr<bool> accepted =
-      coordinator_->ReportResult(request->worker_id(), request->lease_id(), request->events());
+      coordinator_->ReportResult(request->worker_id(), request->lease_id(), request->tiles());
   if (!accepted.ok()) return Answer(context, accepted.status());
   response->set_accepted(*accepted);
   return Answer(context, grpc::Status::OK);

@@ -1,5 +1,6 @@
 #include "worker/bake_task.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -13,8 +14,6 @@
 namespace pdsm {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
 double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -27,44 +26,6 @@ TileEvents EmptyTileEvents(const TileRect& tile) {
   out.width = tile.width;
   out.height = tile.height;
   out.offsets.assign(out.PixelCount() + 1, 0);
-  return out;
-}
-
-struct BlockScan {
-  TileRect rect;
-  double z_begin, z_end;  // light-space depths; z_end = +infinity: to w = 0
-};
-
-// The blocks of rays to scan, each with its depth range: from the block's z_begin to the
-// ray's natural end, or (surfaces only) to the deepest window of its pixels. A block whose
-// windows all lie nearer than z_begin is all lit where it is defined: not scanned.
-std::vector<BlockScan> ScannedBlocks(const BakePlan& plan, const TileReach& reach,
-                                     const std::optional<TileWindows>& windows) {
-  const PdsmGeometry& g = plan.geometry();
-  const double natural_end = g.projection == Projection::kPerspective ? kInf : g.z_far;
-  std::vector<BlockScan> out;
-  for (const RayBlock& block : reach.blocks) {
-    BlockScan scan{block.rect, block.z_begin, natural_end};
-    if (windows) {
-      double shallowest = kInf, deepest = -kInf;
-      for (int y = block.rect.y0; y < block.rect.y0 + block.rect.height; ++y) {
-        for (int x = block.rect.x0; x < block.rect.x0 + block.rect.width; ++x) {
-          const size_t p = static_cast<size_t>(y - windows->rect.y0) * windows->rect.width +
-                           (x - windows->rect.x0);
-          for (const DepthWindow& w : windows->Pixel(p)) {
-            if (!(w.hi > block.z_begin)) continue;  // lit: nothing shadows it
-            shallowest = std::min(shallowest, w.lo);
-            deepest = std::max(deepest, w.hi);
-          }
-        }
-      }
-      if (!(deepest > block.z_begin)) continue;
-      scan.z_begin = std::max(block.z_begin, shallowest);
-      scan.z_end = std::min(natural_end, deepest);
-      if (!(scan.z_end > scan.z_begin)) continue;
-    }
-    out.push_back(scan);
-  }
   return out;
 }
 
@@ -137,95 +98,111 @@ absl::StatusOr<std::unique_ptr<TaskRunner>> TaskRunner::Create(const BakePlan& p
   return std::unique_ptr<TaskRunner>(new TaskRunner(plan, std::move(*renderer)));
 }
 
-absl::Status TaskRunner::UploadCasters(const TileReach& reach) {
-  // Only the triangles that can shadow this tile, re-indexed compactly.
+absl::Status TaskRunner::Prepare(const BakeTask& task) {
+  if (!receivers_uploaded_ && group_.group_index == task.group_index &&
+      group_.tiles == task.tiles) {
+    return absl::OkStatus();
+  }
+  if (task.group_index < 0 || task.group_index >= static_cast<int>(plan_.groups.size())) {
+    return absl::InvalidArgumentError(absl::StrFormat("tile group %d: the plan has %d groups",
+                                                      task.group_index, plan_.groups.size()));
+  }
+  const std::vector<int>& of_group = plan_.groups[task.group_index].tiles;
+  for (int t : task.tiles) {
+    if (!std::binary_search(of_group.begin(), of_group.end(), t)) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("tile %d is not in tile group %d", t, task.group_index));
+    }
+  }
+  group_ = PrepareGroup(plan_, task.group_index, task.tiles);
+  // The casters any tile of the group can meet, in cluster order, re-indexed compactly.
   std::vector<glm::vec3> positions;
   std::vector<uint32_t> indices;
-  positions.reserve(reach.triangles.size() * 3);
-  indices.reserve(reach.triangles.size() * 3);
-  for (uint32_t tri : reach.triangles) {
+  positions.reserve(group_.triangles.size() * 3);
+  indices.reserve(group_.triangles.size() * 3);
+  for (uint32_t tri : group_.triangles) {
     for (int k = 0; k < 3; ++k) {
       indices.push_back(static_cast<uint32_t>(positions.size()));
       positions.push_back(plan_.casters.positions[plan_.casters.indices[3 * tri + k]]);
     }
   }
   receivers_uploaded_ = false;
-  return renderer_->SetGeometry(positions, indices);
+  absl::Status uploaded = renderer_->SetGeometry(positions, indices);
+  if (!uploaded.ok()) group_ = PreparedGroup{};  // the renderer's geometry is unknown
+  return uploaded;
 }
 
-absl::StatusOr<TileEvents> TaskRunner::Run(const BakeTask& task, TaskStats* stats,
-                                           const std::function<bool()>& cancelled) {
-  const TileRect& tile = plan_.tiles.at(task.tile_index);
-  TileEvents result = EmptyTileEvents(tile);
-  if (task.sample_begin >= task.sample_end) return result;
-  // Nothing can shadow these rays: all lit, no shadow map. Counted once per tile, at the
-  // batch that starts its samples.
-  if (!TileHasCasters(plan_, tile)) {
-    if (task.sample_begin == 0) ++stats->tiles_skipped;
-    return result;
+absl::StatusOr<std::vector<TileEvents>> TaskRunner::Run(const BakeTask& task, TaskStats* stats,
+                                                        const std::function<bool()>& cancelled) {
+  if (absl::Status s = Prepare(task); !s.ok()) return s;
+  std::vector<TileEvents> results;
+  std::vector<std::vector<std::vector<Event>>> pixel_events;  // per tile, per pixel
+  for (const PreparedTile& tile : group_.prepared) {
+    results.push_back(EmptyTileEvents(tile.rect));
+    pixel_events.emplace_back(tile.blocks.empty() ? 0 : results.back().PixelCount());
+    // Counted once per tile, at the batch that starts its samples.
+    if (!tile.has_casters && task.sample_begin == 0) ++stats->tiles_skipped;
   }
-  const TileReach reach = ComputeTileReach(plan_, tile);
-  if (reach.empty()) return result;
-  std::optional<TileWindows> windows;
-  if (plan_.header.surfaces_only) windows = ComputeReceiverWindows(plan_, tile);
-  const std::vector<BlockScan> blocks = ScannedBlocks(plan_, reach, windows);
-  if (blocks.empty()) return result;
-  if (absl::Status s = UploadCasters(reach); !s.ok()) return s;
+  if (task.sample_begin >= task.sample_end || group_.empty()) return results;
 
-  const PdsmGeometry& g = plan_.geometry();
-  std::vector<std::vector<Event>> pixel_events(result.PixelCount());
   std::vector<float> depth;
   ShadowMapCamera camera = BakeCamera(plan_);
-
   for (int k = task.sample_begin; k < task.sample_end; ++k) {
     if (cancelled && cancelled()) {
-      return absl::CancelledError(absl::StrFormat("tile %d: task cancelled", tile.index));
+      return absl::CancelledError(
+          absl::StrFormat("tile group %d: task cancelled", task.group_index));
     }
     const glm::dvec2& sample = plan_.samples.at(k);
     camera.sample = sample;
-    // Only the texels the blocks' clipped segments cross.
-    camera.window = ShadowMapWindow{};
-    for (const BlockScan& b : blocks) {
-      camera.window =
-          UnionWindow(camera.window, ShadowMapWindowFor(plan_, b.rect, sample, b.z_begin, b.z_end));
-    }
+    camera.window = GroupWindow(plan_, group_, sample);
     const int64_t texels = int64_t{camera.window.width} * camera.window.height;
     if (texels > kMaxShadowMapTexels) {
       return absl::ResourceExhaustedError(absl::StrFormat(
-          "tile %d, sample %d: its shadow map would need %dx%d texels (limit %d): "
+          "tile group %d, sample %d: its shadow map would need %dx%d texels (limit %d): "
           "lower shadowMapResolution or tileSize",
-          tile.index, k, camera.window.width, camera.window.height, kMaxShadowMapTexels));
+          task.group_index, k, camera.window.width, camera.window.height, kMaxShadowMapTexels));
     }
+    const std::vector<DrawRange> visible = VisibleClusters(plan_, group_, sample, camera.window);
     auto render_start = std::chrono::steady_clock::now();
-    if (absl::Status s = renderer_->Render(camera, &depth); !s.ok()) return s;
+    if (absl::Status s = renderer_->Render(camera, visible, &depth); !s.ok()) return s;
     stats->shadow_map_seconds += SecondsSince(render_start);
     stats->shadow_maps += 1;
     stats->shadow_map_texels += texels;
-    stats->triangles_submitted += static_cast<int64_t>(reach.triangles.size());
+    for (const DrawRange& r : visible) stats->triangles_submitted += r.triangle_count;
 
     auto scan_start = std::chrono::steady_clock::now();
     const ShadowMapView view{depth.data(), plan_.lattice, camera.window};
-    for (const BlockScan& b : blocks) {
-      ScanBlock(plan_, view, b, sample, windows ? &*windows : nullptr, tile, &pixel_events, stats);
+    for (size_t i = 0; i < group_.prepared.size(); ++i) {
+      const PreparedTile& tile = group_.prepared[i];
+      for (const BlockScan& b : tile.blocks) {
+        ScanBlock(plan_, view, b, sample, tile.windows ? &*tile.windows : nullptr, tile.rect,
+                  &pixel_events[i], stats);
+      }
     }
     stats->scan_seconds += SecondsSince(scan_start);
   }
 
   auto sort_start = std::chrono::steady_clock::now();
-  for (size_t p = 0; p < pixel_events.size(); ++p) {
-    stats->events += static_cast<int64_t>(pixel_events[p].size());
-    NormalizeEvents(&pixel_events[p]);
-    result.events.insert(result.events.end(), pixel_events[p].begin(), pixel_events[p].end());
-    result.offsets[p + 1] = result.events.size();
-    std::vector<Event>().swap(pixel_events[p]);
+  for (size_t i = 0; i < results.size(); ++i) {
+    TileEvents& result = results[i];
+    for (size_t p = 0; p < pixel_events[i].size(); ++p) {
+      std::vector<Event>& events = pixel_events[i][p];
+      stats->events += static_cast<int64_t>(events.size());
+      NormalizeEvents(&events);
+      result.events.insert(result.events.end(), events.begin(), events.end());
+      result.offsets[p + 1] = result.events.size();
+      std::vector<Event>().swap(events);
+    }
+    // A tile without blocks keeps its all-zero offsets.
   }
   stats->scan_seconds += SecondsSince(sort_start);
-  return result;
+  return results;
 }
 
 absl::StatusOr<std::vector<float>> TaskRunner::ReceiverDepth(const TileRect& tile) {
   // The light-centre view of the receivers on the PDSM's own pixel grid.
   if (!receivers_uploaded_) {
+    group_ = PreparedGroup{};  // its casters are no longer uploaded
     if (absl::Status s = renderer_->SetGeometry(plan_.receivers.positions, plan_.receivers.indices);
         !s.ok()) {
       return s;

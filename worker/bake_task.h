@@ -1,6 +1,8 @@
-// A bake task (the unit of distribution): one tile and a batch of light samples. For each
-// sample the worker renders the tile's shadow map and scan-converts every ray of the tile
-// through it; the result is the tile's per-pixel event lists for that batch.
+// A bake task (the unit of rendering and of distribution): the tiles of one tile group
+// (core/bake/tile_groups.h) and a batch of light samples. For each sample the worker renders
+// one shadow map for the group — the window its rays' segments cross, drawing only the caster
+// clusters that window can see — and scan-converts every ray of the group's tiles through it;
+// the result is each tile's per-pixel event lists for that batch.
 #ifndef PDSM_WORKER_BAKE_TASK_H_
 #define PDSM_WORKER_BAKE_TASK_H_
 
@@ -13,12 +15,14 @@
 #include "core/bake/bake_plan.h"
 #include "core/bake/tile_reach.h"
 #include "core/events/event.h"
+#include "worker/prepared_group.h"
 #include "worker/shadow_map_renderer.h"
 
 namespace pdsm {
 
 struct BakeTask {
-  int tile_index = 0;
+  int group_index = 0;
+  std::vector<int> tiles;  // tiles of that group, ascending (a later stage may leave some out)
   // [sample_begin, sample_end) of plan.samples. Empty: returned all lit at once.
   int sample_begin = 0;
   int sample_end = 0;
@@ -47,10 +51,12 @@ class TaskRunner {
   // `plan` must outlive the runner.
   static absl::StatusOr<std::unique_ptr<TaskRunner>> Create(const BakePlan& plan);
 
-  // `cancelled` (optional) is polled before each sample's shadow map: when it returns true the
-  // task stops with CANCELLED (a cancelled job or a stopping worker frees the thread promptly).
-  absl::StatusOr<TileEvents> Run(const BakeTask& task, TaskStats* stats,
-                                 const std::function<bool()>& cancelled = nullptr);
+  // One TileEvents per task tile, in order. `cancelled` (optional) is polled before each
+  // sample's shadow map: when it returns true the task stops with CANCELLED (a cancelled job or
+  // a stopping worker frees the thread promptly). INVALID_ARGUMENT for a group or tile not of
+  // the plan; RESOURCE_EXHAUSTED for a shadow map past kMaxShadowMapTexels.
+  absl::StatusOr<std::vector<TileEvents>> Run(const BakeTask& task, TaskStats* stats,
+                                              const std::function<bool()>& cancelled = nullptr);
 
   // Light-space depth of the nearest receiver seen along each PDSM ray of the tile (the
   // preview's surface), +infinity where none; row-major over the tile. Consecutive calls
@@ -60,11 +66,13 @@ class TaskRunner {
  private:
   TaskRunner(const BakePlan& plan, std::unique_ptr<ShadowMapRenderer> renderer)
       : plan_(plan), renderer_(std::move(renderer)) {}
-  absl::Status UploadCasters(const TileReach& reach);
+  // Prepares the task's group (kept for the next batches of it) and uploads its casters.
+  absl::Status Prepare(const BakeTask& task);
 
   const BakePlan& plan_;
   std::unique_ptr<ShadowMapRenderer> renderer_;
-  bool receivers_uploaded_ = false;  // the renderer holds the receivers (ReceiverDepth)
+  PreparedGroup group_;              // the last task's group, its casters uploaded
+  bool receivers_uploaded_ = false;  // the renderer holds the receivers (ReceiverDepth) instead
 };
 
 }  // namespace pdsm

@@ -43,7 +43,8 @@ absl::StatusOr<int64_t> CoordinatorClient::Extend(uint64_t lease_id) {
   return response.lease_ms();
 }
 
-absl::StatusOr<bool> CoordinatorClient::ReportResult(uint64_t lease_id, const TileEvents& events,
+absl::StatusOr<bool> CoordinatorClient::ReportResult(uint64_t lease_id,
+                                                     const std::vector<TileEvents>& events,
                                                      double seconds) {
   grpc::ClientContext context;
   PrepareCall(&context, token_, kLongCall);
@@ -51,7 +52,7 @@ absl::StatusOr<bool> CoordinatorClient::ReportResult(uint64_t lease_id, const Ti
   request.set_worker_id(worker_id_);
   request.set_lease_id(lease_id);
   request.set_seconds(seconds);
-  TileEventsToProto(events, request.mutable_events());
+  for (const TileEvents& tile : events) TileEventsToProto(tile, request.add_tiles());
   pdsm::v1::ReportResultResponse response;
   if (absl::Status s = FromGrpcStatus(stub_->ReportResult(&context, request, &response)); !s.ok()) {
     return s;

@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/events/event.h"
@@ -29,7 +30,9 @@ class CoordinatorClient {
   // The lease's new length in ms; FAILED_PRECONDITION when the lease is lost.
   absl::StatusOr<int64_t> Extend(uint64_t lease_id);
   // True when the coordinator accepted the result, false when it dropped it as stale.
-  absl::StatusOr<bool> ReportResult(uint64_t lease_id, const TileEvents& events, double seconds);
+  // `events`: one per tile of the task, in its order.
+  absl::StatusOr<bool> ReportResult(uint64_t lease_id, const std::vector<TileEvents>& events,
+                                    double seconds);
   absl::Status ReportFailure(uint64_t lease_id, const std::string& reason, bool handed_back);
   absl::StatusOr<pdsm::v1::GetJobSceneResponse> JobScene(const std::string& job_id);
   absl::StatusOr<std::string> FetchAsset(const std::string& sha256);

@@ -49,9 +49,9 @@ class LocalWorker {
     while (!output_->ended()) {
       const std::optional<TaskLease> lease = engine_->Lease(id_, kIdleWait);
       if (!lease) continue;
-      absl::StatusOr<TileEvents> events =
-          runner_->Run(BakeTask{lease->tile_index, lease->sample_begin, lease->sample_end}, &stats_,
-                       [this] { return output_->ended(); });
+      absl::StatusOr<std::vector<TileEvents>> events = runner_->Run(
+          BakeTask{lease->group_index, lease->tiles, lease->sample_begin, lease->sample_end},
+          &stats_, [this] { return output_->ended(); });
       if (events.ok()) {
         engine_->Report(id_, lease->lease_id, *std::move(events));
       } else {
@@ -78,14 +78,30 @@ class LocalWorker {
   TaskStats stats_;
 };
 
+// Light samples per task when the caller sets none: a group's samples cut so that every
+// thread has a batch of it (a small map is one group), and at most kMaxLocalBatch, which bounds
+// a task's events whatever the sample count.
+constexpr int kMaxLocalBatch = 32;
+int LocalBatch(const BakePlan& plan, int threads, const LocalBakeOptions& options) {
+  if (options.samples_per_task > 0) return options.samples_per_task;
+  const int samples = std::max(1, plan.header.samples);
+  return std::clamp((samples + 2 * threads - 1) / (2 * threads), 1, kMaxLocalBatch);
+}
+
 // Threads worth starting: more than tasks would only cost contexts.
 int ThreadCount(const BakePlan& plan, const LocalBakeOptions& options) {
   const int64_t wanted = options.threads > 0 ? options.threads : CoreCount();
-  const int64_t batch =
-      options.samples_per_task > 0 ? options.samples_per_task : std::max(1, plan.header.samples);
+  const int64_t batch = LocalBatch(plan, static_cast<int>(std::max<int64_t>(1, wanted)), options);
   const int64_t batches = (std::max(1, plan.header.samples) + batch - 1) / batch;
-  const int64_t tasks = std::max<int64_t>(1, static_cast<int64_t>(plan.tiles.size()) * batches);
+  const int64_t tasks = std::max<int64_t>(1, static_cast<int64_t>(plan.groups.size()) * batches);
   return static_cast<int>(std::clamp<int64_t>(wanted, 1, tasks));
+}
+
+// Tiles in the largest group.
+int LargestGroup(const BakePlan& plan) {
+  size_t most = 1;
+  for (const TileGroup& g : plan.groups) most = std::max(most, g.tiles.size());
+  return static_cast<int>(most);
 }
 
 // Waits until all `count` threads have called Arrive (the preview's depths are all rendered
@@ -124,15 +140,15 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
   const int threads = ThreadCount(*plan, options);
   EngineOptions engine_options;
   engine_options.scheduler.lease_ms = kLocalLeaseMs;
-  // Enough open tiles that no thread waits while another judges a stage.
-  engine_options.scheduler.max_open_tiles = 2 * threads;
+  // Enough open groups that no thread waits while another judges a stage.
+  engine_options.scheduler.max_open_tiles = (threads + 1) * LargestGroup(*plan);
   engine_options.executor = [](std::function<void()> work) { work(); };
   engine_options.task_failure_ends_job = true;
   BakeEngine engine(std::move(engine_options));
   EngineJob job;
   job.job_id = kJobId;
   job.plan = plan;
-  job.samples_per_task = options.samples_per_task;
+  job.samples_per_task = LocalBatch(*plan, threads, options);
   job.output = output;
   if (absl::Status s = engine.AddJob(std::move(job)); !s.ok()) return s;
 

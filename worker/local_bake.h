@@ -27,7 +27,7 @@ struct LocalBakeOptions {
   std::string output_path;   // the .exr; written under a temporary name, renamed at the end
   std::string preview_path;  // a .png of the receivers' attenuation seen from the light; "" none
   int threads = 0;           // 0: one per core
-  int samples_per_task = 0;  // light samples per task; 0: a tile's whole stage in one task
+  int samples_per_task = 0;  // light samples per task; 0: a default that keeps every thread busy
   // Called from worker threads, serialized, after each task.
   std::function<void(const BakeProgress&)> on_progress;
   FileSystem* fs = nullptr;  // where the PDSM and the preview are written; null: the real one

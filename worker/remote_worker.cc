@@ -156,7 +156,7 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
     const pdsm::v1::Task& task = response->task();
     const auto start = std::chrono::steady_clock::now();
     const auto fail = [&](const absl::Status& s, bool handed_back) {
-      spdlog::warn("job {} tile {}: {}", task.job_id(), task.tile_index(),
+      spdlog::warn("job {} tile group {}: {}", task.job_id(), task.group_index(),
                    std::string(s.message()));
       (void)client_->ReportFailure(task.lease_id(), std::string(s.message()), handed_back);
     };
@@ -191,17 +191,20 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
       runner = *std::move(created);
       runner_job = task.job_id();
     }
-    if (context->fingerprint != task.plan_fingerprint() || task.tile_index() < 0 ||
-        task.tile_index() >= static_cast<int>(context->plan.tiles.size())) {
+    if (context->fingerprint != task.plan_fingerprint()) {
       forget_lease();
       fail(absl::FailedPreconditionError("the task does not match this worker's plan"), false);
       continue;
     }
 
+    // The runner checks the group and its tiles against the plan (INVALID_ARGUMENT).
     TaskStats stats;
-    absl::StatusOr<TileEvents> events =
-        runner->Run(BakeTask{task.tile_index(), task.sample_begin(), task.sample_end()}, &stats,
-                    [&] { return stop.load() || lease->lost.load(); });
+    const BakeTask bake_task{
+        task.group_index(),
+        std::vector<int>(task.tile_indices().begin(), task.tile_indices().end()),
+        task.sample_begin(), task.sample_end()};
+    absl::StatusOr<std::vector<TileEvents>> events =
+        runner->Run(bake_task, &stats, [&] { return stop.load() || lease->lost.load(); });
     forget_lease();
     if (lease->lost) continue;  // the coordinator has moved on; nothing to report
     if (!events.ok()) {
@@ -211,11 +214,11 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
     absl::StatusOr<bool> accepted =
         client_->ReportResult(task.lease_id(), *events, SecondsSince(start));
     if (!accepted.ok()) {
-      spdlog::warn("job {} tile {}: result not delivered: {}", task.job_id(), task.tile_index(),
-                   std::string(accepted.status().message()));
+      spdlog::warn("job {} tile group {}: result not delivered: {}", task.job_id(),
+                   task.group_index(), std::string(accepted.status().message()));
     } else {
-      spdlog::debug("job {} tile {}: samples [{}, {}) {} in {:.3f} s, {} events", task.job_id(),
-                    task.tile_index(), task.sample_begin(), task.sample_end(),
+      spdlog::debug("job {} tile group {}: samples [{}, {}) {} in {:.3f} s, {} events",
+                    task.job_id(), task.group_index(), task.sample_begin(), task.sample_end(),
                     *accepted ? "accepted" : "dropped as stale", SecondsSince(start), stats.events);
     }
   }

@@ -129,6 +129,8 @@ class OsMesaShadowMapRenderer final : public ShadowMapRenderer {
   absl::Status SetGeometry(std::span<const glm::vec3> positions_light,
                            std::span<const uint32_t> indices) override;
   absl::Status Render(const ShadowMapCamera& camera, std::vector<float>* depth) override;
+  absl::Status Render(const ShadowMapCamera& camera, std::span<const DrawRange> ranges,
+                      std::vector<float>* depth) override;
 
  private:
   struct UniformLocations {
@@ -141,6 +143,8 @@ class OsMesaShadowMapRenderer final : public ShadowMapRenderer {
   void SetPipelineState(const ShadowMapCamera& camera);
   absl::Status RenderPiece(const ShadowMapCamera& camera, const ShadowMapWindow& piece,
                            int row_length, float* out);
+  // Every triangle, or those of the ranges, as MultiDrawElements' counts and byte offsets.
+  void SetDrawList(std::span<const DrawRange> ranges);
 
   gl::OsMesaContext context_;  // first member: destroyed after every GL object below
   GlFunctions gl_;
@@ -152,6 +156,8 @@ class OsMesaShadowMapRenderer final : public ShadowMapRenderer {
   gl::Buffer vertex_buffer_;
   gl::Buffer index_buffer_;
   GLsizei index_count_ = 0;
+  std::vector<GLsizei> draw_counts_;  // the current Render's draw list
+  std::vector<const void*> draw_offsets_;
   // Render target, grown (never shrunk) to the largest piece rendered so far.
   gl::Framebuffer framebuffer_;
   gl::Texture biased_depth_;    // GL_R32F: biased light-space z, the output
@@ -327,10 +333,11 @@ absl::Status OsMesaShadowMapRenderer::RenderPiece(const ShadowMapCamera& camera,
   const float beyond_everything = 0.0f;
   gl_.ClearBufferfv(GL_COLOR, 0, no_caster);
   gl_.ClearBufferfv(GL_DEPTH, 0, &beyond_everything);
-  if (index_count_ > 0) {
+  if (!draw_counts_.empty()) {
     const std::array<float, 16> clip_from_light = ClipFromLight(camera, piece, has_clip_control_);
     gl_.UniformMatrix4fv(uniforms_.clip_from_light, 1, GL_FALSE, clip_from_light.data());
-    gl_.DrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
+    gl_.MultiDrawElements(GL_TRIANGLES, draw_counts_.data(), GL_UNSIGNED_INT, draw_offsets_.data(),
+                          static_cast<GLsizei>(draw_counts_.size()));
   }
   // Straight into the output: rows are `row_length` apart there; GL's bottom row (lowest t)
   // is the output's row 0.
@@ -341,8 +348,41 @@ absl::Status OsMesaShadowMapRenderer::RenderPiece(const ShadowMapCamera& camera,
                                         piece.width, "x", piece.height));
 }
 
+void OsMesaShadowMapRenderer::SetDrawList(std::span<const DrawRange> ranges) {
+  draw_counts_.clear();
+  draw_offsets_.clear();
+  for (const DrawRange& r : ranges) {
+    if (r.triangle_count == 0) continue;
+    const uint64_t first_index = uint64_t{r.first_triangle} * 3;
+    const uintptr_t offset = first_index * sizeof(uint32_t);
+    // Adjacent ranges are one draw.
+    if (!draw_counts_.empty() &&
+        reinterpret_cast<uintptr_t>(draw_offsets_.back()) + draw_counts_.back() * 4 == offset) {
+      draw_counts_.back() += static_cast<GLsizei>(3 * r.triangle_count);
+      continue;
+    }
+    draw_counts_.push_back(static_cast<GLsizei>(3 * r.triangle_count));
+    draw_offsets_.push_back(reinterpret_cast<const void*>(offset));
+  }
+}
+
 absl::Status OsMesaShadowMapRenderer::Render(const ShadowMapCamera& camera,
                                              std::vector<float>* depth) {
+  const DrawRange all{0, static_cast<uint32_t>(index_count_ / 3)};
+  return Render(camera, std::span<const DrawRange>(&all, 1), depth);
+}
+
+absl::Status OsMesaShadowMapRenderer::Render(const ShadowMapCamera& camera,
+                                             std::span<const DrawRange> ranges,
+                                             std::vector<float>* depth) {
+  for (const DrawRange& r : ranges) {
+    if (uint64_t{r.first_triangle} + r.triangle_count > static_cast<uint64_t>(index_count_ / 3)) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("draw range [%d, %d) past the %d uploaded triangles", r.first_triangle,
+                          uint64_t{r.first_triangle} + r.triangle_count, index_count_ / 3));
+    }
+  }
+  SetDrawList(ranges);
   if (absl::Status status = ValidateCamera(camera); !status.ok()) return status;
   const ShadowMapWindow& window = camera.window;
   depth->assign(static_cast<size_t>(window.width) * window.height,

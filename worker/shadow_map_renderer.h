@@ -20,6 +20,12 @@
 
 namespace pdsm {
 
+// Triangles [first_triangle, first_triangle + triangle_count) of the uploaded geometry.
+struct DrawRange {
+  uint32_t first_triangle = 0;
+  uint32_t triangle_count = 0;
+};
+
 struct ShadowMapCamera {
   Projection projection = Projection::kPerspective;
   glm::dvec2 sample{0.0};  // perspective: (a, b) on the light plane; sun: direction slopes
@@ -65,6 +71,12 @@ class ShadowMapRenderer {
   // (perspective needs z_clip_near > 0; orthographic z_clip_far > z_clip_near; pitches > 0);
   // INTERNAL when GL fails. REQUIRES: called on the thread that created the renderer.
   virtual absl::Status Render(const ShadowMapCamera& camera, std::vector<float>* depth) = 0;
+
+  // The same, drawing only the triangles of `ranges` (in order; ranges may be adjacent, not
+  // overlapping). Texels no drawn triangle covers hold +infinity. INVALID_ARGUMENT for a range
+  // past the uploaded triangles.
+  virtual absl::Status Render(const ShadowMapCamera& camera, std::span<const DrawRange> ranges,
+                              std::vector<float>* depth) = 0;
 };
 
 }  // namespace pdsm

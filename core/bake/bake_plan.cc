@@ -282,6 +282,8 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
     if (Receives(mesh.role)) AppendMesh(mesh, g.frame, &plan.receivers);
   }
   plan.caster_clusters = ClusterCasters(&plan.casters);
+  plan.tile_group_size = scene.bake.tile_group_size;
+  plan.groups = GroupTiles(plan);
   return plan;
 }
 

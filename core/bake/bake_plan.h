@@ -13,6 +13,7 @@
 #include "absl/status/statusor.h"
 #include "core/bake/caster_clusters.h"
 #include "core/bake/shadow_map_lattice.h"
+#include "core/bake/tile_groups.h"
 #include "core/pdsm/pdsm_image.h"
 #include "core/scene/scene.h"
 
@@ -42,7 +43,9 @@ struct BakePlan {
   double z_scan_floor = 0;
   std::vector<TileRect> tiles;  // row-major grid of header.tile_size
   int tiles_x = 0, tiles_y = 0;
-  LightSpaceMesh casters;  // triangles in spatial order, cut into caster_clusters
+  std::vector<TileGroup> groups;  // the unit of rendering and of tasks (tile_groups.h)
+  int tile_group_size = 0;        // the scene's bake.tileGroupSize (0: chosen by GroupTiles)
+  LightSpaceMesh casters;         // triangles in spatial order, cut into caster_clusters
   std::vector<CasterCluster> caster_clusters;
   LightSpaceMesh receivers;
 

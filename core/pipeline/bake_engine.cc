@@ -34,21 +34,38 @@ JobSpec SchedulerSpec(const EngineJob& job) {
   for (int t : job.done_tiles) {
     if (t >= 0 && t < static_cast<int>(done.size())) done[t] = true;
   }
-  for (size_t t = 0; t < done.size(); ++t) {
-    if (!done[t]) spec.tiles.push_back(static_cast<int>(t));
+  for (const TileGroup& group : job.plan->groups) {
+    GroupWork work{group.index, {}};
+    for (int t : group.tiles) {
+      if (!done[t]) work.tiles.push_back(t);
+    }
+    if (!work.tiles.empty()) spec.groups.push_back(std::move(work));
   }
   return spec;
 }
 
+int TileCount(const JobSpec& spec) {
+  int tiles = 0;
+  for (const GroupWork& g : spec.groups) tiles += static_cast<int>(g.tiles.size());
+  return tiles;
+}
+
 }  // namespace
+
+// An open group: its current stage and, per tile of that stage, the batches merged so far
+// and (adaptive bakes) the tile's earlier stages.
+struct BakeEngine::OpenGroup {
+  int stage = 0;
+  std::map<int, StageAccumulator> tiles;
+  std::map<int, TileStageState> states;
+};
 
 // A job in progress. Every field but `spec` and `ended` is guarded by BakeEngine::mu_ (the
 // annotation cannot name another object's mutex); `ended` is also read without it, to drop
 // heavy work early.
 struct BakeEngine::Job {
   EngineJob spec;
-  std::map<int, std::vector<StageBatch>> batches;  // open tiles: their stage's batches so far
-  std::map<int, TileStageState> stages;            // adaptive tiles between stages
+  std::map<int, OpenGroup> groups;  // by group index, from a group's first result to its end
   JobProgress progress;
   int output_calls = 0;  // JobOutput calls in flight
   struct DeferredEnd {
@@ -85,7 +102,7 @@ absl::Status BakeEngine::AddJob(EngineJob spec) {
   const JobSpec scheduled = SchedulerSpec(spec);
   JobProgress& p = job->progress;
   p.tiles_total = static_cast<int>(spec.plan->tiles.size());
-  p.tiles_done = p.tiles_total - static_cast<int>(scheduled.tiles.size());
+  p.tiles_done = p.tiles_total - TileCount(scheduled);
   p.samples_total = int64_t{spec.plan->header.samples} * p.tiles_total;
   p.samples_done = int64_t{spec.plan->header.samples} * p.tiles_done;
   p.samples_at_add = p.samples_done;
@@ -145,92 +162,127 @@ std::optional<TaskLease> BakeEngine::FindLease(uint64_t lease_id) const {
   return scheduler_.FindLease(lease_id);
 }
 
-bool BakeEngine::Report(const std::string& worker_id, uint64_t lease_id, TileEvents events) {
+bool BakeEngine::Report(const std::string& worker_id, uint64_t lease_id,
+                        std::vector<TileEvents> events) {
   JobPtr job;
-  int tile = 0;
-  TileStageState state;
-  std::vector<StageBatch> batches;
+  int group_index = 0;
+  std::optional<OpenGroup> complete_group;
+  std::optional<JobFailure> failure;
   {
     absl::MutexLock lock(&mu_);
     const int64_t now = options_.now_ms();
-    const ResultOutcome outcome = scheduler_.Complete(worker_id, lease_id, now);
-    if (outcome.kind == ResultOutcome::kDropped) return false;
-    job = FindJob(outcome.job_id);
-    if (!job) return false;  // cannot happen: an ended job's leases are gone
-    recent_results_.emplace_back(now, static_cast<int64_t>(events.events.size()));
-    ForgetOldRates(now);
-    JobProgress& p = job->progress;
-    ++p.tasks_done;
-    p.samples_done += outcome.sample_end - outcome.sample_begin;
-    tile = outcome.tile_index;
-    std::vector<StageBatch>& tile_batches = job->batches[tile];
-    tile_batches.push_back(StageBatch{outcome.sample_begin, std::move(events)});
-    if (outcome.kind == ResultOutcome::kTileComplete) {
-      batches.swap(tile_batches);
-      job->batches.erase(tile);
-      if (auto it = job->stages.find(tile); it != job->stages.end()) {
-        state = std::move(it->second);
-        job->stages.erase(it);
+    const std::optional<TaskLease> lease = scheduler_.FindLease(lease_id);
+    if (lease && lease->tiles.size() != events.size()) {
+      failure = scheduler_.Fail(worker_id, lease_id,
+                                absl::StrCat("the result holds ", events.size(),
+                                             " tiles' events for a task of ", lease->tiles.size()),
+                                /*handed_back=*/false, now);
+      if (failure) job = FindJob(failure->job_id);
+    }
+    if (!failure) {
+      const ResultOutcome outcome = scheduler_.Complete(worker_id, lease_id, now);
+      if (outcome.kind == ResultOutcome::kDropped) return false;
+      job = FindJob(outcome.job_id);
+      if (!job) return false;  // cannot happen: an ended job's leases are gone
+      int64_t event_count = 0;
+      for (const TileEvents& e : events) event_count += static_cast<int64_t>(e.events.size());
+      recent_results_.emplace_back(now, event_count);
+      ForgetOldRates(now);
+      JobProgress& p = job->progress;
+      ++p.tasks_done;
+      p.samples_done += int64_t{outcome.sample_end - outcome.sample_begin} *
+                        static_cast<int64_t>(outcome.tiles.size());
+      group_index = outcome.group_index;
+      OpenGroup& group = job->groups[group_index];
+      for (size_t i = 0; i < outcome.tiles.size(); ++i) {
+        auto [it, added] =
+            group.tiles.try_emplace(outcome.tiles[i], job->spec.plan->header, group.stage);
+        it->second.Add(outcome.sample_begin, std::move(events[i]));
+      }
+      if (outcome.kind == ResultOutcome::kStageComplete) {
+        complete_group = std::move(group);
+        job->groups.erase(group_index);
       }
     }
+    changed_.SignalAll();
   }
-  if (!batches.empty()) {
-    options_.executor([this, job, tile, s = std::move(state), b = std::move(batches)]() mutable {
-      CompleteStage(job, tile, std::move(s), std::move(b));
+  if (failure) {
+    if (job) End(job, JobEnd::kFailed, absl::AbortedError(failure->reason));
+    return false;
+  }
+  if (complete_group) {
+    options_.executor([this, job, group_index, g = std::move(*complete_group)]() mutable {
+      CompleteStage(job, group_index, std::move(g));
     });
   }
   return true;
 }
 
-void BakeEngine::CompleteStage(const JobPtr& job, int tile_index, TileStageState state,
-                               std::vector<StageBatch> batches) {
+void BakeEngine::CompleteStage(const JobPtr& job, int group_index, OpenGroup group) {
   if (job->ended) return;  // cancelled or failed while queued
-  StageVerdict verdict = JudgeStage(job->spec.plan->header, std::move(state), std::move(batches));
-  if (verdict.done) return StoreTile(job, tile_index, std::move(verdict));
+  const PdsmHeader& header = job->spec.plan->header;
+  OpenGroup next;
+  next.stage = group.stage + 1;
+  std::vector<int> next_tiles;
+  for (auto& [tile, accumulator] : group.tiles) {
+    TileStageState state;
+    state.stage = group.stage;
+    if (auto it = group.states.find(tile); it != group.states.end()) state = std::move(it->second);
+    StageVerdict verdict = JudgeStage(header, std::move(state), accumulator.TakeRanges());
+    if (verdict.done) {
+      if (!StoreTile(job, tile, std::move(verdict))) return;
+    } else {
+      next_tiles.push_back(tile);
+      next.states[tile] = std::move(verdict.next);
+    }
+  }
+  bool complete = false, queued = true;
   {
     absl::MutexLock lock(&mu_);
     if (job->ended) return;
-    job->stages[tile_index] = std::move(verdict.next);
-    const bool queued = scheduler_.AddStage(job->spec.job_id, tile_index);
-    job->progress.tasks_total = TasksTotal(*job);
+    if (next_tiles.empty()) {
+      scheduler_.GroupAssembled(job->spec.job_id, group_index);
+      complete = scheduler_.JobComplete(job->spec.job_id);
+    } else {
+      queued = scheduler_.AddStage(job->spec.job_id, group_index, next_tiles);
+      job->progress.tasks_total = TasksTotal(*job);
+      if (queued) job->groups[group_index] = std::move(next);
+    }
     changed_.SignalAll();
-    if (queued) return;
   }
-  // A tile left open would hold its slot and the job would never end: fail it loudly.
-  End(job, JobEnd::kFailed,
-      absl::InternalError(
-          absl::StrCat("tile ", tile_index, ": its next adaptive stage could not be queued")));
+  if (!queued) {
+    // A group left open would hold its slot and the job would never end: fail it loudly.
+    return End(job, JobEnd::kFailed,
+               absl::InternalError(absl::StrCat("tile group ", group_index,
+                                                ": its next adaptive stage could not be queued")));
+  }
+  if (complete) FinishJob(job);
 }
 
-void BakeEngine::StoreTile(const JobPtr& job, int tile_index, StageVerdict verdict) {
+bool BakeEngine::StoreTile(const JobPtr& job, int tile_index, StageVerdict verdict) {
   AssemblyStats stats;
   const PdsmTile tile =
       AssemblePlanTile(*job->spec.plan, verdict.events, verdict.tile_samples, &stats);
   verdict.events.clear();
-  if (!BeginOutputCall(job)) return;
+  if (!BeginOutputCall(job)) return false;
   const absl::Status stored = job->spec.output->StoreTile(tile);
   EndOutputCall(job);
   if (!stored.ok()) {
-    return End(job, JobEnd::kFailed,
-               absl::Status(stored.code(),
-                            absl::StrCat("storing tile ", tile_index, ": ", stored.message())));
+    End(job, JobEnd::kFailed,
+        absl::Status(stored.code(),
+                     absl::StrCat("storing tile ", tile_index, ": ", stored.message())));
+    return false;
   }
-  bool complete = false;
-  {
-    absl::MutexLock lock(&mu_);
-    if (job->ended) return;
-    scheduler_.TileAssembled(job->spec.job_id, tile_index);
-    JobProgress& p = job->progress;
-    ++p.tiles_done;
-    if (tile.vertices.empty()) ++p.tiles_all_lit;
-    p.samples_done += verdict.samples_skipped;
-    p.tile_samples_total +=
-        verdict.tile_samples > 0 ? verdict.tile_samples : job->spec.plan->header.samples;
-    p.assembly.Add(stats);
-    complete = scheduler_.JobComplete(job->spec.job_id);
-    changed_.SignalAll();
-  }
-  if (complete) FinishJob(job);
+  absl::MutexLock lock(&mu_);
+  if (job->ended) return false;
+  JobProgress& p = job->progress;
+  ++p.tiles_done;
+  if (tile.vertices.empty()) ++p.tiles_all_lit;
+  p.samples_done += verdict.samples_skipped;
+  p.tile_samples_total +=
+      verdict.tile_samples > 0 ? verdict.tile_samples : job->spec.plan->header.samples;
+  p.assembly.Add(stats);
+  return true;
 }
 
 void BakeEngine::FinishJob(const JobPtr& job) {

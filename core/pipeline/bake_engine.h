@@ -5,10 +5,11 @@
 // bake (worker/local_bake.h) from N task runners in one process. Same plan, same scheduler,
 // same rule, same assembly: the same bytes, by construction.
 //
-//   AddJob ─► Lease ─► (a worker runs the task) ─► Report ─┐ a tile's stage complete:
-//                ▲                                          ▼ (executor) JudgeStage
-//                └──── next adaptive stage ◄──── not done ──┤
-//                                                     done ─► AssemblePlanTile ─► StoreTile
+//   AddJob ─► Lease ─► (a worker runs the task: a tile group, a batch of samples) ─► Report
+//                ▲        each tile's events merged as they come; a group's stage complete:
+//                │                                      ▼ (executor) JudgeStage, per tile
+//                └──── next adaptive stage ◄── tiles not done ──┤
+//                                              tiles done ─► AssemblePlanTile ─► StoreTile
 //                                          every tile stored ─► Finish ─► Ended(kSucceeded)
 //
 // Thread-safe. Bookkeeping (Lease, Extend, Report, ReportFailure, Tick) holds one mutex
@@ -138,11 +139,14 @@ class BakeEngine {
   absl::StatusOr<int64_t> Extend(const std::string& worker_id, uint64_t lease_id);
   std::optional<TaskLease> FindLease(uint64_t lease_id) const;
 
-  // A worker's events for its lease. REQUIRES: `events` fit the lease's tile (the coordinator
-  // checks a remote worker's with rpc/tile_events_codec.h). False when the result was dropped
-  // (late after expiry, duplicate, job ended). When it completes a tile's stage, the stage's
-  // judgement, assembly and storage run through the executor before or after this returns.
-  bool Report(const std::string& worker_id, uint64_t lease_id, TileEvents events);
+  // A worker's events for its lease: one TileEvents per tile of the lease, in its order. Each
+  // is merged into its tile's running lists at once (memory does not grow with the batches).
+  // REQUIRES: each fits its tile (the coordinator checks a remote worker's with
+  // rpc/tile_events_codec.h). False when the result was dropped (late after expiry,
+  // duplicate, job ended; a result with the wrong number of tiles counts as the task's
+  // failure). When it completes a group's stage, the stage's judgement, assembly and storage
+  // run through the executor before or after this returns.
+  bool Report(const std::string& worker_id, uint64_t lease_id, std::vector<TileEvents> events);
 
   // The worker could not do the task (handed_back: it gave it up undone, e.g. stopping; it
   // counts against nobody). See EngineOptions::task_failure_ends_job.
@@ -168,9 +172,10 @@ class BakeEngine {
   struct Job;
   using JobPtr = std::shared_ptr<Job>;
 
-  void CompleteStage(const JobPtr& job, int tile_index, TileStageState state,
-                     std::vector<StageBatch> batches);
-  void StoreTile(const JobPtr& job, int tile_index, StageVerdict verdict);
+  struct OpenGroup;
+  void CompleteStage(const JobPtr& job, int group_index, OpenGroup group);
+  // False when the job ended (the store failed, or it was ended meanwhile).
+  bool StoreTile(const JobPtr& job, int tile_index, StageVerdict verdict);
   void FinishJob(const JobPtr& job);
   // Ends the job once; defers JobOutput::Ended until its output calls in flight return.
   void End(const JobPtr& job, JobEnd end, const absl::Status& status);

@@ -19,9 +19,9 @@ namespace pdsm {
 namespace {
 
 // A plan of `tiles_x` x 1 tiles of 2x1 pixels, without geometry: the engine only reads the
-// header and the tile grid.
+// header, the tile grid and the groups (`group_size` consecutive tiles each).
 std::shared_ptr<const BakePlan> SmallPlan(int tiles_x, int samples, double adaptive_tolerance = 0,
-                                          int adaptive_min_samples = 0) {
+                                          int adaptive_min_samples = 0, int group_size = 1) {
   auto plan = std::make_shared<BakePlan>();
   PdsmHeader& h = plan->header;
   h.samples = samples;
@@ -37,6 +37,11 @@ std::shared_ptr<const BakePlan> SmallPlan(int tiles_x, int samples, double adapt
   plan->tiles_y = 1;
   for (int t = 0; t < tiles_x; ++t) {
     plan->tiles.push_back(TileRect{.index = t, .x0 = 2 * t, .y0 = 0, .width = 2, .height = 1});
+    if (t % group_size == 0) {
+      plan->groups.push_back(TileGroup{static_cast<int>(plan->groups.size()), 2 * t, 0, 0, 1, {}});
+    }
+    plan->groups.back().tiles.push_back(t);
+    plan->groups.back().width += 2;
   }
   return plan;
 }
@@ -131,6 +136,22 @@ class RecordingOutput : public JobOutput {
   std::map<int, PdsmTile> tiles_;
 };
 
+// The events of a lease: one TileEvents per tile of it, in order.
+std::vector<TileEvents> LeaseEvents(const BakePlan& plan, const TaskLease& lease) {
+  std::vector<TileEvents> out;
+  for (int tile : lease.tiles) {
+    out.push_back(BatchEvents(plan, tile, lease.sample_begin, lease.sample_end));
+  }
+  return out;
+}
+
+// One tile's events as a lease result.
+std::vector<TileEvents> One(TileEvents events) {
+  std::vector<TileEvents> out;
+  out.push_back(std::move(events));
+  return out;
+}
+
 EngineOptions InlineOptions() {
   EngineOptions options;
   options.executor = [](std::function<void()> work) { work(); };
@@ -159,8 +180,7 @@ int RunAll(BakeEngine& engine, const BakePlan& plan, std::optional<unsigned> see
     if (leases.empty()) return tasks;
     if (seed) std::shuffle(leases.begin(), leases.end(), rng);
     for (const TaskLease& l : leases) {
-      EXPECT_TRUE(engine.Report("w", l.lease_id,
-                                BatchEvents(plan, l.tile_index, l.sample_begin, l.sample_end)));
+      EXPECT_TRUE(engine.Report("w", l.lease_id, LeaseEvents(plan, l)));
       ++tasks;
     }
   }
@@ -224,13 +244,12 @@ TEST(BakeEngine, AdaptiveTileTakesStagesUntilItConverges) {
   while (std::optional<TaskLease> lease = engine.Lease("w")) pilot.push_back(*lease);
   ASSERT_EQ(pilot.size(), 2u);
   for (const TaskLease& l : pilot) {
-    engine.Report("w", l.lease_id, BatchEvents(*plan, 0, l.sample_begin, l.sample_end));
+    engine.Report("w", l.lease_id, LeaseEvents(*plan, l));
   }
   std::vector<std::pair<int, int>> ranges;
   while (std::optional<TaskLease> lease = engine.Lease("w")) {
     ranges.emplace_back(lease->sample_begin, lease->sample_end);
-    engine.Report("w", lease->lease_id,
-                  BatchEvents(*plan, 0, lease->sample_begin, lease->sample_end));
+    engine.Report("w", lease->lease_id, LeaseEvents(*plan, *lease));
   }
   EXPECT_EQ(ranges, (std::vector<std::pair<int, int>>{{2, 4}, {4, 8}, {8, 16}}));
   ASSERT_EQ(output->end(), JobEnd::kSucceeded);
@@ -247,8 +266,7 @@ TEST(BakeEngine, ConvergedAdaptiveTileStopsEarlyAndCountsItsSkippedSamples) {
   ASSERT_TRUE(engine.AddJob(Job(plan, output, 0)).ok());
   while (std::optional<TaskLease> lease = engine.Lease("w")) {
     // Samples 0 and 1 both in shadow over [2, 8).
-    TileEvents events = BatchEvents(*plan, 0, 0, 1);
-    engine.Report("w", lease->lease_id, std::move(events));
+    engine.Report("w", lease->lease_id, One(BatchEvents(*plan, 0, 0, 1)));
   }
   ASSERT_EQ(output->end(), JobEnd::kSucceeded);
   EXPECT_EQ(output->tiles().at(0).samples, 2);
@@ -268,8 +286,7 @@ TEST(BakeEngine, CancelWhileATileIsStoredEndsOnlyAfterTheStoreReturns) {
   ASSERT_TRUE(engine.AddJob(Job(plan, output, 0)).ok());
   const std::optional<TaskLease> lease = engine.Lease("w");
   ASSERT_TRUE(lease);
-  ASSERT_TRUE(engine.Report("w", lease->lease_id,
-                            BatchEvents(*plan, lease->tile_index, 0, plan->header.samples)));
+  ASSERT_TRUE(engine.Report("w", lease->lease_id, LeaseEvents(*plan, *lease)));
   output->store_entered_.WaitForNotification();
   EXPECT_TRUE(engine.Cancel("j", absl::CancelledError("by request")));
   EXPECT_FALSE(engine.Cancel("j", absl::CancelledError("twice")));
@@ -293,8 +310,8 @@ TEST(BakeEngine, StoreErrorFailsTheJobNamingTheTile) {
   const std::optional<TaskLease> first = engine.Lease("w");
   const std::optional<TaskLease> second = engine.Lease("w");
   ASSERT_TRUE(first && second);
-  EXPECT_TRUE(engine.Report("w", first->lease_id, BatchEvents(*plan, first->tile_index, 0, 1)));
-  EXPECT_FALSE(engine.Report("w", second->lease_id, BatchEvents(*plan, second->tile_index, 0, 1)))
+  EXPECT_TRUE(engine.Report("w", first->lease_id, LeaseEvents(*plan, *first)));
+  EXPECT_FALSE(engine.Report("w", second->lease_id, LeaseEvents(*plan, *second)))
       << "a failed job takes no more results";
   EXPECT_EQ(output->end(), JobEnd::kFailed);
   EXPECT_EQ(output->status().code(), absl::StatusCode::kResourceExhausted);
@@ -364,8 +381,8 @@ TEST(BakeEngine, ResumedJobRunsOnlyItsMissingTiles) {
   EXPECT_EQ(engine.Progress("j")->tiles_done, 2);
   const std::optional<TaskLease> lease = engine.Lease("w");
   ASSERT_TRUE(lease);
-  EXPECT_EQ(lease->tile_index, 1);
-  engine.Report("w", lease->lease_id, BatchEvents(*plan, 1, 0, 2));
+  EXPECT_EQ(lease->tiles, std::vector<int>{1});
+  engine.Report("w", lease->lease_id, LeaseEvents(*plan, *lease));
   EXPECT_EQ(output->started(), 0);  // it had started before the restart
   EXPECT_EQ(output->end(), JobEnd::kSucceeded);
   EXPECT_EQ(output->tiles().size(), 1u);
@@ -412,11 +429,11 @@ TEST(BakeEngine, WaitingLeaseReturnsWhenTheJobEnds) {
   waiter.join();
   EXPECT_FALSE(got);
   EXPECT_EQ(output->end(), JobEnd::kFailed);
-  EXPECT_FALSE(engine.Report("a", only->lease_id, BatchEvents(*plan, 0, 0, 2)));  // stale
+  EXPECT_FALSE(engine.Report("a", only->lease_id, LeaseEvents(*plan, *only)));  // stale
 }
 
 TEST(BakeEngine, ManyThreadsBakeTheSameTilesAsOne) {
-  const auto plan = SmallPlan(16, 12);
+  const auto plan = SmallPlan(16, 12, 0, 0, /*group_size=*/4);
   std::map<int, PdsmTile> single;
   {
     auto output = std::make_shared<RecordingOutput>();
@@ -435,8 +452,7 @@ TEST(BakeEngine, ManyThreadsBakeTheSameTilesAsOne) {
     threads.Post([&, t] {
       const std::string id = "w" + std::to_string(t);
       while (std::optional<TaskLease> l = engine.Lease(id, absl::Seconds(5))) {
-        engine.Report(id, l->lease_id,
-                      BatchEvents(*plan, l->tile_index, l->sample_begin, l->sample_end));
+        engine.Report(id, l->lease_id, LeaseEvents(*plan, *l));
       }
     });
   }
@@ -444,6 +460,90 @@ TEST(BakeEngine, ManyThreadsBakeTheSameTilesAsOne) {
   ASSERT_EQ(output->end(), JobEnd::kSucceeded);
   ASSERT_EQ(output->tiles().size(), single.size());
   for (const auto& [t, tile] : single) EXPECT_EQ(output->tiles().at(t).vertices, tile.vertices);
+}
+
+TEST(BakeEngine, ATaskCoversItsGroupAndEveryTileOfItIsStored) {
+  const auto plan = SmallPlan(6, 4, 0, 0, /*group_size=*/3);
+  auto output = std::make_shared<RecordingOutput>();
+  BakeEngine engine(InlineOptions());
+  ASSERT_TRUE(engine.AddJob(Job(plan, output, 2)).ok());
+  std::vector<TaskLease> leases;
+  while (std::optional<TaskLease> lease = engine.Lease("w")) leases.push_back(*lease);
+  ASSERT_EQ(leases.size(), 4u);  // 2 groups x 2 batches
+  EXPECT_EQ(leases[0].group_index, 0);
+  EXPECT_EQ(leases[0].tiles, (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(leases[3].tiles, (std::vector<int>{3, 4, 5}));
+  for (const TaskLease& l : leases)
+    EXPECT_TRUE(engine.Report("w", l.lease_id, LeaseEvents(*plan, l)));
+  EXPECT_EQ(output->end(), JobEnd::kSucceeded);
+  EXPECT_EQ(output->tiles().size(), 6u);
+  EXPECT_EQ(output->progress().samples_done, output->progress().samples_total);
+  // The same tiles as with one tile per group.
+  const auto single = SmallPlan(6, 4);
+  auto reference = std::make_shared<RecordingOutput>();
+  BakeEngine other(InlineOptions());
+  ASSERT_TRUE(other.AddJob(Job(single, reference, 0)).ok());
+  RunAll(other, *single);
+  for (int t = 0; t < 6; ++t)
+    EXPECT_EQ(output->tiles().at(t).vertices, reference->tiles().at(t).vertices);
+}
+
+TEST(BakeEngine, ResumedGroupLeasesOnlyItsMissingTiles) {
+  const auto plan = SmallPlan(4, 2, 0, 0, /*group_size=*/4);
+  auto output = std::make_shared<RecordingOutput>();
+  BakeEngine engine(InlineOptions());
+  EngineJob job = Job(plan, output, 0);
+  job.done_tiles = {1, 2};
+  ASSERT_TRUE(engine.AddJob(std::move(job)).ok());
+  const std::optional<TaskLease> lease = engine.Lease("w");
+  ASSERT_TRUE(lease);
+  EXPECT_EQ(lease->tiles, (std::vector<int>{0, 3}));
+  EXPECT_TRUE(engine.Report("w", lease->lease_id, LeaseEvents(*plan, *lease)));
+  EXPECT_EQ(output->end(), JobEnd::kSucceeded);
+  EXPECT_EQ(output->tiles().size(), 2u);
+}
+
+TEST(BakeEngine, AResultWithTheWrongNumberOfTilesIsTheTasksFailure) {
+  const auto plan = SmallPlan(2, 2, 0, 0, /*group_size=*/2);
+  auto output = std::make_shared<RecordingOutput>();
+  EngineOptions options = InlineOptions();
+  options.scheduler.max_task_failures = 1;
+  BakeEngine engine(std::move(options));
+  ASSERT_TRUE(engine.AddJob(Job(plan, output, 0)).ok());
+  const std::optional<TaskLease> lease = engine.Lease("w");
+  ASSERT_TRUE(lease);
+  EXPECT_FALSE(engine.Report("w", lease->lease_id, One(BatchEvents(*plan, 0, 0, 2))));
+  EXPECT_EQ(output->end(), JobEnd::kFailed);
+  EXPECT_NE(output->status().message().find("1 tiles' events for a task of 2"), std::string::npos)
+      << output->status();
+}
+
+TEST(BakeEngine, AdaptiveGroupGoesOnWithOnlyTheTilesThatNeedIt) {
+  // Tile 0 sees every sample alike (converges at the pilot); tile 1 sees them differ.
+  const auto plan = SmallPlan(2, 16, /*adaptive_tolerance=*/0.01, /*adaptive_min_samples=*/2,
+                              /*group_size=*/2);
+  auto output = std::make_shared<RecordingOutput>();
+  BakeEngine engine(InlineOptions());
+  ASSERT_TRUE(engine.AddJob(Job(plan, output, 0)).ok());
+  std::vector<std::vector<int>> tiles_per_task;
+  while (std::optional<TaskLease> lease = engine.Lease("w")) {
+    tiles_per_task.push_back(lease->tiles);
+    std::vector<TileEvents> events;
+    for (int tile : lease->tiles) {
+      events.push_back(tile == 0 ? BatchEvents(*plan, 0, 0, lease->sample_end - lease->sample_begin)
+                                 : BatchEvents(*plan, 1, lease->sample_begin, lease->sample_end));
+    }
+    engine.Report("w", lease->lease_id, std::move(events));
+  }
+  ASSERT_EQ(output->end(), JobEnd::kSucceeded);
+  ASSERT_GE(tiles_per_task.size(), 3u);
+  EXPECT_EQ(tiles_per_task[0], (std::vector<int>{0, 1}));  // the pilot's two halves
+  EXPECT_EQ(tiles_per_task[1], (std::vector<int>{0, 1}));
+  for (size_t k = 2; k < tiles_per_task.size(); ++k) {
+    EXPECT_EQ(tiles_per_task[k], std::vector<int>{1}) << "task " << k;
+  }
+  EXPECT_EQ(output->tiles().at(0).samples, 2);
+  EXPECT_EQ(output->tiles().at(1).samples, 16);
 }
 
 TEST(BakeEngine, StatsCountJobsAndRecentResults) {
@@ -457,7 +557,7 @@ TEST(BakeEngine, StatsCountJobsAndRecentResults) {
   now += 10'000;
   const std::optional<TaskLease> lease = engine.Lease("w");
   ASSERT_TRUE(lease);
-  engine.Report("w", lease->lease_id, BatchEvents(*plan, lease->tile_index, 0, 2));
+  engine.Report("w", lease->lease_id, LeaseEvents(*plan, *lease));
   EngineStats stats = engine.Stats();
   EXPECT_EQ(stats.jobs_started, 1);
   EXPECT_EQ(stats.scheduler.results_accepted, 1);

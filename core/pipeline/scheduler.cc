@@ -30,18 +30,21 @@ void Scheduler::AddJob(const JobSpec& spec) {
   job.samples_per_task = std::max(1, spec.samples_per_task);
   job.adaptive_min_samples = std::clamp(spec.adaptive_min_samples, 0, job.samples);
   std::set<int> seen;
-  for (int tile : spec.tiles) {
-    if (seen.insert(tile).second) job.tile_order.push_back(tile);  // a repeat is the same tile
+  for (const GroupWork& group : spec.groups) {
+    // A repeat is the same group; a group with no tile has no work.
+    if (!group.tiles.empty() && seen.insert(group.group_index).second) {
+      job.group_order.push_back(group);
+    }
   }
-  job.tiles_left = static_cast<int>(job.tile_order.size());
-  // Adaptive jobs: the tasks known so far (every tile's pilot); later stages add theirs.
-  job.tasks_left = int64_t{job.tiles_left} * static_cast<int64_t>(StageBatches(job, 0).size());
+  job.groups_left = static_cast<int>(job.group_order.size());
+  // Adaptive jobs: the tasks known so far (every group's pilot); later stages add theirs.
+  job.tasks_left = int64_t{job.groups_left} * static_cast<int64_t>(StageBatches(job, 0).size());
   order_.insert(job.key);
 }
 
 std::optional<TaskLease> Scheduler::Lease(const std::string& worker_id, int64_t now_ms) {
   Touch(worker_id, now_ms);
-  // With every tile slot taken only pending tasks of open tiles can go out, so the walk can
+  // With every tile slot taken only pending tasks of open groups can go out, so the walk can
   // skip the jobs that have none.
   const std::set<JobKey>& walk = tiles_open_ < options_.max_open_tiles ? order_ : ready_;
   for (const JobKey& key : walk) {
@@ -58,28 +61,34 @@ std::optional<TaskLease> Scheduler::TryLease(Job& job, const std::string& worker
   // since it is not excluded.
   for (const TaskRef& task : job.pending) {
     const std::vector<std::pair<std::string, std::string>>& failures =
-        TileOf(job, task).tasks[task.second].failures;
+        GroupOf(job, task).tasks[task.second].failures;
     const bool failed_here =
         std::any_of(failures.begin(), failures.end(),
                     [&](const auto& failure) { return failure.first == worker_id; });
     if (!failed_here) return Issue(job, task, worker_id, now_ms);
   }
-  // A freshly opened tile's first batch has failed on nobody.
-  if (OpenTile(job)) {
-    return Issue(job, {static_cast<int>(job.next_tile) - 1, 0}, worker_id, now_ms);
+  // A freshly opened group's first batch has failed on nobody.
+  if (OpenGroup(job)) {
+    return Issue(job, {static_cast<int>(job.next_group) - 1, 0}, worker_id, now_ms);
   }
   return std::nullopt;
 }
 
-bool Scheduler::OpenTile(Job& job) {
-  if (tiles_open_ >= options_.max_open_tiles || job.next_tile >= job.tile_order.size()) {
-    return false;
-  }
-  const int position = static_cast<int>(job.next_tile++);
-  Tile& tile = job.tiles[job.tile_order[position]];
-  tile.position = position;
-  AddTasks(job, tile, 0);
-  ++tiles_open_;
+bool Scheduler::OpenGroup(Job& job) {
+  if (job.next_group >= job.group_order.size()) return false;
+  const GroupWork& work = job.group_order[job.next_group];
+  // The tile budget holds unless no group is open at all: a group larger than the budget
+  // still gets its turn.
+  const int tiles = static_cast<int>(work.tiles.size());
+  if (tiles_open_ > 0 && tiles_open_ + tiles > options_.max_open_tiles) return false;
+  const int position = static_cast<int>(job.next_group++);
+  Group& group = job.groups[work.group_index];
+  group.position = position;
+  group.tiles = work.tiles;
+  std::sort(group.tiles.begin(), group.tiles.end());
+  group.tiles.erase(std::unique(group.tiles.begin(), group.tiles.end()), group.tiles.end());
+  tiles_open_ += static_cast<int>(group.tiles.size());
+  AddTasks(job, group, 0);
   return true;
 }
 
@@ -100,30 +109,41 @@ std::vector<std::pair<int, int>> Scheduler::StageBatches(const Job& job, int sta
   return batches;
 }
 
-void Scheduler::AddTasks(Job& job, Tile& tile, int stage) {
-  tile.stage = stage;
-  tile.tasks_left = 0;
+void Scheduler::AddTasks(Job& job, Group& group, int stage) {
+  group.stage = stage;
+  group.tasks_left = 0;
   for (const auto& [begin, end] : StageBatches(job, stage)) {
-    job.pending.insert({tile.position, static_cast<int>(tile.tasks.size())});
+    job.pending.insert({group.position, static_cast<int>(group.tasks.size())});
     Task task;
     task.sample_begin = begin;
     task.sample_end = end;
-    tile.tasks.push_back(std::move(task));
-    ++tile.tasks_left;
+    group.tasks.push_back(std::move(task));
+    ++group.tasks_left;
   }
   UpdateReady(job);
 }
 
-bool Scheduler::AddStage(const std::string& job_id, int tile_index) {
+bool Scheduler::AddStage(const std::string& job_id, int group_index,
+                         const std::vector<int>& tiles) {
   const auto job_it = jobs_.find(job_id);
   if (job_it == jobs_.end() || job_it->second.adaptive_min_samples == 0) return false;
   Job& job = job_it->second;
-  const auto tile_it = job.tiles.find(tile_index);
-  if (tile_it == job.tiles.end() || tile_it->second.tasks_left > 0) return false;
-  Tile& tile = tile_it->second;
-  const size_t added = StageBatches(job, tile.stage + 1).size();
+  const auto group_it = job.groups.find(group_index);
+  if (group_it == job.groups.end() || group_it->second.tasks_left > 0 || tiles.empty()) {
+    return false;
+  }
+  Group& group = group_it->second;
+  std::vector<int> next = tiles;
+  std::sort(next.begin(), next.end());
+  next.erase(std::unique(next.begin(), next.end()), next.end());
+  if (!std::includes(group.tiles.begin(), group.tiles.end(), next.begin(), next.end())) {
+    return false;
+  }
+  const size_t added = StageBatches(job, group.stage + 1).size();
   if (added == 0) return false;
-  AddTasks(job, tile, tile.stage + 1);
+  tiles_open_ -= static_cast<int>(group.tiles.size() - next.size());  // the done ones leave
+  group.tiles = std::move(next);
+  AddTasks(job, group, group.stage + 1);
   job.tasks_left += static_cast<int64_t>(added);
   return true;
 }
@@ -133,24 +153,34 @@ TaskLease Scheduler::Issue(Job& job, TaskRef task, const std::string& worker_id,
   const int64_t deadline_ms = now_ms + options_.lease_ms;
   job.pending.erase(task);
   UpdateReady(job);
-  TileOf(job, task).tasks[task.second].lease_id = lease_id;
+  GroupOf(job, task).tasks[task.second].lease_id = lease_id;
   job.leases.insert(lease_id);
-  leases_[lease_id] = {job.key.job_id, task, worker_id, deadline_ms};
+  const LeaseInfo& info = leases_[lease_id] = {job.key.job_id, task, worker_id, deadline_ms};
   deadlines_.insert({deadline_ms, lease_id});
-
-  TaskLease lease;
-  lease.lease_id = lease_id;
-  lease.job_id = job.key.job_id;
-  lease.tile_index = job.tile_order[task.first];
-  const Task& t = TileOf(job, task).tasks[task.second];
-  lease.sample_begin = t.sample_begin;
-  lease.sample_end = t.sample_end;
-  lease.deadline_ms = deadline_ms;
-  return lease;
+  return LeaseOf(lease_id, info);
 }
 
-Scheduler::Tile& Scheduler::TileOf(Job& job, TaskRef task) {
-  return job.tiles.at(job.tile_order[task.first]);
+Scheduler::Group& Scheduler::GroupOf(Job& job, TaskRef task) {
+  return job.groups.at(job.group_order[task.first].group_index);
+}
+
+const Scheduler::Group& Scheduler::GroupOf(const Job& job, TaskRef task) const {
+  return job.groups.at(job.group_order[task.first].group_index);
+}
+
+TaskLease Scheduler::LeaseOf(uint64_t lease_id, const LeaseInfo& info) const {
+  const Job& job = jobs_.at(info.job_id);
+  const Group& group = GroupOf(job, info.task);
+  const Task& task = group.tasks[info.task.second];
+  TaskLease lease;
+  lease.lease_id = lease_id;
+  lease.job_id = info.job_id;
+  lease.group_index = job.group_order[info.task.first].group_index;
+  lease.tiles = group.tiles;
+  lease.sample_begin = task.sample_begin;
+  lease.sample_end = task.sample_end;
+  lease.deadline_ms = info.deadline_ms;
+  return lease;
 }
 
 absl::StatusOr<int64_t> Scheduler::Extend(const std::string& worker_id, uint64_t lease_id,
@@ -177,18 +207,19 @@ ResultOutcome Scheduler::Complete(const std::string& worker_id, uint64_t lease_i
   }
   const LeaseInfo lease = TakeLease(it);
   Job& job = jobs_.at(lease.job_id);
-  Tile& tile = TileOf(job, lease.task);
-  tile.tasks[lease.task.second].done = true;
-  --tile.tasks_left;
+  Group& group = GroupOf(job, lease.task);
+  group.tasks[lease.task.second].done = true;
+  --group.tasks_left;
   --job.tasks_left;
   ++results_accepted_;
 
   ResultOutcome outcome;
-  outcome.kind = tile.tasks_left == 0 ? ResultOutcome::kTileComplete : ResultOutcome::kAccepted;
+  outcome.kind = group.tasks_left == 0 ? ResultOutcome::kStageComplete : ResultOutcome::kAccepted;
   outcome.job_id = lease.job_id;
-  outcome.tile_index = job.tile_order[lease.task.first];
-  outcome.sample_begin = tile.tasks[lease.task.second].sample_begin;
-  outcome.sample_end = tile.tasks[lease.task.second].sample_end;
+  outcome.group_index = job.group_order[lease.task.first].group_index;
+  outcome.tiles = group.tiles;
+  outcome.sample_begin = group.tasks[lease.task.second].sample_begin;
+  outcome.sample_end = group.tasks[lease.task.second].sample_end;
   return outcome;
 }
 
@@ -226,20 +257,20 @@ std::vector<JobFailure> Scheduler::Tick(int64_t now_ms) {
   return failures;
 }
 
-void Scheduler::TileAssembled(const std::string& job_id, int tile_index) {
+void Scheduler::GroupAssembled(const std::string& job_id, int group_index) {
   const auto job_it = jobs_.find(job_id);
   if (job_it == jobs_.end()) return;
   Job& job = job_it->second;
-  const auto tile_it = job.tiles.find(tile_index);
-  if (tile_it == job.tiles.end() || tile_it->second.tasks_left > 0) return;
-  job.tiles.erase(tile_it);
-  --job.tiles_left;
-  --tiles_open_;
+  const auto group_it = job.groups.find(group_index);
+  if (group_it == job.groups.end() || group_it->second.tasks_left > 0) return;
+  tiles_open_ -= static_cast<int>(group_it->second.tiles.size());
+  job.groups.erase(group_it);
+  --job.groups_left;
 }
 
 bool Scheduler::JobComplete(const std::string& job_id) const {
   const auto it = jobs_.find(job_id);
-  return it != jobs_.end() && it->second.tiles_left == 0;
+  return it != jobs_.end() && it->second.groups_left == 0;
 }
 
 void Scheduler::RemoveJob(const std::string& job_id) {
@@ -251,7 +282,7 @@ void Scheduler::RemoveJob(const std::string& job_id) {
     deadlines_.erase({lease->second.deadline_ms, lease_id});
     leases_.erase(lease);
   }
-  tiles_open_ -= static_cast<int>(job.tiles.size());
+  for (const auto& [index, group] : job.groups) tiles_open_ -= static_cast<int>(group.tiles.size());
   order_.erase(job.key);
   ready_.erase(job.key);
   jobs_.erase(it);
@@ -260,17 +291,7 @@ void Scheduler::RemoveJob(const std::string& job_id) {
 std::optional<TaskLease> Scheduler::FindLease(uint64_t lease_id) const {
   const auto it = leases_.find(lease_id);
   if (it == leases_.end()) return std::nullopt;
-  const LeaseInfo& info = it->second;
-  const Job& job = jobs_.at(info.job_id);
-  TaskLease lease;
-  lease.lease_id = lease_id;
-  lease.job_id = info.job_id;
-  lease.tile_index = job.tile_order[info.task.first];
-  const Task& task = job.tiles.at(lease.tile_index).tasks[info.task.second];
-  lease.sample_begin = task.sample_begin;
-  lease.sample_end = task.sample_end;
-  lease.deadline_ms = info.deadline_ms;
-  return lease;
+  return LeaseOf(lease_id, it->second);
 }
 
 bool Scheduler::HasJob(const std::string& job_id) const { return jobs_.contains(job_id); }
@@ -315,7 +336,7 @@ Scheduler::LeaseInfo Scheduler::TakeLease(LeaseMap::iterator it) {
   deadlines_.erase({lease.deadline_ms, lease_id});
   Job& job = jobs_.at(lease.job_id);
   job.leases.erase(lease_id);
-  TileOf(job, lease.task).tasks[lease.task.second].lease_id.reset();
+  GroupOf(job, lease.task).tasks[lease.task.second].lease_id.reset();
   return lease;
 }
 
@@ -345,14 +366,15 @@ std::optional<JobFailure> Scheduler::CountFailure(Job& job, TaskRef task,
   ++job.worker_failures[worker_id];
   job.last_failure = reason;
   std::vector<std::pair<std::string, std::string>>& failures =
-      TileOf(job, task).tasks[task.second].failures;
+      GroupOf(job, task).tasks[task.second].failures;
   failures.emplace_back(worker_id, reason);
   if (static_cast<int>(failures.size()) < options_.max_task_failures) return std::nullopt;
 
-  const int64_t begin = TileOf(job, task).tasks[task.second].sample_begin;
-  const int64_t end = TileOf(job, task).tasks[task.second].sample_end;
-  std::string why = absl::StrCat("tile ", job.tile_order[task.first], " samples [", begin, ", ",
-                                 end, ") failed on ", failures.size(), " workers:");
+  const int64_t begin = GroupOf(job, task).tasks[task.second].sample_begin;
+  const int64_t end = GroupOf(job, task).tasks[task.second].sample_end;
+  std::string why =
+      absl::StrCat("tile group ", job.group_order[task.first].group_index, " samples [", begin,
+                   ", ", end, ") failed on ", failures.size(), " workers:");
   for (const auto& [worker, what] : failures) absl::StrAppend(&why, " ", worker, ": ", what, ";");
   why.pop_back();
   return JobFailure{job.key.job_id, std::move(why)};
@@ -365,12 +387,12 @@ bool Scheduler::Excluded(const Job& job, const std::string& worker_id) const {
 
 bool Scheduler::FailedAllRemaining(const Job& job, const std::string& worker_id) const {
   // Each failure is on a different task, so fewer failures than tasks left settles it, and
-  // nobody has failed a task of an unopened tile.
+  // nobody has failed a task of an unopened group.
   const auto it = job.worker_failures.find(worker_id);
   if (it == job.worker_failures.end() || it->second < job.tasks_left) return false;
-  if (job.next_tile < job.tile_order.size()) return false;
-  for (const auto& [tile_index, tile] : job.tiles) {
-    for (const Task& task : tile.tasks) {
+  if (job.next_group < job.group_order.size()) return false;
+  for (const auto& [group_index, group] : job.groups) {
+    for (const Task& task : group.tasks) {
       if (task.done) continue;
       const bool failed_here =
           std::any_of(task.failures.begin(), task.failures.end(),

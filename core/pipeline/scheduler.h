@@ -4,11 +4,13 @@
 // and calls it under its mutex, for the coordinator's remote workers and the local bake's
 // threads alike.
 //
-// A job's work is its tiles x sample batches. Tasks are handed out tile by tile: at most
-// `max_open_tiles` tiles (over all jobs) have work issued but are not yet assembled, which is
-// what bounds the coordinator's memory whatever the job size. Jobs run by priority (higher
-// first), then in submission order. Adaptive jobs hand out a tile's work in stages: the next
-// stage's batches are queued only when the service calls AddStage().
+// A job's work is its tile groups (core/bake/tile_groups.h) x sample batches: a task is one
+// batch of samples for the tiles of one group still to do. Tasks are handed out group by
+// group: a group opens only when no open group has a task waiting, and at most
+// `max_open_tiles` tiles (over all jobs; one group at least) are in open groups, which is what
+// bounds memory whatever the job size. Jobs run by priority (higher first), then in submission
+// order. Adaptive jobs hand out a group's work in stages: the next stage's batches, for the
+// tiles that need it, are queued only when the service calls AddStage().
 #ifndef PDSM_CORE_PIPELINE_SCHEDULER_H_
 #define PDSM_CORE_PIPELINE_SCHEDULER_H_
 
@@ -28,38 +30,46 @@ struct SchedulerOptions {
   int64_t lease_ms = 30'000;            // a lease lasts this long unless extended
   int max_task_failures = 3;            // distinct workers a task may fail on; then the job fails
   int max_worker_failures_per_job = 3;  // failures after which a worker gets no more of a job
-  int max_open_tiles = 64;              // tiles with issued, unassembled work, over all jobs
+  int max_open_tiles = 64;              // tiles of open groups, over all jobs (>= one group)
   int64_t worker_active_ms = 30'000;    // a worker is active if seen this recently
   uint64_t lease_id_base = 1;           // first lease id; a restarted coordinator picks a new
                                         // base so results for its predecessor's leases drop
 };
 
+// A group's tiles still to do (a resumed job lists only its unfinished ones).
+struct GroupWork {
+  int group_index = 0;
+  std::vector<int> tiles;  // non-empty
+};
+
 struct JobSpec {
   std::string job_id;
   int priority = 0;
-  int64_t sequence = 0;      // submission order, ascending
-  std::vector<int> tiles;    // tiles still to do (a resumed job lists only unfinished ones)
-  int samples = 1;           // light samples of the bake
-  int samples_per_task = 1;  // batch size; the last batch of a tile may be smaller
-  // Adaptive sampling (core/bake/adaptive_sampling.h): > 0 makes a tile's work come in stages
-  // of these first samples; after each stage completes the service either assembles the tile
-  // or calls AddStage(). 0: one stage holding all `samples`.
+  int64_t sequence = 0;           // submission order, ascending
+  std::vector<GroupWork> groups;  // in the order they open
+  int samples = 1;                // light samples of the bake
+  int samples_per_task = 1;       // batch size; the last batch of a range may be smaller
+  // Adaptive sampling (core/bake/adaptive_sampling.h): > 0 makes a group's work come in
+  // stages of these first samples; after each stage completes the service assembles the tiles
+  // that are done and calls AddStage() for the others. 0: one stage holding all `samples`.
   int adaptive_min_samples = 0;
 };
 
 struct TaskLease {
   uint64_t lease_id = 0;
   std::string job_id;
-  int tile_index = 0;
+  int group_index = 0;
+  std::vector<int> tiles;  // the group's tiles of this stage, ascending
   int sample_begin = 0, sample_end = 0;
   int64_t deadline_ms = 0;
 };
 
 // What happened to a reported result.
 struct ResultOutcome {
-  enum Kind { kDropped, kAccepted, kTileComplete } kind = kDropped;
+  enum Kind { kDropped, kAccepted, kStageComplete } kind = kDropped;
   std::string job_id;  // set unless dropped
-  int tile_index = 0;
+  int group_index = 0;
+  std::vector<int> tiles;
   int sample_begin = 0, sample_end = 0;
 };
 
@@ -71,7 +81,7 @@ struct JobFailure {
 struct SchedulerStats {
   int tasks_pending = 0;
   int tasks_leased = 0;
-  int tiles_open = 0;
+  int tiles_open = 0;  // tiles of open groups
   int workers_active = 0;
   int64_t leases_expired = 0;
   int64_t results_dropped = 0;
@@ -82,7 +92,7 @@ class Scheduler {
  public:
   explicit Scheduler(SchedulerOptions options);
 
-  // REQUIRES: job_id not already present. A job with no tiles is complete at once.
+  // REQUIRES: job_id not already present. A job with no groups is complete at once.
   void AddJob(const JobSpec& job);
 
   // The next task for `worker_id`, or nullopt when none may be issued now. Records the worker
@@ -93,8 +103,9 @@ class Scheduler {
   absl::StatusOr<int64_t> Extend(const std::string& worker_id, uint64_t lease_id, int64_t now_ms);
 
   // Accepts the result of a current lease held by `worker_id`; anything else is dropped
-  // (late after expiry, duplicate, cancelled job, unknown lease). kTileComplete: every batch
-  // of that tile is now accepted and it awaits TileAssembled(). A lease expires when Tick()
+  // (late after expiry, duplicate, cancelled job, unknown lease). kStageComplete: every batch
+  // of that group's stage is now accepted; the service then calls AddStage() for the tiles
+  // that need more and GroupAssembled() when none does. A lease expires when Tick()
   // finds its deadline passed; until then it is current. Extend, Complete and Fail also record
   // the worker as seen (a worker busy on a long task is active).
   ResultOutcome Complete(const std::string& worker_id, uint64_t lease_id, int64_t now_ms);
@@ -110,16 +121,17 @@ class Scheduler {
   // every active worker excluded. Call periodically.
   std::vector<JobFailure> Tick(int64_t now_ms);
 
-  // Adaptive jobs: queues the next stage of a tile whose stage just completed (kTileComplete)
-  // instead of assembling it. Returns false, changing nothing, for an unknown job or tile, a
-  // tile with work outstanding, a fixed-count job, or a tile past its last stage.
-  bool AddStage(const std::string& job_id, int tile_index);
+  // Adaptive jobs: queues the next stage of a group whose stage just completed
+  // (kStageComplete) for `tiles`, a non-empty subset of its stage's tiles (the others are
+  // done). Returns false, changing nothing, for an unknown job or group, a group with work
+  // outstanding, tiles not of its stage, a fixed-count job, or a group past its last stage.
+  bool AddStage(const std::string& job_id, int group_index, const std::vector<int>& tiles);
 
-  // Frees the tile's slot after the service has stored it.
-  // REQUIRES: Complete() returned kTileComplete for it.
-  void TileAssembled(const std::string& job_id, int tile_index);
+  // Frees the group's slot once the service has stored every tile of it.
+  // REQUIRES: Complete() returned kStageComplete for its last stage.
+  void GroupAssembled(const std::string& job_id, int group_index);
 
-  // True when every tile of the job is assembled (the job then leaves the scheduler after
+  // True when every group of the job is assembled (the job then leaves the scheduler after
   // RemoveJob). False for unknown jobs.
   bool JobComplete(const std::string& job_id) const;
 
@@ -138,7 +150,7 @@ class Scheduler {
   SchedulerStats Stats(int64_t now_ms) const;
 
  private:
-  // A sample batch of an open tile.
+  // A sample batch of an open group.
   struct Task {
     int sample_begin = 0, sample_end = 0;
     bool done = false;
@@ -147,11 +159,12 @@ class Scheduler {
     // to a worker it failed on.
     std::vector<std::pair<std::string, std::string>> failures;
   };
-  // A tile from its opening until TileAssembled(). Unopened tiles are only entries of
-  // Job::tile_order, so a job's memory follows its open tiles, not its size.
-  struct Tile {
-    int position = 0;         // in Job::tile_order
+  // A group from its opening until GroupAssembled(). Unopened groups are only entries of
+  // Job::group_order, so a job's memory follows its open groups, not its size.
+  struct Group {
+    int position = 0;         // in Job::group_order
     int stage = 0;            // adaptive jobs: the stage whose tasks are the last of `tasks`
+    std::vector<int> tiles;   // the current stage's
     std::vector<Task> tasks;  // by batch
     int tasks_left = 0;
   };
@@ -162,20 +175,20 @@ class Scheduler {
     std::string job_id;
     bool operator<(const JobKey& o) const;
   };
-  // (position of the tile in Job::tile_order, batch): sorted, it is the order tasks go out.
+  // (position of the group in Job::group_order, batch): sorted, it is the order tasks go out.
   using TaskRef = std::pair<int, int>;
   struct Job {
     JobKey key;
     int samples = 1;
     int samples_per_task = 1;
-    int adaptive_min_samples = 0;  // 0: fixed-count job
-    std::vector<int> tile_order;   // tiles in the order they open
-    size_t next_tile = 0;          // next tile of tile_order to open
-    std::map<int, Tile> tiles;     // open tiles by tile index
-    std::set<TaskRef> pending;     // tasks of open tiles waiting for a worker
-    std::set<uint64_t> leases;     // current leases
-    int64_t tasks_left = 0;        // not yet accepted, open or not
-    int tiles_left = 0;            // not yet assembled
+    int adaptive_min_samples = 0;        // 0: fixed-count job
+    std::vector<GroupWork> group_order;  // groups in the order they open
+    size_t next_group = 0;               // next group of group_order to open
+    std::map<int, Group> groups;         // open groups by group index
+    std::set<TaskRef> pending;           // tasks of open groups waiting for a worker
+    std::set<uint64_t> leases;           // current leases
+    int64_t tasks_left = 0;              // not yet accepted, open or not
+    int groups_left = 0;                 // not yet assembled
     std::map<std::string, int> worker_failures;
     std::string last_failure;
   };
@@ -188,12 +201,14 @@ class Scheduler {
   using LeaseMap = std::map<uint64_t, LeaseInfo>;
 
   std::optional<TaskLease> TryLease(Job& job, const std::string& worker_id, int64_t now_ms);
-  bool OpenTile(Job& job);
-  // The sample ranges of a tile's stage, cut into batches of samples_per_task.
+  bool OpenGroup(Job& job);
+  // The sample ranges of a group's stage, cut into batches of samples_per_task.
   static std::vector<std::pair<int, int>> StageBatches(const Job& job, int stage);
-  void AddTasks(Job& job, Tile& tile, int stage);
+  void AddTasks(Job& job, Group& group, int stage);
   TaskLease Issue(Job& job, TaskRef task, const std::string& worker_id, int64_t now_ms);
-  Tile& TileOf(Job& job, TaskRef task);
+  Group& GroupOf(Job& job, TaskRef task);
+  const Group& GroupOf(const Job& job, TaskRef task) const;
+  TaskLease LeaseOf(uint64_t lease_id, const LeaseInfo& info) const;
   LeaseMap::iterator FindCurrent(const std::string& worker_id, uint64_t lease_id);
   LeaseInfo TakeLease(LeaseMap::iterator it);
   void Requeue(Job& job, TaskRef task);
@@ -212,7 +227,7 @@ class Scheduler {
   uint64_t next_lease_id_;
   std::map<std::string, Job> jobs_;
   std::set<JobKey> order_;  // every job
-  std::set<JobKey> ready_;  // jobs with pending tasks of open tiles
+  std::set<JobKey> ready_;  // jobs with pending tasks of open groups
   LeaseMap leases_;
   std::set<std::pair<int64_t, uint64_t>> deadlines_;  // (deadline, lease id) of current leases
   std::map<std::string, int64_t> worker_seen_ms_;

@@ -30,7 +30,8 @@ JobSpec MakeJob(const std::string& id, std::vector<int> tiles, int samples = 1,
   job.job_id = id;
   job.priority = priority;
   job.sequence = sequence;
-  job.tiles = std::move(tiles);
+  // One tile per group, the group named after its tile: the scheduler's unit is the group.
+  for (int tile : tiles) job.groups.push_back(GroupWork{tile, {tile}});
   job.samples = samples;
   job.samples_per_task = samples_per_task;
   return job;
@@ -69,7 +70,7 @@ TEST(SchedulerTest, BatchesCoverSamplesExactlyOnceInTileThenBatchOrder) {
   scheduler.AddJob(MakeJob("j", {4, 2}, /*samples=*/10, /*samples_per_task=*/3));
   std::vector<std::tuple<int, int, int>> got;
   while (std::optional<TaskLease> lease = scheduler.Lease("w", 0)) {
-    got.emplace_back(lease->tile_index, lease->sample_begin, lease->sample_end);
+    got.emplace_back(lease->group_index, lease->sample_begin, lease->sample_end);
   }
   const std::vector<std::tuple<int, int, int>> want = {{4, 0, 3}, {4, 3, 6}, {4, 6, 9}, {4, 9, 10},
                                                        {2, 0, 3}, {2, 3, 6}, {2, 6, 9}, {2, 9, 10}};
@@ -87,24 +88,24 @@ TEST(SchedulerTest, AdaptiveStagesGoOutOnlyWhenAsked) {
     std::vector<std::tuple<int, int, int>> got;
     ResultOutcome last;
     while (std::optional<TaskLease> lease = scheduler.Lease("w", 0)) {
-      got.emplace_back(lease->tile_index, lease->sample_begin, lease->sample_end);
+      got.emplace_back(lease->group_index, lease->sample_begin, lease->sample_end);
       last = scheduler.Complete("w", lease->lease_id, 0);
     }
-    EXPECT_EQ(last.kind, ResultOutcome::kTileComplete);
+    EXPECT_EQ(last.kind, ResultOutcome::kStageComplete);
     return got;
   };
   // Pilot [0, 4) and [4, 8), batches of at most 6 within each range.
   EXPECT_EQ(drain(), (std::vector<std::tuple<int, int, int>>{{3, 0, 4}, {3, 4, 8}}));
   EXPECT_FALSE(scheduler.JobComplete("a"));
-  ASSERT_TRUE(scheduler.AddStage("a", 3));
+  ASSERT_TRUE(scheduler.AddStage("a", 3, {3}));
   EXPECT_EQ(drain(), (std::vector<std::tuple<int, int, int>>{{3, 8, 14}, {3, 14, 16}}));
-  ASSERT_TRUE(scheduler.AddStage("a", 3));
+  ASSERT_TRUE(scheduler.AddStage("a", 3, {3}));
   EXPECT_EQ(drain(),
             (std::vector<std::tuple<int, int, int>>{{3, 16, 22}, {3, 22, 28}, {3, 28, 32}}));
-  ASSERT_TRUE(scheduler.AddStage("a", 3));
+  ASSERT_TRUE(scheduler.AddStage("a", 3, {3}));
   EXPECT_EQ(drain(), (std::vector<std::tuple<int, int, int>>{{3, 32, 38}, {3, 38, 40}}));
-  EXPECT_FALSE(scheduler.AddStage("a", 3));  // past the last stage
-  scheduler.TileAssembled("a", 3);
+  EXPECT_FALSE(scheduler.AddStage("a", 3, {3}));  // past the last stage
+  scheduler.GroupAssembled("a", 3);
   EXPECT_TRUE(scheduler.JobComplete("a"));
 }
 
@@ -112,7 +113,7 @@ TEST(SchedulerTest, AddStageRefusesFixedJobsAndBusyTiles) {
   Scheduler scheduler(SmallOptions());
   scheduler.AddJob(MakeJob("fixed", {0}, 4, 2));
   const TaskLease lease = MustLease(scheduler, "w", 0);
-  EXPECT_FALSE(scheduler.AddStage("fixed", 0));
+  EXPECT_FALSE(scheduler.AddStage("fixed", 0, {0}));
   JobSpec job = MakeJob("a", {0}, 16, 16);
   job.adaptive_min_samples = 4;
   scheduler.AddJob(job);
@@ -120,8 +121,8 @@ TEST(SchedulerTest, AddStageRefusesFixedJobsAndBusyTiles) {
   MustLease(scheduler, "w", 0);  // fixed's second batch
   const TaskLease adaptive = MustLease(scheduler, "w", 0);
   ASSERT_EQ(adaptive.job_id, "a");
-  EXPECT_FALSE(scheduler.AddStage("a", 0));  // its pilot is still out
-  EXPECT_FALSE(scheduler.AddStage("missing", 0));
+  EXPECT_FALSE(scheduler.AddStage("a", 0, {0}));  // its pilot is still out
+  EXPECT_FALSE(scheduler.AddStage("missing", 0, {0}));
 }
 
 TEST(SchedulerTest, PendingTasksOfOpenTilesGoBeforeANewTile) {
@@ -129,13 +130,13 @@ TEST(SchedulerTest, PendingTasksOfOpenTilesGoBeforeANewTile) {
   scheduler.AddJob(MakeJob("j", {0, 1}, /*samples=*/2, /*samples_per_task=*/1));
   const TaskLease first = MustLease(scheduler, "a", 0);
   const TaskLease second = MustLease(scheduler, "b", 0);
-  ASSERT_EQ(second.tile_index, 0);
+  ASSERT_EQ(second.group_index, 0);
   // Tile 0 batch 0 comes back to the queue; it must go out before tile 1 opens.
   EXPECT_FALSE(scheduler.Fail("a", first.lease_id, "busy", /*handed_back=*/true, 0));
   const TaskLease third = MustLease(scheduler, "c", 0);
-  EXPECT_EQ(third.tile_index, 0);
+  EXPECT_EQ(third.group_index, 0);
   EXPECT_EQ(third.sample_begin, 0);
-  EXPECT_EQ(MustLease(scheduler, "c", 0).tile_index, 1);
+  EXPECT_EQ(MustLease(scheduler, "c", 0).group_index, 1);
 }
 
 TEST(SchedulerTest, HonoursTheOpenTileBoundOverAllJobs) {
@@ -150,17 +151,17 @@ TEST(SchedulerTest, HonoursTheOpenTileBoundOverAllJobs) {
   EXPECT_EQ(scheduler.Stats(0).tiles_open, 2);
 
   const ResultOutcome done = scheduler.Complete("w", t0.lease_id, 0);
-  EXPECT_EQ(done.kind, ResultOutcome::kTileComplete);
+  EXPECT_EQ(done.kind, ResultOutcome::kStageComplete);
   EXPECT_FALSE(scheduler.Lease("w", 0));  // a complete tile holds its slot until assembled
-  scheduler.TileAssembled("a", t0.tile_index);
+  scheduler.GroupAssembled("a", t0.group_index);
   EXPECT_EQ(scheduler.Stats(0).tiles_open, 1);
   const std::optional<TaskLease> t2 = scheduler.Lease("w", 0);
   ASSERT_TRUE(t2);
   EXPECT_EQ(t2->job_id, "a");
-  EXPECT_EQ(t2->tile_index, 2);
+  EXPECT_EQ(t2->group_index, 2);
   EXPECT_FALSE(scheduler.Lease("w", 0));
-  EXPECT_EQ(scheduler.Complete("w", t1.lease_id, 0).kind, ResultOutcome::kTileComplete);
-  scheduler.TileAssembled("a", t1.tile_index);
+  EXPECT_EQ(scheduler.Complete("w", t1.lease_id, 0).kind, ResultOutcome::kStageComplete);
+  scheduler.GroupAssembled("a", t1.group_index);
   EXPECT_EQ(MustLease(scheduler, "w", 0).job_id, "b");
 }
 
@@ -169,7 +170,7 @@ TEST(SchedulerTest, ResumedJobIssuesOnlyItsListedTiles) {
   scheduler.AddJob(MakeJob("j", {8, 3}, /*samples=*/4, /*samples_per_task=*/2));
   std::multiset<int> tiles;
   while (std::optional<TaskLease> lease = scheduler.Lease("w", 0)) {
-    tiles.insert(lease->tile_index);
+    tiles.insert(lease->group_index);
   }
   EXPECT_EQ(tiles, (std::multiset<int>{3, 3, 8, 8}));
 }
@@ -191,17 +192,17 @@ TEST(SchedulerTest, JobCompletesAfterEveryTileIsAssembled) {
   while (std::optional<TaskLease> lease = scheduler.Lease("w", 0)) leases.push_back(*lease);
   ASSERT_EQ(leases.size(), 4u);
   EXPECT_EQ(scheduler.Complete("w", leases[0].lease_id, 0).kind, ResultOutcome::kAccepted);
-  EXPECT_EQ(scheduler.Complete("w", leases[1].lease_id, 0).kind, ResultOutcome::kTileComplete);
+  EXPECT_EQ(scheduler.Complete("w", leases[1].lease_id, 0).kind, ResultOutcome::kStageComplete);
   EXPECT_EQ(scheduler.Complete("w", leases[2].lease_id, 0).kind, ResultOutcome::kAccepted);
   const ResultOutcome last = scheduler.Complete("w", leases[3].lease_id, 0);
-  EXPECT_EQ(last.kind, ResultOutcome::kTileComplete);
+  EXPECT_EQ(last.kind, ResultOutcome::kStageComplete);
   EXPECT_EQ(last.job_id, "j");
-  EXPECT_EQ(last.tile_index, 1);
+  EXPECT_EQ(last.group_index, 1);
   EXPECT_EQ(last.sample_begin, 1);
   EXPECT_EQ(last.sample_end, 2);
-  scheduler.TileAssembled("j", 0);
+  scheduler.GroupAssembled("j", 0);
   EXPECT_FALSE(scheduler.JobComplete("j"));
-  scheduler.TileAssembled("j", 1);
+  scheduler.GroupAssembled("j", 1);
   EXPECT_TRUE(scheduler.JobComplete("j"));
   EXPECT_EQ(scheduler.Stats(0).results_accepted, 4);
 }
@@ -232,7 +233,7 @@ TEST(SchedulerTest, ExpiredLeaseIsReissued) {
   EXPECT_EQ(scheduler.Stats(1000).leases_expired, 1);
   const std::optional<TaskLease> second = scheduler.Lease("b", 1000);
   ASSERT_TRUE(second);
-  EXPECT_EQ(second->tile_index, 0);
+  EXPECT_EQ(second->group_index, 0);
   EXPECT_NE(second->lease_id, first.lease_id);
   // The expiry counted against "a": it never gets this task back.
   EXPECT_EQ(scheduler.Fail("b", second->lease_id, "x", /*handed_back=*/true, 1000), std::nullopt);
@@ -251,7 +252,7 @@ TEST(SchedulerTest, LateResultIsDroppedAndTheReissuedOneAccepted) {
   EXPECT_EQ(scheduler.Complete("a", first.lease_id, 2100).kind, ResultOutcome::kDropped);
   EXPECT_EQ(scheduler.Stats(2100).results_dropped, 1);
   const ResultOutcome outcome = scheduler.Complete("b", second.lease_id, 2200);
-  EXPECT_EQ(outcome.kind, ResultOutcome::kTileComplete);
+  EXPECT_EQ(outcome.kind, ResultOutcome::kStageComplete);
   EXPECT_EQ(outcome.job_id, "j");
   EXPECT_EQ(scheduler.Stats(2200).results_accepted, 1);
 }
@@ -274,7 +275,7 @@ TEST(SchedulerTest, ResultFromAnotherWorkerIsDroppedAndLeavesTheLease) {
   EXPECT_EQ(scheduler.Complete("b", lease.lease_id, 10).kind, ResultOutcome::kDropped);
   EXPECT_FALSE(scheduler.Fail("b", lease.lease_id, "x", false, 10));
   EXPECT_FALSE(scheduler.Extend("b", lease.lease_id, 10).ok());
-  EXPECT_EQ(scheduler.Complete("a", lease.lease_id, 20).kind, ResultOutcome::kTileComplete);
+  EXPECT_EQ(scheduler.Complete("a", lease.lease_id, 20).kind, ResultOutcome::kStageComplete);
 }
 
 TEST(SchedulerTest, ExtendMovesTheDeadlineAndIsRefusedAfterExpiry) {
@@ -309,7 +310,7 @@ TEST(SchedulerTest, TaskFailingOnThreeWorkersFailsTheJob) {
   }
   ASSERT_TRUE(failure);
   EXPECT_EQ(failure->job_id, "j");
-  EXPECT_THAT(failure->reason, HasSubstr("tile 7"));
+  EXPECT_THAT(failure->reason, HasSubstr("tile group 7"));
   EXPECT_THAT(failure->reason, HasSubstr("[0, 4)"));
   EXPECT_THAT(failure->reason, HasSubstr("out of memory on a"));
   EXPECT_THAT(failure->reason, HasSubstr("out of memory on c"));
@@ -327,7 +328,7 @@ TEST(SchedulerTest, ExpiryCountsTowardsTheTaskFailures) {
   MustLease(scheduler, "b", 0);
   const std::vector<JobFailure> failures = scheduler.Tick(1000);
   ASSERT_EQ(failures.size(), 1u);
-  EXPECT_THAT(failures[0].reason, HasSubstr("tile 3"));
+  EXPECT_THAT(failures[0].reason, HasSubstr("tile group 3"));
   EXPECT_THAT(failures[0].reason, HasSubstr("lease expired on worker b"));
   EXPECT_FALSE(scheduler.HasJob("j"));
 }
@@ -342,7 +343,7 @@ TEST(SchedulerTest, WorkerFailingRepeatedlyIsExcludedAndTheJobGoesOn) {
   for (int i = 0; i < 3; ++i) {
     const TaskLease lease = MustLease(scheduler, "bad", 0);
     ASSERT_EQ(lease.job_id, "j");
-    EXPECT_TRUE(failed_tiles.insert(lease.tile_index).second) << "task re-issued to its failer";
+    EXPECT_TRUE(failed_tiles.insert(lease.group_index).second) << "task re-issued to its failer";
     EXPECT_FALSE(scheduler.Fail("bad", lease.lease_id, "driver crash", false, 0));
   }
   // Tile 3 is still to do but "bad" is out of "j"; it may still run other jobs.
@@ -353,8 +354,8 @@ TEST(SchedulerTest, WorkerFailingRepeatedlyIsExcludedAndTheJobGoesOn) {
   int done = 0;
   while (std::optional<TaskLease> lease = scheduler.Lease("good", 0)) {
     if (lease->job_id != "j") continue;
-    if (scheduler.Complete("good", lease->lease_id, 0).kind == ResultOutcome::kTileComplete) {
-      scheduler.TileAssembled("j", lease->tile_index);
+    if (scheduler.Complete("good", lease->lease_id, 0).kind == ResultOutcome::kStageComplete) {
+      scheduler.GroupAssembled("j", lease->group_index);
       ++done;
     }
   }
@@ -454,7 +455,7 @@ TEST(SchedulerTest, HandedBackIsNotAFailure) {
   }
   EXPECT_TRUE(scheduler.Tick(10).empty());
   const TaskLease lease = MustLease(scheduler, "a", 10);
-  EXPECT_EQ(scheduler.Complete("a", lease.lease_id, 11).kind, ResultOutcome::kTileComplete);
+  EXPECT_EQ(scheduler.Complete("a", lease.lease_id, 11).kind, ResultOutcome::kStageComplete);
 }
 
 TEST(SchedulerTest, RemoveJobMakesLeasesStaleAndFreesSlots) {
@@ -549,7 +550,9 @@ class Farm {
       spec.job_id = absl::StrCat("job", j);
       spec.priority = priorities[j % 5];
       spec.sequence = j;
-      for (int t = 0; t < config_.tiles_per_job; ++t) spec.tiles.push_back(1000 + 3 * t);
+      for (int t = 0; t < config_.tiles_per_job; ++t) {
+        spec.groups.push_back(GroupWork{1000 + 3 * t, {1000 + 3 * t}});
+      }
       spec.samples = config_.samples;
       spec.samples_per_task = config_.samples_per_task;
       specs_[spec.job_id] = spec;
@@ -646,7 +649,7 @@ class Farm {
     worker.next_extend_ms = std::numeric_limits<int64_t>::max();
     const double u = Unit();
     const bool poisoned =
-        lease->job_id == config_.poison_job && lease->tile_index == config_.poison_tile;
+        lease->job_id == config_.poison_job && lease->group_index == config_.poison_tile;
     if (poisoned || (worker.flaky && u < 0.6) || (!worker.flaky && u < 0.003)) {
       worker.plan = Worker::kFail;
       worker.next_ms = now_ + Uniform(200, 2000);
@@ -734,7 +737,7 @@ class Farm {
           "wrong batch bounds");
     Check(failures_[{lease.job_id, worker_id}] < options_.max_worker_failures_per_job,
           "a worker got a task of a job it is excluded from");
-    const TaskKey task{lease.job_id, lease.tile_index, batch};
+    const TaskKey task{lease.job_id, lease.group_index, batch};
     Check(!failed_on_[task].contains(worker_id), "a worker got back a task it failed");
     Check(!accepted_.contains(task), "an accepted task was issued again");
     for (const auto& [id, other] : live_) {
@@ -744,12 +747,12 @@ class Farm {
         break;
       }
     }
-    if (!job->second.open.contains(lease.tile_index)) OpenTile(worker_id, lease, job->second);
-    live_[lease.lease_id] = {lease.job_id, worker_id, lease.tile_index, batch, lease.deadline_ms};
+    if (!job->second.open.contains(lease.group_index)) OpenTile(worker_id, lease, job->second);
+    live_[lease.lease_id] = {lease.job_id, worker_id, lease.group_index, batch, lease.deadline_ms};
   }
 
   void OpenTile(const std::string& worker_id, const TaskLease& lease, MirrorJob& job) {
-    job.open.insert(lease.tile_index);
+    job.open.insert(lease.group_index);
     --job.unopened;
     ++open_tiles_;
     Check(open_tiles_ <= options_.max_open_tiles, "mirror: too many open tiles");
@@ -770,14 +773,14 @@ class Farm {
 
   void OnAccepted(const MirrorLease& lease, const ResultOutcome& outcome) {
     const TaskKey task{lease.job_id, lease.tile, lease.batch};
-    Check(outcome.job_id == lease.job_id && outcome.tile_index == lease.tile &&
+    Check(outcome.job_id == lease.job_id && outcome.group_index == lease.tile &&
               outcome.sample_begin == lease.batch * config_.samples_per_task,
           "outcome does not match its lease");
     Check(accepted_.insert(task).second, "a task accepted twice");
     const int batches = (config_.samples + config_.samples_per_task - 1) / config_.samples_per_task;
     const bool tile_done = ++tile_accepted_[{lease.job_id, lease.tile}] == batches;
-    Check(tile_done == (outcome.kind == ResultOutcome::kTileComplete),
-          "kTileComplete not exactly when the tile's last batch is in");
+    Check(tile_done == (outcome.kind == ResultOutcome::kStageComplete),
+          "kStageComplete not exactly when the tile's last batch is in");
     if (tile_done) assembly_.emplace_back(now_ + 200, lease.job_id, lease.tile);
   }
 
@@ -806,7 +809,7 @@ class Farm {
       assembly_.erase(assembly_.begin());
       const auto job = jobs_.find(job_id);
       if (job == jobs_.end()) continue;
-      scheduler_->TileAssembled(job_id, tile);
+      scheduler_->GroupAssembled(job_id, tile);
       job->second.open.erase(tile);
       --open_tiles_;
       if (scheduler_->JobComplete(job_id)) {
@@ -835,7 +838,8 @@ class Farm {
   void CheckAcceptedOnce() {
     for (const std::string& job_id : result_.completed) {
       const JobSpec& spec = specs_.at(job_id);
-      for (int tile : spec.tiles) {
+      for (const GroupWork& group : spec.groups) {
+        const int tile = group.group_index;
         for (int begin = 0; begin < spec.samples; begin += spec.samples_per_task) {
           Check(accepted_.contains({job_id, tile, begin / spec.samples_per_task}),
                 absl::StrCat(job_id, " completed without tile ", tile, " samples ", begin));
@@ -900,7 +904,7 @@ TEST(SchedulerFarmTest, PoisonTileFailsItsJobOnly) {
   EXPECT_EQ(result.violations, 0) << result.first_violation;
   ASSERT_EQ(result.failed.size(), 1u);
   EXPECT_EQ(result.failed.begin()->first, "job2");
-  EXPECT_THAT(result.failed.begin()->second, HasSubstr(absl::StrCat("tile ", 1000 + 3 * 42)));
+  EXPECT_THAT(result.failed.begin()->second, HasSubstr(absl::StrCat("tile group ", 1000 + 3 * 42)));
   EXPECT_THAT(result.failed.begin()->second, HasSubstr("render error"));
   EXPECT_EQ(result.completed, (std::set<std::string>{"job0", "job1", "job3", "job4"}));
   EXPECT_EQ(result.late_dropped, result.late_reports);

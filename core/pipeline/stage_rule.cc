@@ -1,36 +1,51 @@
 #include "core/pipeline/stage_rule.h"
 
 #include <algorithm>
-
-#include "core/bake/adaptive_sampling.h"
+#include <utility>
 
 namespace pdsm {
 
+std::vector<SampleRange> StageRanges(const PdsmHeader& header, int stage) {
+  if (!header.adaptive()) {
+    if (stage > 0) return {};
+    return {SampleRange{0, header.samples}};
+  }
+  return AdaptiveStageRanges(stage, std::max(1, header.adaptive_min_samples), header.samples);
+}
+
+StageAccumulator::StageAccumulator(const PdsmHeader& header, int stage)
+    : ranges_(StageRanges(header, stage)), merged_(ranges_.size()) {}
+
+void StageAccumulator::Add(int sample_begin, TileEvents events) {
+  for (size_t r = 0; r < ranges_.size(); ++r) {
+    if (sample_begin < ranges_[r].begin || sample_begin >= ranges_[r].end) continue;
+    if (!merged_[r]) {
+      merged_[r] = std::move(events);
+    } else {
+      const TileEvents parts[2] = {*std::move(merged_[r]), std::move(events)};
+      merged_[r] = MergeTileEvents(parts);
+    }
+    return;
+  }
+}
+
+std::vector<TileEvents> StageAccumulator::TakeRanges() {
+  std::vector<TileEvents> out;
+  out.reserve(merged_.size());
+  for (std::optional<TileEvents>& m : merged_) out.push_back(m ? *std::move(m) : TileEvents{});
+  merged_.assign(ranges_.size(), std::nullopt);
+  return out;
+}
+
 StageVerdict JudgeStage(const PdsmHeader& header, TileStageState state,
-                        std::vector<StageBatch> batches) {
-  // Batches in sample order: the merge does not depend on it, but a fixed order costs nothing.
-  std::sort(batches.begin(), batches.end(), [](const StageBatch& a, const StageBatch& b) {
-    return a.sample_begin < b.sample_begin;
-  });
+                        std::vector<TileEvents> range_results) {
   StageVerdict verdict;
   if (!header.adaptive()) {
     verdict.done = true;
-    for (StageBatch& b : batches) verdict.events.push_back(std::move(b.events));
+    verdict.events = std::move(range_results);
     return verdict;
   }
-  // Merge each range of the stage, then the decision (JudgeAdaptiveStage).
-  const std::vector<SampleRange> ranges =
-      AdaptiveStageRanges(state.stage, std::max(1, header.adaptive_min_samples), header.samples);
-  std::vector<TileEvents> range_results;
-  for (const SampleRange& range : ranges) {
-    std::vector<TileEvents> range_parts;
-    for (StageBatch& b : batches) {
-      if (b.sample_begin >= range.begin && b.sample_begin < range.end) {
-        range_parts.push_back(std::move(b.events));
-      }
-    }
-    range_results.push_back(MergeTileEvents(range_parts));
-  }
+  const std::vector<SampleRange> ranges = StageRanges(header, state.stage);
   const int samples = ranges.back().end;
   if (JudgeAdaptiveStage(header, ranges, std::move(range_results), &state.earlier)) {
     verdict.done = true;

@@ -2,25 +2,44 @@
 // bake and the coordinator both call it through core/pipeline/bake_engine.h), so their files
 // are the same bytes by construction.
 //
-// A fixed-count bake has one stage per tile holding every sample: its batches are the tile.
-// An adaptive bake (core/bake/adaptive_sampling.h, docs/algorithms.md section 9) has stages of
-// doubling sample ranges: after each, JudgeAdaptiveStage decides from the merged integer counts
-// whether the tile is done or needs its next stage. Neither depends on how the stage's samples
-// were cut into batches, nor on the order the batches arrived.
+// A fixed-count bake has one stage per tile holding every sample: its merged batches are the
+// tile. An adaptive bake (core/bake/adaptive_sampling.h, docs/algorithms.md section 9) has
+// stages of doubling sample ranges: after each, JudgeAdaptiveStage decides from the merged
+// integer counts whether the tile is done or needs its next stage. Neither depends on how the
+// stage's samples were cut into batches, nor on the order the batches arrived.
 #ifndef PDSM_CORE_PIPELINE_STAGE_RULE_H_
 #define PDSM_CORE_PIPELINE_STAGE_RULE_H_
 
+#include <optional>
 #include <vector>
 
+#include "core/bake/adaptive_sampling.h"
 #include "core/events/event.h"
 #include "core/pdsm/pdsm_image.h"
 
 namespace pdsm {
 
-// One accepted batch of a tile: the events of samples [sample_begin, ...).
-struct StageBatch {
-  int sample_begin = 0;
-  TileEvents events;
+// The sample ranges of stage `stage` of a tile: [0, samples) for a fixed-count bake (stage 0),
+// AdaptiveStageRanges for an adaptive one.
+std::vector<SampleRange> StageRanges(const PdsmHeader& header, int stage);
+
+// One tile's batches of its current stage, merged as they arrive: one merged list per range of
+// the stage, whatever the number of batches, so memory does not grow with the samples. The
+// merge is exact integer addition, so the lists do not depend on the batches or their order.
+// Not thread-safe.
+class StageAccumulator {
+ public:
+  StageAccumulator(const PdsmHeader& header, int stage);
+
+  // REQUIRES: `sample_begin` lies in a range of the stage; `events` are of this tile.
+  void Add(int sample_begin, TileEvents events);
+
+  // The merged events of each range, in range order. REQUIRES: every range got a batch.
+  std::vector<TileEvents> TakeRanges();
+
+ private:
+  std::vector<SampleRange> ranges_;
+  std::vector<std::optional<TileEvents>> merged_;
 };
 
 // An open tile between stages.
@@ -42,10 +61,10 @@ struct StageVerdict {
   TileStageState next;
 };
 
-// REQUIRES: `batches` are every batch of stage `state.stage` of one tile, each once, in any
-// order; for a fixed-count header that stage is 0 and the batches cover every sample.
+// REQUIRES: `range_results` are the merged events of every range of stage `state.stage`
+// (StageAccumulator::TakeRanges) of one tile.
 StageVerdict JudgeStage(const PdsmHeader& header, TileStageState state,
-                        std::vector<StageBatch> batches);
+                        std::vector<TileEvents> range_results);
 
 }  // namespace pdsm
 

@@ -82,6 +82,8 @@ struct BakeSettings {
   // Keep each ray's function only near the receiver surfaces it can be queried at
   // (docs/algorithms.md, "Surfaces only"); free-space queries are then undefined (NaN).
   bool surfaces_only = false;
+  // Tiles per side of a tile group; 0: chosen by the plan (core/bake/tile_groups.h).
+  int tile_group_size = 0;
 };
 
 struct Scene {

@@ -88,6 +88,16 @@ absl::Status BuildSizes(const FieldChecker& checks, const pdsm::v1::BakeParams& 
     }
     out->tile_size = static_cast<int>(bake.tile_size());
   }
+  if (bake.has_tile_group_size()) {
+    if (bake.tile_group_size() > 0) {
+      if (absl::Status s =
+              checks.CheckUintRange("bake.tileGroupSize", bake.tile_group_size(), kMaxTileSize);
+          !s.ok()) {
+        return s;
+      }
+    }
+    out->tile_group_size = static_cast<int>(bake.tile_group_size());
+  }
   return absl::OkStatus();
 }
 

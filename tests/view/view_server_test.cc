@@ -99,7 +99,9 @@ class TaskHolder {
         continue;
       }
       EXPECT_EQ(response.task().job_id(), job_id);
-      if (tiles.erase(response.task().tile_index()) > 0) {
+      // One tile per group here: a task's tiles are its group's one tile.
+      EXPECT_EQ(response.task().tile_indices_size(), 1);
+      if (tiles.erase(response.task().tile_indices(0)) > 0) {
         held_.push_back(response.task());
       } else {
         others.push_back(response.task());
@@ -144,12 +146,13 @@ class TaskHolder {
 TEST(ViewServer, RunningJobShowsItsFinishedTilesAsTheyWillBe) {
   ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "4", "--lease-seconds", "600"}));
   ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
-  // 96x96 pixels in tiles of 32: 9 tiles of 8 tasks each.
+  // 96x96 pixels in tiles of 32, each tile its own group: 9 tiles of 8 tasks each.
   std::string text = ReadBytes(WriteSmallPlates(cluster.dir()));
   const std::string from = "\"resolution\": [48,48], \"samples\": 8";
   ASSERT_NE(text.find(from), std::string::npos);
   text.replace(text.find(from), from.size(),
-               "\"resolution\": [96,96], \"samples\": 32, \"tileSize\": 32");
+               "\"resolution\": [96,96], \"samples\": 32, \"tileSize\": 32, "
+               "\"tileGroupSize\": 1");
   const std::string scene = cluster.dir().File("tiled.json");
   WriteText(scene, text);
   const std::string job_id = cluster.Submit(scene);
