@@ -92,15 +92,16 @@ void TaskStats::Add(const TaskStats& o) {
   tiles_skipped += o.tiles_skipped;
 }
 
-absl::StatusOr<std::unique_ptr<TaskRunner>> TaskRunner::Create(const BakePlan& plan) {
+absl::StatusOr<std::unique_ptr<TaskRunner>> TaskRunner::Create(const BakePlan& plan,
+                                                               GroupCache* groups) {
   absl::StatusOr<std::unique_ptr<ShadowMapRenderer>> renderer = ShadowMapRenderer::Create();
   if (!renderer.ok()) return renderer.status();
-  return std::unique_ptr<TaskRunner>(new TaskRunner(plan, std::move(*renderer)));
+  return std::unique_ptr<TaskRunner>(new TaskRunner(plan, std::move(*renderer), groups));
 }
 
 absl::Status TaskRunner::Prepare(const BakeTask& task) {
-  if (!receivers_uploaded_ && group_.group_index == task.group_index &&
-      group_.tiles == task.tiles) {
+  if (!receivers_uploaded_ && group_ && group_->group_index == task.group_index &&
+      group_->tiles == task.tiles) {
     return absl::OkStatus();
   }
   if (task.group_index < 0 || task.group_index >= static_cast<int>(plan_.groups.size())) {
@@ -114,21 +115,28 @@ absl::Status TaskRunner::Prepare(const BakeTask& task) {
           absl::StrFormat("tile %d is not in tile group %d", t, task.group_index));
     }
   }
-  group_ = PrepareGroup(plan_, task.group_index, task.tiles);
-  // The casters any tile of the group can meet, in cluster order, re-indexed compactly.
+  group_ = groups_->Get(task.group_index, task.tiles);
+  // The casters any tile of the group can meet, in cluster order, re-indexed compactly with
+  // their vertices still shared: llvmpipe shades a vertex once for the triangles around it
+  // (its vertex cache), which is most of a shadow map's cost on a fine mesh.
+  constexpr uint32_t kUnused = std::numeric_limits<uint32_t>::max();
+  std::vector<uint32_t> remap(plan_.casters.positions.size(), kUnused);
   std::vector<glm::vec3> positions;
   std::vector<uint32_t> indices;
-  positions.reserve(group_.triangles.size() * 3);
-  indices.reserve(group_.triangles.size() * 3);
-  for (uint32_t tri : group_.triangles) {
+  indices.reserve(group_->triangles.size() * 3);
+  for (uint32_t tri : group_->triangles) {
     for (int k = 0; k < 3; ++k) {
-      indices.push_back(static_cast<uint32_t>(positions.size()));
-      positions.push_back(plan_.casters.positions[plan_.casters.indices[3 * tri + k]]);
+      const uint32_t v = plan_.casters.indices[3 * tri + k];
+      if (remap[v] == kUnused) {
+        remap[v] = static_cast<uint32_t>(positions.size());
+        positions.push_back(plan_.casters.positions[v]);
+      }
+      indices.push_back(remap[v]);
     }
   }
   receivers_uploaded_ = false;
   absl::Status uploaded = renderer_->SetGeometry(positions, indices);
-  if (!uploaded.ok()) group_ = PreparedGroup{};  // the renderer's geometry is unknown
+  if (!uploaded.ok()) group_.reset();  // the renderer's geometry is unknown
   return uploaded;
 }
 
@@ -137,13 +145,14 @@ absl::StatusOr<std::vector<TileEvents>> TaskRunner::Run(const BakeTask& task, Ta
   if (absl::Status s = Prepare(task); !s.ok()) return s;
   std::vector<TileEvents> results;
   std::vector<std::vector<std::vector<Event>>> pixel_events;  // per tile, per pixel
-  for (const PreparedTile& tile : group_.prepared) {
+  const PreparedGroup& group = *group_;
+  for (const PreparedTile& tile : group.prepared) {
     results.push_back(EmptyTileEvents(tile.rect));
     pixel_events.emplace_back(tile.blocks.empty() ? 0 : results.back().PixelCount());
     // Counted once per tile, at the batch that starts its samples.
     if (!tile.has_casters && task.sample_begin == 0) ++stats->tiles_skipped;
   }
-  if (task.sample_begin >= task.sample_end || group_.empty()) return results;
+  if (task.sample_begin >= task.sample_end || group.empty()) return results;
 
   std::vector<float> depth;
   ShadowMapCamera camera = BakeCamera(plan_);
@@ -154,7 +163,7 @@ absl::StatusOr<std::vector<TileEvents>> TaskRunner::Run(const BakeTask& task, Ta
     }
     const glm::dvec2& sample = plan_.samples.at(k);
     camera.sample = sample;
-    camera.window = GroupWindow(plan_, group_, sample);
+    camera.window = GroupWindow(plan_, group, sample);
     const int64_t texels = int64_t{camera.window.width} * camera.window.height;
     if (texels > kMaxShadowMapTexels) {
       return absl::ResourceExhaustedError(absl::StrFormat(
@@ -162,7 +171,7 @@ absl::StatusOr<std::vector<TileEvents>> TaskRunner::Run(const BakeTask& task, Ta
           "lower shadowMapResolution or tileSize",
           task.group_index, k, camera.window.width, camera.window.height, kMaxShadowMapTexels));
     }
-    const std::vector<DrawRange> visible = VisibleClusters(plan_, group_, sample, camera.window);
+    const std::vector<DrawRange> visible = VisibleClusters(plan_, group, sample, camera.window);
     auto render_start = std::chrono::steady_clock::now();
     if (absl::Status s = renderer_->Render(camera, visible, &depth); !s.ok()) return s;
     stats->shadow_map_seconds += SecondsSince(render_start);
@@ -172,8 +181,8 @@ absl::StatusOr<std::vector<TileEvents>> TaskRunner::Run(const BakeTask& task, Ta
 
     auto scan_start = std::chrono::steady_clock::now();
     const ShadowMapView view{depth.data(), plan_.lattice, camera.window};
-    for (size_t i = 0; i < group_.prepared.size(); ++i) {
-      const PreparedTile& tile = group_.prepared[i];
+    for (size_t i = 0; i < group.prepared.size(); ++i) {
+      const PreparedTile& tile = group.prepared[i];
       for (const BlockScan& b : tile.blocks) {
         ScanBlock(plan_, view, b, sample, tile.windows ? &*tile.windows : nullptr, tile.rect,
                   &pixel_events[i], stats);
@@ -202,7 +211,7 @@ absl::StatusOr<std::vector<TileEvents>> TaskRunner::Run(const BakeTask& task, Ta
 absl::StatusOr<std::vector<float>> TaskRunner::ReceiverDepth(const TileRect& tile) {
   // The light-centre view of the receivers on the PDSM's own pixel grid.
   if (!receivers_uploaded_) {
-    group_ = PreparedGroup{};  // its casters are no longer uploaded
+    group_.reset();  // its casters are no longer uploaded
     if (absl::Status s = renderer_->SetGeometry(plan_.receivers.positions, plan_.receivers.indices);
         !s.ok()) {
       return s;

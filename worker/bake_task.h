@@ -15,6 +15,7 @@
 #include "core/bake/bake_plan.h"
 #include "core/bake/tile_reach.h"
 #include "core/events/event.h"
+#include "worker/group_cache.h"
 #include "worker/prepared_group.h"
 #include "worker/shadow_map_renderer.h"
 
@@ -48,8 +49,10 @@ ShadowMapCamera BakeCamera(const BakePlan& plan);
 // Runs tasks of one plan. Owns a renderer (an OSMesa context): one runner per thread.
 class TaskRunner {
  public:
-  // `plan` must outlive the runner.
-  static absl::StatusOr<std::unique_ptr<TaskRunner>> Create(const BakePlan& plan);
+  // `plan` must outlive the runner, and `groups` (the prepared groups shared with the plan's
+  // other runners; null: the runner keeps its own) too.
+  static absl::StatusOr<std::unique_ptr<TaskRunner>> Create(const BakePlan& plan,
+                                                            GroupCache* groups = nullptr);
 
   // One TileEvents per task tile, in order. `cancelled` (optional) is polled before each
   // sample's shadow map: when it returns true the task stops with CANCELLED (a cancelled job or
@@ -64,14 +67,19 @@ class TaskRunner {
   absl::StatusOr<std::vector<float>> ReceiverDepth(const TileRect& tile);
 
  private:
-  TaskRunner(const BakePlan& plan, std::unique_ptr<ShadowMapRenderer> renderer)
-      : plan_(plan), renderer_(std::move(renderer)) {}
+  TaskRunner(const BakePlan& plan, std::unique_ptr<ShadowMapRenderer> renderer, GroupCache* groups)
+      : plan_(plan),
+        renderer_(std::move(renderer)),
+        own_groups_(groups == nullptr ? std::make_unique<GroupCache>(plan, 1) : nullptr),
+        groups_(groups != nullptr ? groups : own_groups_.get()) {}
   // Prepares the task's group (kept for the next batches of it) and uploads its casters.
   absl::Status Prepare(const BakeTask& task);
 
   const BakePlan& plan_;
   std::unique_ptr<ShadowMapRenderer> renderer_;
-  PreparedGroup group_;              // the last task's group, its casters uploaded
+  std::unique_ptr<GroupCache> own_groups_;  // when no shared cache was given
+  GroupCache* const groups_;
+  std::shared_ptr<const PreparedGroup> group_;  // the last task's group, its casters uploaded
   bool receivers_uploaded_ = false;  // the renderer holds the receivers (ReceiverDepth) instead
 };
 

@@ -27,12 +27,17 @@ constexpr absl::Duration kIdleWait = absl::Seconds(1);
 // One thread of the bake: its task runner, its statistics.
 class LocalWorker {
  public:
-  LocalWorker(int index, const BakePlan& plan, BakeEngine* engine, LocalOutput* output)
-      : id_(absl::StrCat("local-", index)), plan_(plan), engine_(engine), output_(output) {}
+  LocalWorker(int index, const BakePlan& plan, GroupCache* groups, BakeEngine* engine,
+              LocalOutput* output)
+      : id_(absl::StrCat("local-", index)),
+        plan_(plan),
+        groups_(groups),
+        engine_(engine),
+        output_(output) {}
 
   // Renders the preview's receiver depths of every `stride`-th tile from `first`.
   bool Start(int first, int stride) {
-    absl::StatusOr<std::unique_ptr<TaskRunner>> runner = TaskRunner::Create(plan_);
+    absl::StatusOr<std::unique_ptr<TaskRunner>> runner = TaskRunner::Create(plan_, groups_);
     if (!runner.ok()) return Stop(runner.status());
     runner_ = *std::move(runner);
     if (!output_->has_preview()) return true;
@@ -72,6 +77,7 @@ class LocalWorker {
 
   const std::string id_;
   const BakePlan& plan_;
+  GroupCache* const groups_;
   BakeEngine* const engine_;
   LocalOutput* const output_;
   std::unique_ptr<TaskRunner> runner_;
@@ -160,9 +166,10 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
     absl::MutexLock lock(&progress_mu);
     options.on_progress(BakeProgress{p->tasks_done, p->tasks_total, elapsed()});
   };
+  GroupCache groups(*plan);  // each group prepared once, whichever thread needs it first
   std::vector<std::unique_ptr<LocalWorker>> workers;
   for (int t = 0; t < threads; ++t) {
-    workers.push_back(std::make_unique<LocalWorker>(t, *plan, &engine, output.get()));
+    workers.push_back(std::make_unique<LocalWorker>(t, *plan, &groups, &engine, output.get()));
   }
   StartLine start_line(threads);
   WorkQueue queue(threads);

@@ -91,6 +91,7 @@ absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::Lo
   if (!plan.ok()) return plan.status();
   context->plan = *std::move(plan);
   context->fingerprint = PlanFingerprint(context->plan);
+  context->groups = std::make_unique<GroupCache>(context->plan);
   if (context->fingerprint != scene->plan_fingerprint()) {
     return absl::FailedPreconditionError(absl::StrCat(
         "job ", job_id,
@@ -182,7 +183,8 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
         continue;
       }
       context = *loaded;
-      absl::StatusOr<std::unique_ptr<TaskRunner>> created = TaskRunner::Create(context->plan);
+      absl::StatusOr<std::unique_ptr<TaskRunner>> created =
+          TaskRunner::Create(context->plan, context->groups.get());
       if (!created.ok()) {
         forget_lease();
         fail(created.status(), false);

@@ -17,6 +17,7 @@
 #include "core/assets/asset_store.h"
 #include "core/bake/bake_plan.h"
 #include "worker/coordinator_client.h"
+#include "worker/group_cache.h"
 
 namespace pdsm {
 
@@ -40,6 +41,7 @@ class RemoteWorker {
   struct JobContext {
     BakePlan plan;
     std::string fingerprint;
+    std::unique_ptr<GroupCache> groups;  // of `plan`, shared by the threads on this job
   };
   struct RunningLease {
     std::atomic<bool> lost{false};

@@ -76,11 +76,15 @@ std::vector<HalfSpace> ShadowingRegion(const BakePlan& plan, const TileSpan& spa
 // z_Q - z_P >= g_hi / max(-a). Each g is linear, so its minimum over the hull is at a
 // vertex; the largest of the four bounds holds. +infinity: the hull cannot shadow. The result
 // only grows as the hull shrinks (each minimum grows), so a box's is a bound of its triangles'.
+// `margin` > 0 (boxes): every g is lowered by that fraction of its terms' magnitude, and f by
+// that much, so the result is a lower bound of every triangle inside even where their own
+// evaluation rounds differently (and +infinity only where none of them can shadow).
 double NearestShadowedDepth(const BakePlan& plan, const SampleExtent& e, const TileSpan& span,
-                            const glm::dvec3* points, int count) {
+                            const glm::dvec3* points, int count, double margin = 0) {
   const bool sun = plan.geometry().projection == Projection::kOrthographic;
   double g_min[4] = {kInf, kInf, kInf, kInf};
   double z_min = kInf;
+  double scale = 0;
   for (int k = 0; k < count; ++k) {
     const glm::dvec3& p = points[k];
     const double zs = sun ? 1.0 : p.z;  // perspective measures offsets at the point's depth
@@ -89,7 +93,12 @@ double NearestShadowedDepth(const BakePlan& plan, const SampleExtent& e, const T
     g_min[2] = std::min(g_min[2], p.y - span.t_hi * zs);
     g_min[3] = std::min(g_min[3], span.t_lo * zs - p.y);
     z_min = std::min(z_min, p.z);
+    if (margin > 0) {
+      scale = std::max({scale, std::abs(p.x) + std::abs(span.s_hi * zs) + std::abs(span.s_lo * zs),
+                        std::abs(p.y) + std::abs(span.t_hi * zs) + std::abs(span.t_lo * zs)});
+    }
   }
+  for (double& g : g_min) g -= margin * scale;
   // The sample reach that offsets each side: x beyond s_hi needs a > 0 (perspective) or
   // a < 0 (sun), and so on.
   const double reach[4] = {sun ? -e.neg.x : e.pos.x, sun ? e.pos.x : -e.neg.x,
@@ -100,6 +109,7 @@ double NearestShadowedDepth(const BakePlan& plan, const SampleExtent& e, const T
     if (!(reach[k] > 0)) return kInf;
     f = std::max(f, g_min[k] / reach[k]);
   }
+  f = std::max(0.0, f - margin);
   // Only the part at z >= z_clip_near is drawn into shadow maps.
   z_min = std::max(z_min, plan.z_clip_near);
   if (sun) return z_min + f;
@@ -171,7 +181,7 @@ bool BoxOutsideRegion(const std::vector<HalfSpace>& region, const glm::dvec3& lo
 double NearestShadowedDepthOfBox(const BakePlan& plan, const SampleExtent& e, const TileSpan& span,
                                  const glm::dvec3& lo, const glm::dvec3& hi) {
   const std::array<glm::dvec3, 8> corners = Corners(lo, hi);
-  const double z = NearestShadowedDepth(plan, e, span, corners.data(), 8);
+  const double z = NearestShadowedDepth(plan, e, span, corners.data(), 8, /*margin=*/1e-12);
   return std::isfinite(z) ? z - 1e-9 * std::abs(z) : z;
 }
 
@@ -233,6 +243,7 @@ TileReach ComputeTileReach(const BakePlan& plan, const TileRect& tile) {
   // span is widened by one shadow-map texel: a texel holds the depth seen at its centre, up to
   // half a texel from where the ray crosses it.
   const SampleExtent extent = ExtentOf(plan);
+  std::vector<std::pair<double, size_t>> bounds;  // (box bound, group), per block
   const double z_last = g.projection == Projection::kOrthographic ? plan.z_clip_far : kInf;
   for (const TileRect& block : BlocksOf(tile)) {
     TileSpan span = SpanOf(g, block);
@@ -240,13 +251,18 @@ TileReach ComputeTileReach(const BakePlan& plan, const TileRect& tile) {
     span.s_hi += plan.lattice.pitch_s;
     span.t_lo -= plan.lattice.pitch_t;
     span.t_hi += plan.lattice.pitch_t;
-    // The minimum over the kept triangles, a cluster's at a time: a cluster whose box cannot
-    // beat the best so far is skipped whole. (A box that cannot shadow at all is still walked:
-    // a triangle on its edge may round the other way, and the walk keeps the result exact.)
+    // The minimum over the kept triangles, a cluster's at a time, nearest bound first: once a
+    // cluster's box cannot beat the best so far, no later one can.
+    bounds.clear();
+    for (size_t i = 0; i < kept.groups.size(); ++i) {
+      const KeptTriangles::Group& group = kept.groups[i];
+      bounds.emplace_back(NearestShadowedDepthOfBox(plan, extent, span, group.lo, group.hi), i);
+    }
+    std::sort(bounds.begin(), bounds.end());
     double z_begin = kInf;
-    for (const KeptTriangles::Group& group : kept.groups) {
-      const double bound = NearestShadowedDepthOfBox(plan, extent, span, group.lo, group.hi);
-      if (std::isfinite(bound) && !(bound < z_begin)) continue;
+    for (const auto& [bound, i] : bounds) {
+      if (!(bound < z_begin)) break;
+      const KeptTriangles::Group& group = kept.groups[i];
       for (uint32_t t = group.begin; t < group.end; ++t) {
         z_begin =
             std::min(z_begin, NearestShadowedDepth(plan, extent, span, &kept.vertices[3 * t], 3));

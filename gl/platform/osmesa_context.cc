@@ -1,5 +1,10 @@
 #include "gl/platform/osmesa_context.h"
 
+#include <algorithm>
+#include <cstdlib>
+#include <string>
+#include <thread>
+
 #include <GL/osmesa.h>
 
 #include <utility>
@@ -7,6 +12,17 @@
 #include "absl/strings/str_cat.h"
 
 namespace pdsm::gl {
+
+int ShareCoresBetweenContexts(int contexts) {
+  if (const char* set = std::getenv("LP_NUM_THREADS"); set != nullptr && *set != '\0') {
+    return std::atoi(set);
+  }
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int per_context = contexts >= cores ? 0 : cores / std::max(1, contexts);
+  setenv("LP_NUM_THREADS", std::to_string(per_context).c_str(), /*overwrite=*/1);
+  return per_context;
+}
+
 namespace {
 
 // OSMesaMakeCurrent refuses a null buffer; 1x1 RGBA8 is the smallest it accepts.

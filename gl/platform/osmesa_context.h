@@ -15,6 +15,14 @@ struct osmesa_context;  // <GL/osmesa.h>'s OSMesaContext is `osmesa_context*`
 
 namespace pdsm::gl {
 
+// llvmpipe rasterizes with LP_NUM_THREADS helper threads per context (by default one per
+// core). A process that already runs one context per core on its own threads only
+// oversubscribes the cores with them and pays their memory (measured in docs/performance.md,
+// "GL memory"): this sets LP_NUM_THREADS so that contexts x threads stays at the core count
+// (0: llvmpipe rasterizes on the calling thread). Call before the first context is created;
+// an LP_NUM_THREADS the user set is left alone. Returns the value in effect.
+int ShareCoresBetweenContexts(int contexts);
+
 class OsMesaContext {
  public:
   // Creates a core-profile context, GL 4.5 or else 3.3, with no depth/stencil/accum buffers,
