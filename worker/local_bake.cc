@@ -35,18 +35,19 @@ class LocalWorker {
         engine_(engine),
         output_(output) {}
 
-  // Renders the preview's receiver depths of every `stride`-th tile from `first`.
-  bool Start(int first, int stride) {
+  // Creates the runner and renders the preview's receiver depths of every `stride`-th tile
+  // from `first`.
+  absl::Status Start(int first, int stride) {
     absl::StatusOr<std::unique_ptr<TaskRunner>> runner = TaskRunner::Create(plan_, groups_);
-    if (!runner.ok()) return Stop(runner.status());
+    if (!runner.ok()) return runner.status();
     runner_ = *std::move(runner);
-    if (!output_->has_preview()) return true;
+    if (!output_->has_preview()) return absl::OkStatus();
     for (size_t t = first; t < plan_.tiles.size(); t += stride) {
       absl::StatusOr<std::vector<float>> depth = runner_->ReceiverDepth(plan_.tiles[t]);
-      if (!depth.ok()) return Stop(depth.status());
+      if (!depth.ok()) return depth.status();
       output_->SetReceiverDepth(static_cast<int>(t), *std::move(depth));
     }
-    return true;
+    return absl::OkStatus();
   }
 
   // Leases, runs and reports tasks until the bake has ended.
@@ -70,11 +71,6 @@ class LocalWorker {
   const TaskStats& stats() const { return stats_; }
 
  private:
-  bool Stop(const absl::Status& status) {
-    engine_->Fail(kJobId, status);
-    return false;
-  }
-
   const std::string id_;
   const BakePlan& plan_;
   GroupCache* const groups_;
@@ -110,21 +106,28 @@ int LargestGroup(const BakePlan& plan) {
   return static_cast<int>(most);
 }
 
-// Waits until all `count` threads have called Arrive (the preview's depths are all rendered
-// before any tile can be shaded).
+// Waits until all `count` threads have called Arrive; the last to arrive runs `go` first
+// (the job is added only once the preview's depths are all rendered: a tile no caster reaches
+// is stored, and shaded, as soon as the job is).
 class StartLine {
  public:
-  explicit StartLine(int count) : waiting_(count) {}
+  StartLine(int count, std::function<void()> go) : waiting_(count), go_(std::move(go)) {}
   void Arrive() {
     absl::MutexLock lock(&mu_);
-    --waiting_;
-    mu_.Await(absl::Condition(this, &StartLine::AllArrived));
+    if (--waiting_ == 0) {
+      mu_.Unlock();
+      go_();
+      mu_.Lock();
+      gone_ = true;
+    }
+    mu_.Await(absl::Condition(&gone_));
   }
 
  private:
-  bool AllArrived() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) { return waiting_ <= 0; }
   absl::Mutex mu_;
   int waiting_ ABSL_GUARDED_BY(mu_);
+  bool gone_ ABSL_GUARDED_BY(mu_) = false;
+  const std::function<void()> go_;
 };
 
 }  // namespace
@@ -156,7 +159,6 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
   job.plan = plan;
   job.samples_per_task = LocalBatch(*plan, threads, options);
   job.output = output;
-  if (absl::Status s = engine.AddJob(std::move(job)); !s.ok()) return s;
 
   absl::Mutex progress_mu;
   const auto report_progress = [&] {
@@ -171,16 +173,29 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
   for (int t = 0; t < threads; ++t) {
     workers.push_back(std::make_unique<LocalWorker>(t, *plan, &groups, &engine, output.get()));
   }
-  StartLine start_line(threads);
+  absl::Mutex start_mu;
+  absl::Status started;  // the first runner that could not start, else AddJob's
+  StartLine start_line(threads, [&] {
+    absl::MutexLock lock(&start_mu);
+    if (started.ok()) started = engine.AddJob(std::move(job));
+  });
   WorkQueue queue(threads);
   for (int t = 0; t < threads; ++t) {
     queue.Post([&, t] {
-      const bool started = workers[t]->Start(t, threads);
+      if (absl::Status s = workers[t]->Start(t, threads); !s.ok()) {
+        absl::MutexLock lock(&start_mu);
+        if (started.ok()) started = s;
+      }
       start_line.Arrive();
-      if (started) workers[t]->RunTasks(report_progress);
+      {
+        absl::MutexLock lock(&start_mu);
+        if (!started.ok()) return;
+      }
+      workers[t]->RunTasks(report_progress);
     });
   }
   queue.Wait();
+  if (!started.ok()) return started;
   if (!output->ended()) return absl::InternalError("the local bake stopped before its end");
   if (absl::Status s = output->status(); !s.ok()) return s;
 
@@ -189,10 +204,13 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
   summary.seconds = elapsed();
   summary.tiles = progress.tiles_total;
   summary.tiles_all_lit = progress.tiles_all_lit;
+  summary.groups = static_cast<int>(plan->groups.size());
+  summary.casters = static_cast<int64_t>(plan->casters.TriangleCount());
   summary.tasks = progress.tasks_done;
   summary.tile_samples_total = progress.tile_samples_total;
   summary.assembly = progress.assembly;
   for (const auto& w : workers) summary.tasks_stats.Add(w->stats());
+  summary.tasks_stats.tiles_skipped += progress.tiles_without_task;
   std::error_code ec;
   summary.file_bytes = std::filesystem::file_size(options.output_path, ec);
   return summary;

@@ -37,6 +37,8 @@ struct BakeSummary {
   double seconds = 0;
   int tiles = 0;
   int tiles_all_lit = 0;  // tiles with no vertex at all (no caster can reach their rays)
+  int groups = 0;         // tile groups (the unit of rendering)
+  int64_t casters = 0;    // caster triangles of the scene
   int64_t tasks = 0;
   int64_t tile_samples_total = 0;  // light samples summed over tiles (adaptive bakes: < max)
   TaskStats tasks_stats;           // summed over threads (thread-seconds)

@@ -1,4 +1,5 @@
 // `pdsm bake SCENE.json -o OUT.exr [overrides]`: a local single-node bake.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -52,6 +53,17 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags, const std::string&
       static_cast<long long>(s.assembly.vertices),
       static_cast<long long>(s.tasks_stats.ray_segments), s.tasks_stats.texels_walked / 1e6,
       static_cast<long long>(s.tasks_stats.tiles_skipped));
+  // The limit of the design is one map per sample drawing every caster (bench/
+  // pdsm-bench-limit): these two ratios say how far the bake is from it, in maps and triangles.
+  const double limit_triangles = static_cast<double>(s.casters) * scene.bake.samples;
+  std::fprintf(stderr,
+               "  shadow maps: %lld for %d samples in %d tile groups (%.2f per sample); "
+               "%lld triangles submitted, %.2fx the %lld casters x samples\n",
+               static_cast<long long>(s.tasks_stats.shadow_maps), scene.bake.samples, s.groups,
+               static_cast<double>(s.tasks_stats.shadow_maps) / std::max(1, scene.bake.samples),
+               static_cast<long long>(s.tasks_stats.triangles_submitted),
+               limit_triangles > 0 ? s.tasks_stats.triangles_submitted / limit_triangles : 0.0,
+               static_cast<long long>(s.casters));
   if (scene.bake.adaptive() && s.tiles > 0) {
     std::fprintf(stderr,
                  "  adaptive sampling: tolerance %g, %.1f samples per tile on average "

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "absl/strings/str_format.h"
+#include "core/bake/tile_reach.h"
 #include "core/sampling/light_samples.h"
 
 namespace pdsm {
@@ -284,6 +285,7 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
   plan.caster_clusters = ClusterCasters(&plan.casters);
   plan.tile_group_size = scene.bake.tile_group_size;
   plan.groups = GroupTiles(plan);
+  plan.tile_has_casters = TilesCastersMayReach(plan);
   return plan;
 }
 

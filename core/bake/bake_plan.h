@@ -44,8 +44,11 @@ struct BakePlan {
   std::vector<TileRect> tiles;  // row-major grid of header.tile_size
   int tiles_x = 0, tiles_y = 0;
   std::vector<TileGroup> groups;  // the unit of rendering and of tasks (tile_groups.h)
-  int tile_group_size = 0;        // the scene's bake.tileGroupSize (0: chosen by GroupTiles)
-  LightSpaceMesh casters;         // triangles in spatial order, cut into caster_clusters
+  // Per tile: may a caster shadow it (TilesCastersMayReach)? The others are all lit and get
+  // no task at all.
+  std::vector<bool> tile_has_casters;
+  int tile_group_size = 0;  // the scene's bake.tileGroupSize (0: chosen by GroupTiles)
+  LightSpaceMesh casters;   // triangles in spatial order, cut into caster_clusters
   std::vector<CasterCluster> caster_clusters;
   LightSpaceMesh receivers;
 

@@ -17,9 +17,10 @@ namespace pdsm {
 
 struct BakePlan;
 
-// A task's result holds per-pixel offsets and events of every pixel of its group: 2^18 pixels
-// (512^2) keep it to a few MiB.
-inline constexpr int64_t kMaxGroupPixels = int64_t{1} << 18;
+// A task's result holds per-pixel offsets and events of every pixel of its group's tiles that a
+// caster may reach (the others get no task): 2^22 pixels (2048^2) keep that within tens of
+// MiB even where casters reach every tile.
+inline constexpr int64_t kMaxGroupPixels = int64_t{1} << 22;
 
 struct TileGroup {
   int index = 0;

@@ -277,6 +277,47 @@ TileReach ComputeTileReach(const BakePlan& plan, const TileRect& tile) {
   return reach;
 }
 
+std::vector<bool> TilesCastersMayReach(const BakePlan& plan) {
+  std::vector<bool> reached(plan.tiles.size(), false);
+  const PdsmGeometry& g = plan.geometry();
+  const bool sun = g.projection == Projection::kOrthographic;
+  const SampleExtent e = ExtentOf(plan);
+  for (const CasterCluster& c : plan.caster_clusters) {
+    const double z_lo = std::max(c.lo.z, plan.z_clip_near);
+    const double z_hi = sun ? std::min(c.hi.z, plan.z_clip_far) : c.hi.z;
+    if (!(z_lo <= z_hi)) continue;
+    // The rays' (s, t) the box's points can shadow: perspective s = (x - a (1 - l)) / z over
+    // a (1 - l) in [min(0, a), max(0, a)]; sun s = x + a (z_q - z), z_q - z in [0, z_far - z].
+    double s_lo = kInf, s_hi = -kInf, t_lo = kInf, t_hi = -kInf;
+    for (int k = 0; k < 8; ++k) {
+      const double x = (k & 1) ? c.hi.x : c.lo.x, y = (k & 2) ? c.hi.y : c.lo.y;
+      const double z = (k & 4) ? z_hi : z_lo;
+      if (sun) {
+        const double run = std::max(0.0, g.z_far - z);
+        s_lo = std::min(s_lo, x + e.neg.x * run), s_hi = std::max(s_hi, x + e.pos.x * run);
+        t_lo = std::min(t_lo, y + e.neg.y * run), t_hi = std::max(t_hi, y + e.pos.y * run);
+      } else {
+        s_lo = std::min(s_lo, (x - e.pos.x) / z), s_hi = std::max(s_hi, (x - e.neg.x) / z);
+        t_lo = std::min(t_lo, (y - e.pos.y) / z), t_hi = std::max(t_hi, (y - e.neg.y) / z);
+      }
+    }
+    // Pixel centres within [lo, hi], a pixel wider each side, as tiles.
+    const auto pixel = [](double v, double min, double pitch) {
+      return static_cast<int64_t>(std::floor((v - min) / pitch - 0.5));
+    };
+    const int64_t x0 = std::max<int64_t>(0, pixel(s_lo, g.s_min, g.PixelPitchS()) - 1);
+    const int64_t x1 = std::min<int64_t>(g.width - 1, pixel(s_hi, g.s_min, g.PixelPitchS()) + 2);
+    const int64_t y0 = std::max<int64_t>(0, pixel(t_lo, g.t_min, g.PixelPitchT()) - 1);
+    const int64_t y1 = std::min<int64_t>(g.height - 1, pixel(t_hi, g.t_min, g.PixelPitchT()) + 2);
+    if (x0 > x1 || y0 > y1) continue;
+    const int size = plan.header.tile_size;
+    for (int64_t ty = y0 / size; ty <= y1 / size; ++ty) {
+      for (int64_t tx = x0 / size; tx <= x1 / size; ++tx) reached[ty * plan.tiles_x + tx] = true;
+    }
+  }
+  return reached;
+}
+
 RayInShadowMap RayForSample(const BakePlan& plan, double s, double t, const glm::dvec2& sample,
                             double z_near, double z_far) {
   const PdsmGeometry& g = plan.geometry();

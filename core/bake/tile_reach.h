@@ -46,6 +46,13 @@ TileReach ComputeTileReach(const BakePlan& plan, const TileRect& tile);
 // stopping at the first triangle kept. False: the tile is all lit and needs no shadow map.
 bool TileHasCasters(const BakePlan& plan, const TileRect& tile);
 
+// For every tile of the plan, whether a caster may shadow it: each cluster's box marks the
+// tiles whose rays its points can shadow from some sample, by the same relation as the reach
+// (x_P - s z_P = a (1 - l), sun: x_P - s = -a (z - z_P)), widened by a pixel. A superset of
+// TileHasCasters (never false where it is true), in time linear in clusters and marked tiles:
+// a world of 10^5 tiles and 10^6 triangles costs milliseconds, not a reach per tile.
+std::vector<bool> TilesCastersMayReach(const BakePlan& plan);
+
 // A PDSM ray of the tile seen in one sample's shadow map: a straight segment in lattice
 // (s, t) coordinates from its nearest to its farthest point (DESIGN.md: linear in w = 1/z for
 // perspective lights, in z for the sun), with the depths at its ends.

@@ -542,6 +542,30 @@ TEST_P(TileReachTest, ClustersGiveTheBruteForceReachExactly) {
   }
 }
 
+// The plan's per-tile flags never miss a tile the exact test keeps, and skip most of the
+// others (casters over a corner of the ground).
+TEST_P(TileReachTest, TilesCastersMayReachIsASupersetOfTileHasCasters) {
+  int exact = 0, flagged = 0;
+  for (uint64_t seed : {2u, 8u}) {
+    Scene scene = MakeScene(GetParam(), seed, 600);
+    for (glm::dvec3& p : scene.meshes[1].positions_world) {
+      p = {0.25 * p.x - 6.5, p.y, 0.25 * p.z - 6.5};  // the casters shrunk into one corner
+    }
+    scene.bake.width = 256;
+    scene.bake.height = 192;
+    const BakePlan plan = Plan(scene);
+    ASSERT_EQ(plan.tile_has_casters.size(), plan.tiles.size());
+    for (const TileRect& tile : plan.tiles) {
+      const bool has = TileHasCasters(plan, tile);
+      if (has) EXPECT_TRUE(plan.tile_has_casters[tile.index]) << "tile " << tile.index;
+      exact += has;
+      flagged += plan.tile_has_casters[tile.index];
+    }
+  }
+  EXPECT_GT(exact, 0);
+  EXPECT_LT(flagged, 2 * 192);  // of 2 x 192 tiles
+}
+
 TEST(CasterClusters, EveryTriangleOnceInSpatialRunsWithTheirBounds) {
   LightSpaceMesh mesh;
   std::mt19937_64 rng(5);

@@ -21,7 +21,9 @@ EngineOptions WithDefaults(EngineOptions options) {
   return options;
 }
 
-JobSpec SchedulerSpec(const EngineJob& job) {
+// `direct` receives the tiles to do that no caster can reach (plan.tile_has_casters): they
+// need no task and are stored all lit at once.
+JobSpec SchedulerSpec(const EngineJob& job, std::vector<int>* direct) {
   const PdsmHeader& header = job.plan->header;
   JobSpec spec;
   spec.job_id = job.job_id;
@@ -34,10 +36,16 @@ JobSpec SchedulerSpec(const EngineJob& job) {
   for (int t : job.done_tiles) {
     if (t >= 0 && t < static_cast<int>(done.size())) done[t] = true;
   }
+  const std::vector<bool>& casters = job.plan->tile_has_casters;
   for (const TileGroup& group : job.plan->groups) {
     GroupWork work{group.index, {}};
     for (int t : group.tiles) {
-      if (!done[t]) work.tiles.push_back(t);
+      if (done[t]) continue;
+      if (casters.empty() || casters[t]) {
+        work.tiles.push_back(t);
+      } else {
+        direct->push_back(t);
+      }
     }
     if (!work.tiles.empty()) spec.groups.push_back(std::move(work));
   }
@@ -66,6 +74,7 @@ struct BakeEngine::OpenGroup {
 struct BakeEngine::Job {
   EngineJob spec;
   std::map<int, OpenGroup> groups;  // by group index, from a group's first result to its end
+  int direct_left = 0;              // tiles no caster reaches, not stored yet
   JobProgress progress;
   int output_calls = 0;  // JobOutput calls in flight
   struct DeferredEnd {
@@ -99,10 +108,12 @@ absl::Status BakeEngine::AddJob(EngineJob spec) {
         absl::StrCat("job ", spec.job_id, ": a job needs a plan and an output"));
   }
   auto job = std::make_shared<Job>();
-  const JobSpec scheduled = SchedulerSpec(spec);
+  std::vector<int> direct;
+  const JobSpec scheduled = SchedulerSpec(spec, &direct);
+  job->direct_left = static_cast<int>(direct.size());
   JobProgress& p = job->progress;
   p.tiles_total = static_cast<int>(spec.plan->tiles.size());
-  p.tiles_done = p.tiles_total - TileCount(scheduled);
+  p.tiles_done = p.tiles_total - TileCount(scheduled) - job->direct_left;
   p.samples_total = int64_t{spec.plan->header.samples} * p.tiles_total;
   p.samples_done = int64_t{spec.plan->header.samples} * p.tiles_done;
   p.samples_at_add = p.samples_done;
@@ -119,11 +130,43 @@ absl::Status BakeEngine::AddJob(EngineJob spec) {
     scheduler_.AddJob(scheduled);
     jobs_[job->spec.job_id] = job;
     p.tasks_total = TasksTotal(*job);
-    complete = scheduler_.JobComplete(job->spec.job_id);
+    complete = job->direct_left == 0 && scheduler_.JobComplete(job->spec.job_id);
     changed_.SignalAll();
   }
-  if (complete) options_.executor([this, job] { FinishJob(job); });
+  if (!direct.empty()) {
+    options_.executor([this, job, d = std::move(direct)] { StoreUnreachedTiles(job, d); });
+  } else if (complete) {
+    options_.executor([this, job] { FinishJob(job); });
+  }
   return absl::OkStatus();
+}
+
+void BakeEngine::StoreUnreachedTiles(const JobPtr& job, const std::vector<int>& tiles) {
+  // What a task would have returned for them, judged as every stage rule judges a tile with
+  // no event: fixed-count tiles complete, adaptive ones converge at their pilot.
+  const BakePlan& plan = *job->spec.plan;
+  for (int t : tiles) {
+    if (job->ended) return;
+    const TileRect& r = plan.tiles[t];
+    TileEvents none{.tile_index = t, .x0 = r.x0, .y0 = r.y0, .width = r.width, .height = r.height};
+    none.offsets.assign(none.PixelCount() + 1, 0);
+    std::vector<TileEvents> ranges;
+    for (size_t k = 0; k < StageRanges(plan.header, 0).size(); ++k) ranges.push_back(none);
+    StageVerdict verdict = JudgeStage(plan.header, TileStageState{}, std::move(ranges));
+    const int64_t samples = verdict.tile_samples > 0 ? verdict.tile_samples : plan.header.samples;
+    if (!StoreTile(job, t, std::move(verdict))) return;
+    absl::MutexLock lock(&mu_);
+    --job->direct_left;
+    ++job->progress.tiles_without_task;
+    job->progress.samples_done += samples;  // what its tasks would have reported
+  }
+  bool complete = false;
+  {
+    absl::MutexLock lock(&mu_);
+    if (job->ended) return;
+    complete = job->direct_left == 0 && scheduler_.JobComplete(job->spec.job_id);
+  }
+  if (complete) FinishJob(job);
 }
 
 std::optional<TaskLease> BakeEngine::Lease(const std::string& worker_id, absl::Duration wait) {
@@ -242,7 +285,7 @@ void BakeEngine::CompleteStage(const JobPtr& job, int group_index, OpenGroup gro
     if (job->ended) return;
     if (next_tiles.empty()) {
       scheduler_.GroupAssembled(job->spec.job_id, group_index);
-      complete = scheduler_.JobComplete(job->spec.job_id);
+      complete = job->direct_left == 0 && scheduler_.JobComplete(job->spec.job_id);
     } else {
       queued = scheduler_.AddStage(job->spec.job_id, group_index, next_tiles);
       job->progress.tasks_total = TasksTotal(*job);

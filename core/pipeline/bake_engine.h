@@ -51,9 +51,10 @@ struct JobProgress {
   bool started = false;  // a task has been leased
   int tiles_total = 0;
   int tiles_done = 0;
-  int tiles_all_lit = 0;    // stored with no vertex at all (no caster reaches their rays)
-  int64_t tasks_done = 0;   // accepted results
-  int64_t tasks_total = 0;  // known so far: adaptive stages add theirs as tiles need them
+  int tiles_all_lit = 0;       // stored with no vertex at all (no caster reaches their rays)
+  int tiles_without_task = 0;  // stored all lit without a task (plan.tile_has_casters)
+  int64_t tasks_done = 0;      // accepted results
+  int64_t tasks_total = 0;     // known so far: adaptive stages add theirs as tiles need them
   int64_t samples_total = 0;
   int64_t samples_done = 0;
   int64_t samples_at_add = 0;      // samples_done when AddJob ran (a resumed job starts > 0)
@@ -176,6 +177,8 @@ class BakeEngine {
   void CompleteStage(const JobPtr& job, int group_index, OpenGroup group);
   // False when the job ended (the store failed, or it was ended meanwhile).
   bool StoreTile(const JobPtr& job, int tile_index, StageVerdict verdict);
+  // Stores the tiles no caster reaches (plan.tile_has_casters) all lit, without a task.
+  void StoreUnreachedTiles(const JobPtr& job, const std::vector<int>& tiles);
   void FinishJob(const JobPtr& job);
   // Ends the job once; defers JobOutput::Ended until its output calls in flight return.
   void End(const JobPtr& job, JobEnd end, const absl::Status& status);

@@ -546,6 +546,30 @@ TEST(BakeEngine, AdaptiveGroupGoesOnWithOnlyTheTilesThatNeedIt) {
   EXPECT_EQ(output->tiles().at(1).samples, 16);
 }
 
+TEST(BakeEngine, TilesNoCasterReachesAreStoredWithoutATask) {
+  for (const bool adaptive : {false, true}) {
+    auto plan = std::make_shared<BakePlan>(*SmallPlan(3, 16, adaptive ? 0.01 : 0, adaptive ? 4 : 0,
+                                                      /*group_size=*/3));
+    plan->tile_has_casters = {true, false, true};
+    auto output = std::make_shared<RecordingOutput>();
+    BakeEngine engine(InlineOptions());
+    ASSERT_TRUE(engine.AddJob(Job(plan, output, 0)).ok());
+    EXPECT_EQ(output->tiles().size(), 1u) << "stored at once";
+    while (std::optional<TaskLease> lease = engine.Lease("w")) {
+      EXPECT_EQ(lease->tiles, (std::vector<int>{0, 2}));
+      engine.Report("w", lease->lease_id, LeaseEvents(*plan, *lease));
+    }
+    ASSERT_EQ(output->end(), JobEnd::kSucceeded);
+    const PdsmTile& unreached = output->tiles().at(1);
+    EXPECT_TRUE(unreached.vertices.empty());
+    // What a task would have given it: all samples (fixed), or its pilot's (adaptive).
+    EXPECT_EQ(unreached.samples, adaptive ? 4 : 0);
+    const JobProgress p = output->progress();
+    EXPECT_EQ(p.tiles_without_task, 1);
+    EXPECT_EQ(p.samples_done, p.samples_total);
+  }
+}
+
 TEST(BakeEngine, StatsCountJobsAndRecentResults) {
   const auto plan = SmallPlan(2, 2);
   int64_t now = 1'000'000;
