@@ -46,6 +46,21 @@ void* NotifiedFlag(const absl::Notification* n) {
   return const_cast<char*>(reinterpret_cast<const char*>(n)) + sizeof(absl::Mutex);
 }
 
+// Abseil evaluates a condition with the lock held but inside its own code, after taking the
+// lock again internally (sometimes on the thread that unlocks), and lets the lock go again
+// internally when it is false: each evaluation acquires before and releases after, as a
+// critical section of its own.
+struct Guarded {
+  absl::Mutex* mu;
+  const absl::Condition* cond;
+};
+bool EvalGuarded(Guarded* g) {
+  Acquire(g->mu);
+  const bool met = g->cond->Eval();
+  Release(g->mu);
+  return met;
+}
+
 }  // namespace
 
 namespace absl {
@@ -82,20 +97,33 @@ void Mutex::ReaderUnlock() {
 void Mutex::LockWhen(const Condition& cond) {
   PDSM_REAL(void (*)(Mutex*, const Condition&),
             "_ZN4absl7debian35Mutex8LockWhenERKNS0_9ConditionE");
-  real(this, cond);
+  Guarded g{this, &cond};
+  real(this, Condition(&EvalGuarded, &g));
   Acquire(this);
 }
 void Mutex::Await(const Condition& cond) {
   PDSM_REAL(void (*)(Mutex*, const Condition&), "_ZN4absl7debian35Mutex5AwaitERKNS0_9ConditionE");
+  Guarded g{this, &cond};
   Release(this);
-  real(this, cond);
+  real(this, Condition(&EvalGuarded, &g));
   Acquire(this);
 }
 bool Mutex::AwaitWithTimeout(const Condition& cond, absl::Duration timeout) {
   PDSM_REAL(bool (*)(Mutex*, const Condition&, absl::Duration),
             "_ZN4absl7debian35Mutex16AwaitWithTimeoutERKNS0_9ConditionENS0_8DurationE");
+  Guarded g{this, &cond};
   Release(this);
-  const bool met = real(this, cond, timeout);
+  const bool met = real(this, Condition(&EvalGuarded, &g), timeout);
+  Acquire(this);
+  return met;
+}
+
+bool Mutex::AwaitWithDeadline(const Condition& cond, absl::Time deadline) {
+  PDSM_REAL(bool (*)(Mutex*, const Condition&, absl::Time),
+            "_ZN4absl7debian35Mutex17AwaitWithDeadlineERKNS0_9ConditionENS0_4TimeE");
+  Guarded g{this, &cond};
+  Release(this);
+  const bool met = real(this, Condition(&EvalGuarded, &g), deadline);
   Acquire(this);
   return met;
 }
@@ -111,6 +139,15 @@ bool CondVar::WaitWithTimeout(Mutex* mu, absl::Duration timeout) {
             "_ZN4absl7debian37CondVar15WaitWithTimeoutEPNS0_5MutexENS0_8DurationE");
   Release(mu);
   const bool timed_out = real(this, mu, timeout);
+  Acquire(mu);
+  return timed_out;
+}
+
+bool CondVar::WaitWithDeadline(Mutex* mu, absl::Time deadline) {
+  PDSM_REAL(bool (*)(CondVar*, Mutex*, absl::Time),
+            "_ZN4absl7debian37CondVar16WaitWithDeadlineEPNS0_5MutexENS0_4TimeE");
+  Release(mu);
+  const bool timed_out = real(this, mu, deadline);
   Acquire(mu);
   return timed_out;
 }
