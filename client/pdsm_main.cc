@@ -3,8 +3,11 @@
 
 #include "client/cli_common.h"
 #include "client/commands.h"
+#include "core/util/termination_cleanup.h"
 
 int main(int argc, char** argv) {
+  // Ctrl-C or a kill during a bake, fetch or sweep leaves no "OUT.tmp-XXXXXX" behind.
+  pdsm::RemoveTempFilesOnTerminationSignals();
   CLI::App app{"pdsm: penumbra deep shadow maps (soft shadows from area lights)"};
   app.require_subcommand(1);
   int exit_code = pdsm::kExitOk;

@@ -15,6 +15,10 @@ namespace pdsm {
 absl::StatusOr<std::vector<QueryPoint>> ReadPointsCsv(const std::string& path) {
   std::ifstream in(path);
   if (!in) return absl::NotFoundError(absl::StrFormat("%s: cannot open points file", path));
+  return ParsePointsCsv(in, path);
+}
+
+absl::StatusOr<std::vector<QueryPoint>> ParsePointsCsv(std::istream& in, const std::string& path) {
   std::vector<QueryPoint> points;
   std::string line;
   for (int number = 1; std::getline(in, line); ++number) {

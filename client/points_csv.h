@@ -3,6 +3,7 @@
 #ifndef PDSM_CLIENT_POINTS_CSV_H_
 #define PDSM_CLIENT_POINTS_CSV_H_
 
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,9 @@ struct QueryPoint {
 };
 
 absl::StatusOr<std::vector<QueryPoint>> ReadPointsCsv(const std::string& path);
+
+// The same from a stream; `label` names it in errors (the path, for ReadPointsCsv).
+absl::StatusOr<std::vector<QueryPoint>> ParsePointsCsv(std::istream& in, const std::string& label);
 
 // Prints "x,y,z,attenuation" on stdout (6 decimals; "nan" when `attenuation` is NaN): the
 // output line of `pdsm query` and `pdsm reference`.

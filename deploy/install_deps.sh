@@ -17,8 +17,9 @@ packages=(
   # TLS certificates for the service tests
   openssl
   # clang: the thread-safety analysis test (scripts/check_thread_safety.py); clang-format:
-  # the format check (tests/CMakeLists.txt)
-  clang clang-format
+  # the format check (tests/CMakeLists.txt); clang's sanitizer and libFuzzer runtimes and
+  # llvm-symbolizer for the sanitizer and fuzz jobs (scripts/sanitize.sh)
+  clang clang-format libclang-rt-14-dev llvm
   # pdsm-view's window; Embree occlusion rays for `pdsm reference`; caster clusters
   libglfw3-dev libembree-dev libmeshoptimizer-dev
   # the windowed pdsm-view test runs under a virtual X server; sweep.png is drawn by gnuplot

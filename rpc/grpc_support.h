@@ -14,6 +14,9 @@
 
 namespace pdsm {
 
+// A message longer than kMaxStatusMessageBytes is cut there (with its full length appended):
+// it travels as metadata, which clients refuse past a few KiB, whatever a request made it echo.
+inline constexpr size_t kMaxStatusMessageBytes = 2048;
 grpc::Status ToGrpcStatus(const absl::Status& status);
 absl::Status FromGrpcStatus(const grpc::Status& status);
 

@@ -14,6 +14,8 @@ namespace pdsm {
 namespace {
 
 constexpr absl::Duration kTickInterval = absl::Milliseconds(250);
+// gRPC clients refuse replies above 4 MiB unless told otherwise; leave room for the framing.
+constexpr size_t kMaxListJobsBytes = (4 << 20) - (64 << 10);
 
 // Job-store timestamps: wall-clock milliseconds since the epoch.
 int64_t UnixNowMs() {
@@ -237,7 +239,14 @@ absl::StatusOr<std::vector<pdsm::v1::Job>> Coordinator::ListJobs(int limit) {
   if (!records.ok()) return records.status();
   std::vector<pdsm::v1::Job> jobs;
   jobs.reserve(records->size());
-  for (const JobRecord& r : *records) jobs.push_back(ToProto(r));
+  size_t bytes = 0;
+  for (const JobRecord& r : *records) {
+    pdsm::v1::Job job = ToProto(r);
+    // The listing stops before it outgrows a client's default 4 MiB message limit.
+    bytes += job.ByteSizeLong() + 8;
+    if (bytes > kMaxListJobsBytes) break;
+    jobs.push_back(std::move(job));
+  }
   return jobs;
 }
 
@@ -265,6 +274,12 @@ absl::StatusOr<std::vector<int>> Coordinator::FinishedTiles(const std::string& j
 
 absl::StatusOr<std::string> Coordinator::FinishedTilePath(const std::string& job_id,
                                                           int tile_index) {
+  absl::StatusOr<JobRecord> record = store_->GetJob(job_id);
+  if (!record.ok()) return record.status();
+  if (tile_index < 0 || tile_index >= record->tiles_total) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "tile_index: ", tile_index, " is outside the job's tiles [0, ", record->tiles_total, ")"));
+  }
   absl::StatusOr<std::vector<int>> done = FinishedTiles(job_id);
   if (!done.ok()) return done.status();
   if (!std::binary_search(done->begin(), done->end(), tile_index)) {

@@ -73,8 +73,8 @@ class Coordinator {
   // The finished file. FAILED_PRECONDITION unless the job SUCCEEDED.
   absl::StatusOr<std::string> PdsmPath(const std::string& job_id);
   // A running (or queued) job's assembled tiles so far, ascending, and one tile's file.
-  // FAILED_PRECONDITION once the job has ended; NOT_FOUND for an unknown job, or a tile index
-  // out of the grid or not assembled yet.
+  // FAILED_PRECONDITION once the job has ended; NOT_FOUND for an unknown job or a tile not
+  // assembled yet; INVALID_ARGUMENT for a tile index outside [0, tiles_total).
   absl::StatusOr<std::vector<int>> FinishedTiles(const std::string& job_id);
   absl::StatusOr<std::string> FinishedTilePath(const std::string& job_id, int tile_index);
   absl::StatusOr<std::vector<double>> Query(const std::string& job_id,

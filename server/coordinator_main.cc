@@ -117,6 +117,13 @@ int Run(Flags& flags, const sigset_t& signals) {
     spdlog::error("--listen: cannot listen on {}", flags.listen);
     return 1;
   }
+  // Per service as well as for the whole server (""), so a probe can ask for either API.
+  if (grpc::HealthCheckServiceInterface* health = server->GetHealthCheckService()) {
+    for (const char* service :
+         {pdsm::v1::PdsmJobs::service_full_name(), pdsm::v1::PdsmWorkers::service_full_name()}) {
+      health->SetServingStatus(service, true);
+    }
+  }
   const std::string address =
       absl::StrCat(flags.listen.substr(0, flags.listen.rfind(':')), ":", port);
   spdlog::info("listening on {} ({}), data in {}", address,
@@ -133,6 +140,10 @@ int Run(Flags& flags, const sigset_t& signals) {
   }
 
   if (exit_code == 0) WaitForStopSignal(signals);
+  // NOT_SERVING for every service while the calls in flight finish.
+  if (grpc::HealthCheckServiceInterface* health = server->GetHealthCheckService()) {
+    health->Shutdown();
+  }
   jobs.Shutdown();
   server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(5));
   server->Wait();

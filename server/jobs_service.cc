@@ -9,6 +9,7 @@
 #include "core/assets/mesh_asset.h"
 #include "rpc/grpc_support.h"
 #include "server/call_replies.h"
+#include "server/request_checks.h"
 #include "server/watch_hub.h"
 
 namespace pdsm {
@@ -43,6 +44,16 @@ class UploadReactor final : public grpc::ServerReadReactor<pdsm::v1::AssetChunk>
       // Grow with the data, not with the claim: a client may announce more than it sends.
       blob_.reserve(std::min<uint64_t>(expected_bytes_, kChunkBytes));
     }
+    ++chunks_;
+    if (chunk_.data().size() > kChunkBytes) {
+      return Fail(absl::InvalidArgumentError(
+          absl::StrCat("data: chunk ", chunks_ - 1, " holds ", chunk_.data().size(),
+                       " bytes, a chunk holds at most ", kChunkBytes)));
+    }
+    if (!chunk_.sha256().empty() && chunk_.sha256() != sha256_) {
+      return Fail(absl::InvalidArgumentError(
+          absl::StrCat("sha256: chunk ", chunks_ - 1, " names another blob than the first chunk")));
+    }
     if (blob_.size() + chunk_.data().size() > expected_bytes_) {
       return Fail(absl::InvalidArgumentError(
           absl::StrCat("data: more bytes than the announced total_bytes (", expected_bytes_, ")")));
@@ -73,6 +84,7 @@ class UploadReactor final : public grpc::ServerReadReactor<pdsm::v1::AssetChunk>
   pdsm::v1::UploadAssetResponse* response_;
   pdsm::v1::AssetChunk chunk_;
   bool first_ = true;
+  int64_t chunks_ = 0;  // received so far
   std::string sha256_;
   uint64_t expected_bytes_ = 0;
   std::string blob_;
@@ -174,7 +186,7 @@ grpc::ServerUnaryReactor* JobsService::SubmitBake(grpc::CallbackServerContext* c
   absl::StatusOr<pdsm::v1::Job> job = coordinator_->SubmitBake(*request);
   if (!job.ok()) {
     spdlog::warn("SubmitBake refused ({}): {}", context->peer(),
-                 std::string(job.status().message()));
+                 Printable(job.status().message(), 1024));
     return Answer(context, job.status());
   }
   *response = *std::move(job);
@@ -187,6 +199,7 @@ grpc::ServerUnaryReactor* JobsService::GetJob(grpc::CallbackServerContext* conte
   if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
     return Answer(context, s);
   }
+  if (absl::Status s = CheckJobId(request->job_id()); !s.ok()) return Answer(context, s);
   absl::StatusOr<pdsm::v1::Job> job = coordinator_->GetJob(request->job_id());
   if (!job.ok()) return Answer(context, job.status());
   *response = *std::move(job);
@@ -213,6 +226,9 @@ grpc::ServerWriteReactor<pdsm::v1::Job>* JobsService::WatchJob(
   if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
     return new RefusedStream<grpc::ServerWriteReactor<pdsm::v1::Job>>(s);
   }
+  if (absl::Status s = CheckJobId(request->job_id()); !s.ok()) {
+    return new RefusedStream<grpc::ServerWriteReactor<pdsm::v1::Job>>(ToGrpcStatus(s));
+  }
   return watch_hub_->Watch(request->job_id());
 }
 
@@ -222,6 +238,7 @@ grpc::ServerUnaryReactor* JobsService::CancelJob(grpc::CallbackServerContext* co
   if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
     return Answer(context, s);
   }
+  if (absl::Status s = CheckJobId(request->job_id()); !s.ok()) return Answer(context, s);
   absl::StatusOr<pdsm::v1::Job> job = coordinator_->CancelJob(request->job_id());
   if (!job.ok()) return Answer(context, job.status());
   *response = *std::move(job);
@@ -233,6 +250,9 @@ grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>* JobsService::FetchPdsm(
   if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
     return new RefusedStream<grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>>(s);
   }
+  if (absl::Status s = CheckJobId(request->job_id()); !s.ok()) {
+    return new RefusedStream<grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>>(ToGrpcStatus(s));
+  }
   return new FetchReactor(coordinator_->PdsmPath(request->job_id()));
 }
 
@@ -242,6 +262,7 @@ grpc::ServerUnaryReactor* JobsService::ListFinishedTiles(grpc::CallbackServerCon
   if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
     return Answer(context, s);
   }
+  if (absl::Status s = CheckJobId(request->job_id()); !s.ok()) return Answer(context, s);
   absl::StatusOr<std::vector<int>> tiles = coordinator_->FinishedTiles(request->job_id());
   if (!tiles.ok()) return Answer(context, tiles.status());
   response->mutable_tile_indices()->Assign(tiles->begin(), tiles->end());
@@ -253,6 +274,14 @@ grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>* JobsService::FetchTile(
   if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
     return new RefusedStream<grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>>(s);
   }
+  absl::Status valid = CheckJobId(request->job_id());
+  if (valid.ok() && request->tile_index() < 0) {
+    valid = absl::InvalidArgumentError(
+        absl::StrCat("tile_index: must be >= 0 (got ", request->tile_index(), ")"));
+  }
+  if (!valid.ok()) {
+    return new RefusedStream<grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>>(ToGrpcStatus(valid));
+  }
   return new FetchReactor(coordinator_->FinishedTilePath(request->job_id(), request->tile_index()));
 }
 
@@ -262,6 +291,7 @@ grpc::ServerUnaryReactor* JobsService::QueryAttenuation(
   if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
     return Answer(context, s);
   }
+  if (absl::Status s = CheckJobId(request->job_id()); !s.ok()) return Answer(context, s);
   if (request->points_size() > kMaxQueryPoints) {
     return Answer(context, absl::ResourceExhaustedError(
                                absl::StrCat("points: at most ", kMaxQueryPoints, " per call")));

@@ -3,6 +3,7 @@
 #include "absl/strings/str_cat.h"
 #include "rpc/grpc_support.h"
 #include "server/call_replies.h"
+#include "server/request_checks.h"
 
 namespace pdsm {
 namespace {
@@ -10,13 +11,6 @@ namespace {
 // Without work, a worker asks again after this long: short enough that a new job starts
 // promptly, long enough that idle workers cost the coordinator little.
 constexpr int64_t kIdleRetryMs = 250;
-
-absl::Status CheckWorkerId(const std::string& id) {
-  if (id.empty() || id.size() > 256) {
-    return absl::InvalidArgumentError("worker_id: must have 1 to 256 characters");
-  }
-  return absl::OkStatus();
-}
 
 // FetchAsset: the blob in chunks.
 class AssetReactor final : public grpc::ServerWriteReactor<pdsm::v1::AssetData> {
@@ -76,6 +70,7 @@ grpc::ServerUnaryReactor* WorkersService::ExtendLease(grpc::CallbackServerContex
   if (grpc::Status s = auth_->Check(context, Audience::kWorker); !s.ok()) {
     return Answer(context, s);
   }
+  if (absl::Status s = CheckWorkerId(request->worker_id()); !s.ok()) return Answer(context, s);
   absl::StatusOr<int64_t> lease_ms =
       coordinator_->ExtendLease(request->worker_id(), request->lease_id());
   if (!lease_ms.ok()) return Answer(context, lease_ms.status());
@@ -89,6 +84,7 @@ grpc::ServerUnaryReactor* WorkersService::ReportResult(grpc::CallbackServerConte
   if (grpc::Status s = auth_->Check(context, Audience::kWorker); !s.ok()) {
     return Answer(context, s);
   }
+  if (absl::Status s = CheckWorkerId(request->worker_id()); !s.ok()) return Answer(context, s);
   absl::StatusOr<bool> accepted =
       coordinator_->ReportResult(request->worker_id(), request->lease_id(), request->tiles());
   if (!accepted.ok()) return Answer(context, accepted.status());
@@ -102,8 +98,11 @@ grpc::ServerUnaryReactor* WorkersService::ReportFailure(
   if (grpc::Status s = auth_->Check(context, Audience::kWorker); !s.ok()) {
     return Answer(context, s);
   }
+  if (absl::Status s = CheckWorkerId(request->worker_id()); !s.ok()) return Answer(context, s);
+  // Escaped here, once: the reason goes into logs and into the job's error, one line each.
   coordinator_->ReportFailure(request->worker_id(), request->lease_id(),
-                              request->reason().substr(0, 4096), request->handed_back());
+                              Printable(request->reason(), kMaxReasonBytes),
+                              request->handed_back());
   return Answer(context, grpc::Status::OK);
 }
 
@@ -113,6 +112,7 @@ grpc::ServerUnaryReactor* WorkersService::GetJobScene(grpc::CallbackServerContex
   if (grpc::Status s = auth_->Check(context, Audience::kWorker); !s.ok()) {
     return Answer(context, s);
   }
+  if (absl::Status s = CheckJobId(request->job_id()); !s.ok()) return Answer(context, s);
   absl::StatusOr<pdsm::v1::GetJobSceneResponse> scene = coordinator_->JobScene(request->job_id());
   if (!scene.ok()) return Answer(context, scene.status());
   *response = *std::move(scene);

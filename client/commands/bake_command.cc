@@ -14,6 +14,7 @@
 #include "client/measure/target_error.h"
 #include "client/progress_reporter.h"
 #include "core/scene/scene_loader.h"
+#include "core/util/output_path.h"
 #include "worker/local_bake.h"
 
 namespace pdsm {
@@ -128,6 +129,10 @@ int RunTargetErrorBake(const BakeFlags& flags, const pdsm::v1::BakeParams& overr
 }
 
 int RunBake(const BakeFlags& flags) {
+  // Before any work: -o is a regular file or a new path, and not the scene it bakes.
+  if (absl::Status s = CheckOutputPath("-o", flags.output_path, {flags.scene_path}); !s.ok()) {
+    return ReportError(s);
+  }
   absl::StatusOr<pdsm::v1::BakeParams> overrides = ToBakeParams(flags.overrides);
   if (!overrides.ok()) return ReportError(overrides.status());
   if (flags.target_error) return RunTargetErrorBake(flags, *overrides);
@@ -141,6 +146,11 @@ int RunBake(const BakeFlags& flags) {
         !flags.preview_path.empty()
             ? flags.preview_path
             : std::filesystem::path(flags.output_path).replace_extension(".png").string();
+  }
+  if (absl::Status s = CheckOutputPaths(
+          {{"-o", flags.output_path}, {"--preview", options.preview_path}}, {flags.scene_path});
+      !s.ok()) {
+    return ReportError(s);
   }
   options.threads = flags.threads;
   options.samples_per_task = flags.samples_per_task;

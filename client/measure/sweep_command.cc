@@ -19,6 +19,7 @@
 #include "client/measure/target_error.h"
 #include "client/progress_reporter.h"
 #include "core/scene/scene_loader.h"
+#include "core/util/output_path.h"
 
 namespace pdsm {
 namespace {
@@ -170,6 +171,16 @@ int RunSweep(const SweepFlags& flags) {
   absl::StatusOr<ReferenceMethod> method =
       ParseReferenceMethod(flags.reference_method, "--reference-method");
   if (!method.ok()) return ReportError(method.status());
+  // Before any work: what the sweep writes is a regular file or a new path, not its scene.
+  const std::filesystem::path out(flags.out_dir);
+  OutputPaths outputs = {{"--out", (out / "sweep.png").string()}};
+  if (!flags.replot) {
+    outputs.insert(outputs.end(), {{"--out", (out / "sweep.csv").string()},
+                                   {"--out", (out / "reference.csv").string()}});
+  }
+  if (absl::Status s = CheckOutputPaths(outputs, {flags.scene_path}); !s.ok()) {
+    return ReportError(s);
+  }
   absl::StatusOr<Scene> scene = LoadSceneFile(flags.scene_path);
   if (!scene.ok()) return ReportError(scene.status());
   if (flags.replot) {

@@ -5,6 +5,7 @@
 #include "client/cli_common.h"
 #include "client/commands.h"
 #include "client/service/service_connection.h"
+#include "core/util/output_path.h"
 
 namespace pdsm {
 namespace {
@@ -16,6 +17,11 @@ struct FetchFlags {
 };
 
 absl::Status Fetch(const FetchFlags& flags) {
+  if (absl::Status s = CheckOutputPath("-o", flags.output_path,
+                                       {flags.service.token_file, flags.service.tls_ca});
+      !s.ok()) {
+    return s;
+  }
   absl::StatusOr<ServiceConnection> c = Connect(flags.service);
   if (!c.ok()) return c.status();
   absl::StatusOr<uint64_t> received =

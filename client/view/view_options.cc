@@ -7,6 +7,7 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
+#include "core/util/output_path.h"
 
 namespace pdsm::view {
 namespace {
@@ -165,6 +166,16 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
     return absl::InvalidArgumentError(
         "--sm-size/--multi-sm-size in 0..16384, --sm-count in 0..65536, --filter-radius in "
         "0..16, --frames and --bench >= 0");
+  }
+  // Outputs: regular files or new paths, never one of the viewer's inputs.
+  std::vector<std::string> inputs = {o.scene_path, o.pdsm_path, o.service.token_file,
+                                     o.service.tls_ca};
+  for (const DynamicObjectSpec& object : o.objects) inputs.push_back(object.mesh_path);
+  if (absl::Status s = CheckOutputPaths(
+          {{"--screenshot", o.screenshot_path}, {"--save-attenuation", o.attenuation_path}},
+          inputs);
+      !s.ok()) {
+    return s;
   }
   return o;
 }

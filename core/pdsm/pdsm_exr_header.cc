@@ -14,6 +14,7 @@
 #include <OpenEXR/ImfIntAttribute.h>
 #include <OpenEXR/ImfMultiPartInputFile.h>
 #include <OpenEXR/ImfPartType.h>
+#include <OpenEXR/ImfStdIO.h>
 #include <OpenEXR/ImfStringAttribute.h>
 #include <OpenEXR/ImfTileDescription.h>
 #include <OpenEXR/ImfVecAttribute.h>
@@ -22,6 +23,8 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -39,9 +42,12 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/string_view.h"
+#include "core/assets/mesh_asset.h"
 #include "core/pdsm/exr_output_stream.h"
+#include "core/pdsm/pdsm_exr_tiles.h"
 #include "core/util/atomic_file.h"
 #include "core/util/file_system.h"
+#include "core/util/little_endian.h"
 
 namespace pdsm {
 namespace {
@@ -350,7 +356,52 @@ Imf::Header ExrHeaderFromPdsm(const PdsmHeader& h) {
   }
   if (g.z_valid_min != 0) exr.insert(kAttrZValidMin, Imf::DoubleAttribute(g.z_valid_min));
   if (h.surfaces_only) exr.insert(kAttrSurfacesOnly, Imf::IntAttribute(1));
+  // What DeepTiledOutputFile would add itself, set first so that the checksum covers it.
+  const TileGrid grid{g.width, g.height, h.tile_size};
+  exr.setChunkCount(static_cast<int>(grid.Count()));
+  SealExrHeader(&exr);
   return exr;
+}
+
+std::string HeaderChecksum(const ExrHeaderBytes& header) {
+  Sha256 sha;
+  for (const ExrAttributeBytes& a : header.attributes) {
+    if (a.name == kHeaderChecksumAttribute) continue;
+    char size[4];
+    ByteWriter(size).I32(static_cast<int32_t>(a.value.size()));
+    sha.Update(std::string_view(a.name.c_str(), a.name.size() + 1));
+    sha.Update(std::string_view(a.type.c_str(), a.type.size() + 1));
+    sha.Update(std::string_view(size, sizeof(size)));
+    sha.Update(a.value);
+  }
+  return sha.FinalHex();
+}
+
+void SealExrHeader(Imf::Header* exr) {
+  // The records exactly as OpenEXR will write them: its own serializer, read back by ours.
+  Imf::StdOSStream out;
+  exr->writeTo(out, /*isTiled=*/true);
+  absl::StatusOr<ExrHeaderBytes> records = ParseExrHeaderBytes(out.str(), "header being written");
+  if (!records.ok()) {  // a programmer error: our parser refuses what OpenEXR writes
+    std::fprintf(stderr, "%s\n", std::string(records.status().message()).c_str());
+    std::abort();
+  }
+  exr->insert(kHeaderChecksumAttribute, Imf::StringAttribute(HeaderChecksum(*records)));
+}
+
+absl::Status VerifyHeaderChecksum(const ExrHeaderBytes& header, absl::string_view path) {
+  const ExrAttributeBytes* stored = header.Find(kHeaderChecksumAttribute);
+  if (stored == nullptr) return absl::OkStatus();
+  if (stored->type != "string" || !IsSha256Hex(stored->value)) {
+    return absl::DataLossError(absl::StrCat(path, ": attribute ", kHeaderChecksumAttribute,
+                                            " is not a string of 64 hex digits"));
+  }
+  if (const std::string actual = HeaderChecksum(header); actual != stored->value) {
+    return absl::DataLossError(absl::StrCat(path, ": corrupt header: its checksum (",
+                                            kHeaderChecksumAttribute,
+                                            ") does not match its attributes"));
+  }
+  return absl::OkStatus();
 }
 
 // Reads typed attributes, remembering the first one missing or of the wrong type.

@@ -13,6 +13,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
+#include "core/pdsm/exr_file_scan.h"
 #include "core/pdsm/pdsm_image.h"
 
 namespace pdsm {
@@ -30,12 +31,31 @@ inline constexpr uint64_t kMaxVerticesPerTile =
 // "<action> <path>: <what>". OpenEXR reports everything by throwing; nothing escapes core/pdsm.
 absl::Status StatusFromCurrentException(absl::string_view path, absl::string_view action);
 
-// The deep tiled header of a PDSM: channels, tiling, compression and every pdsm* attribute.
+// The deep tiled header of a PDSM: channels, tiling, compression, chunkCount, every pdsm*
+// attribute, and the header checksum over all of them (SealExrHeader).
 // REQUIRES: ValidateHeaderForWrite(h) is OK.
 Imf::Header ExrHeaderFromPdsm(const PdsmHeader& h);
 
 // INVALID_ARGUMENT naming `path` when `h` cannot be written (sizes, tile size, version).
 absl::Status ValidateHeaderForWrite(const PdsmHeader& h, absl::string_view path);
+
+// The header checksum (docs/pdsm_format.md, "Header checksum"): a string attribute holding
+// the SHA-256, 64 lowercase hex digits, of every attribute record of the header (name\0
+// type\0 int32 size, value) except its own, in file order. Every writer adds it; a reader
+// verifies it when present, before it believes any attribute.
+inline constexpr char kHeaderChecksumAttribute[] = "pdsmHeaderSha256";
+
+// The checksum of `header`'s records (ExrHeaderBytes: exr_file_scan.h).
+std::string HeaderChecksum(const ExrHeaderBytes& header);
+
+// Sets `exr`'s checksum attribute for its other attributes as they are now (replacing one it
+// has). REQUIRES: every attribute the file will carry is set, chunkCount included (OpenEXR
+// adds it when writing otherwise, and the checksum would not cover it).
+void SealExrHeader(Imf::Header* exr);
+
+// OK when `header` has no checksum attribute (files from before it existed) or the checksum
+// matches; DATA_LOSS naming `path` when it does not, or is not a string of 64 hex digits.
+absl::Status VerifyHeaderChecksum(const ExrHeaderBytes& header, absl::string_view path);
 
 // The PdsmHeader of a file's header. DATA_LOSS naming `path` and the attribute when it is not
 // a PDSM or an attribute is missing, mistyped or out of range; FAILED_PRECONDITION for a

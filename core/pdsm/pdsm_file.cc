@@ -24,6 +24,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/string_view.h"
+#include "core/pdsm/exr_file_scan.h"
 #include "core/pdsm/exr_output_stream.h"
 #include "core/pdsm/pdsm_exr_header.h"
 #include "core/pdsm/pdsm_exr_tiles.h"
@@ -202,11 +203,13 @@ class ExrPdsmWriter final : public PdsmWriter {
 // ---------------------------------------------------------------------------------------
 // Reader.
 
+// Opens the file for OpenEXR only after our own bounded read of its framing (exr_file_scan.h:
+// no size in the file makes OpenEXR allocate more than the file can back) and of its header
+// checksum (nothing read from a header that does not match it).
 absl::Status OpenChecked(const std::string& path, std::unique_ptr<Imf::MultiPartInputFile>* file) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) {
-    return absl::NotFoundError(absl::StrCat("no such file: ", path));
-  }
+  absl::StatusOr<ExrHeaderBytes> scanned = ScanPdsmFile(
+      path, [&path](const ExrHeaderBytes& header) { return VerifyHeaderChecksum(header, path); });
+  if (!scanned.ok()) return scanned.status();
   try {
     *file = std::make_unique<Imf::MultiPartInputFile>(path.c_str(), Imf::globalThreadCount(),
                                                       /*reconstructChunkOffsetTable=*/false);

@@ -1,4 +1,6 @@
 #include "core/pdsm/pdsm_file.h"
+#include "core/pdsm/pdsm_exr_header.h"
+#include "core/pdsm/pdsm_test_images.h"
 #include "core/util/fault_injecting_file_system.h"
 #include "core/util/file_system.h"
 #include "tests/test_support.h"
@@ -34,43 +36,12 @@ namespace pdsm {
 namespace {
 
 namespace fs = std::filesystem;
+using ::pdsm::testing::CutTile;
+using ::pdsm::testing::CutTiles;
+using ::pdsm::testing::FullHeader;
+using ::pdsm::testing::RandomImage;
+using ::pdsm::testing::WriteTiles;
 using ::testing::HasSubstr;
-
-// Every field differs from its default, and doubles are ones a decimal round trip would
-// break (1/3, pi, values near 1e6).
-PdsmHeader FullHeader(int width, int height, int tile_size) {
-  PdsmHeader h;
-  h.scene_name = "plates \"quoted\" \xc3\xa9t\xc3\xa9";
-  h.light_shape = LightShape::kDisk;
-  h.light_half_width = 0.1 + 0.2;
-  h.light_half_height = 1.0 / 3.0;
-  h.light_radius = std::numbers::sqrt2;
-  h.tan_half_angle = std::nextafter(0.00465, 1.0);
-  PdsmGeometry& g = h.geometry;
-  g.projection = Projection::kOrthographic;
-  g.frame.center = {1e6 + 0.1, -2.5e5 - 1.0 / 7.0, std::numbers::pi};
-  g.frame.u = {0.5 * std::numbers::sqrt2, 0.5 * std::numbers::sqrt2, 0.0};
-  g.frame.v = {0.0, 0.0, -1.0};
-  g.frame.n = {-0.5 * std::numbers::sqrt2, 0.5 * std::numbers::sqrt2, 0.0};
-  g.width = width;
-  g.height = height;
-  g.s_min = -0.7;
-  g.s_max = 0.9;
-  g.t_min = -1.0 / 3.0;
-  g.t_max = std::numbers::pi / 4;
-  g.z_near = 0.01;
-  g.z_far = 1e5 + 1.0 / 7.0;
-  h.samples = 65536;
-  h.shadow_map_resolution = 2048;
-  h.epsilon = 0.02;
-  h.compression_metric = CompressionMetric::kPerpendicular;
-  h.depth_bias = 1e-4 / 3.0;
-  h.slope_bias = 2.5;
-  h.sampling = SamplingPattern::kUniform;
-  h.seed = 0xFEDCBA9876543210ull;  // above INT64_MAX
-  h.tile_size = tile_size;
-  return h;
-}
 
 void ExpectVec3Eq(const glm::dvec3& a, const glm::dvec3& b) {
   EXPECT_EQ(a.x, b.x);
@@ -110,68 +81,6 @@ void ExpectHeadersEqual(const PdsmHeader& a, const PdsmHeader& b) {
   EXPECT_EQ(a.tile_size, b.tile_size);
 }
 
-// Random functions: about a quarter of the pixels empty, repeated depths (jumps) included,
-// and optionally one pixel with `big_count` vertices.
-PdsmImage RandomImage(const PdsmHeader& header, uint32_t seed, int big_count = 0) {
-  std::mt19937 rng(seed);
-  std::uniform_int_distribution<int> count_dist(-3, 9);
-  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-  PdsmImage image;
-  image.header = header;
-  const size_t pixels = static_cast<size_t>(header.geometry.width) * header.geometry.height;
-  const size_t big_pixel = pixels / 2;
-  image.offsets.push_back(0);
-  for (size_t p = 0; p < pixels; ++p) {
-    const int count = p == big_pixel && big_count > 0 ? big_count : std::max(0, count_dist(rng));
-    float z = 0.5f + unit(rng);
-    for (int k = 0; k < count; ++k) {
-      if (unit(rng) > 0.2f) z += unit(rng) * 3.0f;  // else a jump: same depth again
-      image.vertices.push_back({z, unit(rng)});
-    }
-    image.offsets.push_back(image.vertices.size());
-  }
-  return image;
-}
-
-PdsmTile CutTile(const PdsmImage& image, int x0, int y0) {
-  const int ts = image.header.tile_size;
-  PdsmTile tile;
-  tile.x0 = x0;
-  tile.y0 = y0;
-  tile.width = std::min(ts, image.header.geometry.width - x0);
-  tile.height = std::min(ts, image.header.geometry.height - y0);
-  tile.offsets.push_back(0);
-  for (int y = y0; y < y0 + tile.height; ++y) {
-    for (int x = x0; x < x0 + tile.width; ++x) {
-      for (const Vertex& v : image.Function(x, y)) tile.vertices.push_back(v);
-      tile.offsets.push_back(tile.vertices.size());
-    }
-  }
-  return tile;
-}
-
-std::vector<PdsmTile> CutTiles(const PdsmImage& image) {
-  std::vector<PdsmTile> tiles;
-  const int ts = image.header.tile_size;
-  for (int y0 = 0; y0 < image.header.geometry.height; y0 += ts) {
-    for (int x0 = 0; x0 < image.header.geometry.width; x0 += ts) {
-      tiles.push_back(CutTile(image, x0, y0));
-    }
-  }
-  return tiles;
-}
-
-absl::Status WriteTiles(const std::string& path, const PdsmHeader& header,
-                        const std::vector<PdsmTile>& tiles, FileSystem* file_system = nullptr) {
-  absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
-      PdsmWriter::Create(path, header, file_system);
-  if (!writer.ok()) return writer.status();
-  for (const PdsmTile& tile : tiles) {
-    if (absl::Status s = (*writer)->WriteTile(tile); !s.ok()) return s;
-  }
-  return (*writer)->Finish();
-}
-
 void ExpectImagesEqual(const PdsmImage& expected, const PdsmImage& actual) {
   ExpectHeadersEqual(expected.header, actual.header);
   EXPECT_EQ(expected.offsets, actual.offsets);
@@ -191,8 +100,12 @@ void WriteBytes(const std::string& path, const std::string& bytes) {
 
 // Writes a deep tiled EXR with OpenEXR directly: `header` as given, every pixel holding
 // the same `samples` (Z, attenuation) pairs. For files the PdsmWriter refuses to make.
-void WriteRawDeepTiled(const std::string& path, const Imf::Header& header,
+// Writes `header` as a writer would: a header that carries a checksum (a copy of a real
+// PDSM's, edited) gets it recomputed, so that the reader's checks behind it are what a test
+// exercises.
+void WriteRawDeepTiled(const std::string& path, Imf::Header header,
                        const std::vector<Vertex>& samples) {
+  if (header.find(kHeaderChecksumAttribute) != header.end()) SealExrHeader(&header);
   const Imath::Box2i window = header.dataWindow();
   const int width = window.max.x - window.min.x + 1;
   const int height = window.max.y - window.min.y + 1;

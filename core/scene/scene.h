@@ -3,6 +3,7 @@
 #ifndef PDSM_CORE_SCENE_SCENE_H_
 #define PDSM_CORE_SCENE_SCENE_H_
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -99,6 +100,9 @@ inline constexpr int kMaxPdsmResolution = 16384;
 inline constexpr int kMaxSamples = 65536;
 inline constexpr int kMaxShadowMapResolution = 16384;
 inline constexpr int kMaxTileSize = 4096;
+// A scene's `name`: a label for headers, listings and logs, not a payload (a 5 MiB name made
+// one job listing exceed a client's 4 MiB message limit).
+inline constexpr size_t kMaxSceneNameBytes = 256;
 
 }  // namespace pdsm
 

@@ -2,6 +2,7 @@
 
 #include <utility>
 
+#include "absl/strings/str_cat.h"
 #include "core/scene/scene_bake.h"
 #include "core/scene/scene_light.h"
 
@@ -14,6 +15,10 @@ SceneBuilder::SceneBuilder(std::string source, std::string base_dir,
 
 absl::StatusOr<Scene> SceneBuilder::Build(const pdsm::v1::Scene& message) const {
   Scene scene;
+  if (message.name().size() > kMaxSceneNameBytes) {
+    return checks_.Error("name", absl::StrCat("at most ", kMaxSceneNameBytes, " bytes (got ",
+                                              message.name().size(), ")"));
+  }
   scene.name = message.name();
   scene.source_path = checks_.source();
   // Light and bake first: they are cheap, and a typo there should not wait for a mesh load.

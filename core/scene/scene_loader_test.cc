@@ -320,6 +320,25 @@ TEST_F(SceneLoaderTest, ProtoWithoutBaseDirRefusesMeshFiles) {
   EXPECT_EQ(scene->meshes[0].label, "meshes[0] (inline)");
 }
 
+// A name is a label: 256 bytes at most (a 5 MiB one made a job listing outgrow 4 MiB).
+TEST_F(SceneLoaderTest, SceneNameIsAtMost256Bytes) {
+  pdsm::v1::Scene message;
+  auto* rect = message.mutable_light()->mutable_rect();
+  for (double x : {0.0, 10.0, 0.0}) rect->add_center(x);
+  for (double x : {0.0, -1.0, 0.0}) rect->add_normal(x);
+  for (double x : {0.0, 0.0, 1.0}) rect->add_up(x);
+  for (double x : {1.0, 1.0}) rect->add_size(x);
+  auto* mesh = message.add_meshes()->mutable_inline_();
+  for (double x : {0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0}) mesh->add_positions(x);
+  for (uint32_t i : {0u, 1u, 2u}) mesh->add_indices(i);
+  message.set_name(std::string(256, 'n'));
+  EXPECT_TRUE(SceneFromProto(message, "job 42", "").ok());
+  message.set_name(std::string(257, 'n'));
+  const absl::Status s = SceneFromProto(message, "job 42", "").status();
+  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(s.message(), HasSubstr("job 42: name: at most 256 bytes (got 257)"));
+}
+
 // ---- Accepted input --------------------------------------------------------------------
 
 TEST_F(SceneLoaderTest, DesignExampleLoads) {

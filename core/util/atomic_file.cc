@@ -1,22 +1,48 @@
 #include "core/util/atomic_file.h"
 
 #include <algorithm>
+#include <set>
 #include <utility>
 
+#include "absl/base/thread_annotations.h"
 #include "absl/strings/str_cat.h"
+#include "absl/synchronization/mutex.h"
+#include "core/util/termination_cleanup.h"
 
 namespace pdsm {
+
+namespace {
+
+// Runs fs->RemoveStaleTempFiles(dir) the first time this process writes into `dir` (as
+// spelled: another spelling of the same folder only sweeps it twice).
+void SweepFolderOnce(FileSystem* fs, const std::string& dir) {
+  static absl::Mutex mu(absl::kConstInit);
+  static std::set<std::string>* swept ABSL_GUARDED_BY(mu) = new std::set<std::string>;
+  {
+    absl::MutexLock lock(&mu);
+    if (!swept->insert(dir).second) return;
+  }
+  fs->RemoveStaleTempFiles(dir);
+}
+
+}  // namespace
 
 absl::StatusOr<std::unique_ptr<AtomicFile>> AtomicFile::Create(const std::string& path,
                                                                FileSystem* fs) {
   if (fs == nullptr) fs = FileSystem::Default();
+  if (absl::Status s = CheckReplaceable(path); !s.ok()) return s;
+  SweepFolderOnce(fs, ParentDir(path));
   absl::StatusOr<std::unique_ptr<WritableFile>> file = fs->NewTempFile(path);
   if (!file.ok()) return file.status();
   return std::unique_ptr<AtomicFile>(new AtomicFile(path, fs, *std::move(file)));
 }
 
 AtomicFile::AtomicFile(std::string path, FileSystem* fs, std::unique_ptr<WritableFile> file)
-    : path_(std::move(path)), temp_path_(file->path()), fs_(fs), file_(std::move(file)) {}
+    : path_(std::move(path)),
+      temp_path_(file->path()),
+      fs_(fs),
+      file_(std::move(file)),
+      cleanup_handle_(RegisterTempFile(temp_path_)) {}
 
 AtomicFile::~AtomicFile() {
   if (!committed_ && status_.ok()) Fail(absl::CancelledError("abandoned")).IgnoreError();
@@ -44,11 +70,14 @@ absl::Status AtomicFile::Commit() {
   if (committed_) return absl::FailedPreconditionError(path_ + ": already committed");
   // fsync before the rename: a crash must not leave a renamed file with missing bytes.
   if (absl::Status s = file_->Sync(); !s.ok()) return Fail(s);
-  absl::Status closed = file_->Close();
-  file_.reset();
-  if (!closed.ok()) return Fail(closed);
+  if (absl::Status s = file_->Close(); !s.ok()) return Fail(s);
+  // Checked again just before the rename: the target may have changed since Create().
+  if (absl::Status s = CheckReplaceable(path_); !s.ok()) return Fail(s);
   if (absl::Status s = fs_->RenameFile(temp_path_, path_); !s.ok()) return Fail(s);
   committed_ = true;
+  UnregisterTempFile(cleanup_handle_);
+  cleanup_handle_ = -1;
+  file_.reset();  // drops the lock: the temporary name is gone
   // The rename is in the folder's entries: durable only once the folder is synced.
   if (absl::Status s = fs_->SyncDir(ParentDir(path_)); !s.ok()) {
     status_ = absl::Status(
@@ -60,8 +89,11 @@ absl::Status AtomicFile::Commit() {
 
 absl::Status AtomicFile::Fail(absl::Status status) {
   status_ = std::move(status);
-  file_.reset();  // closes; errors do not matter, the file goes
+  // Removed while still locked, then closed (errors do not matter, the file goes).
   fs_->RemoveFile(temp_path_).IgnoreError();
+  UnregisterTempFile(cleanup_handle_);
+  cleanup_handle_ = -1;
+  file_.reset();
   return status_;
 }
 

@@ -4,6 +4,13 @@
 // onto the target, and the target's folder is synced so that the rename is durable too.
 // AtomicFile streams (the PDSM is written tile by tile, never held whole in memory);
 // WriteFileAtomically writes bytes already in memory.
+//
+// What an interrupted writer leaves: nothing once it unwinds (failure, destruction); nothing
+// after SIGINT, SIGTERM or SIGHUP in a binary that called RemoveTempFilesOnTerminationSignals
+// (termination_cleanup.h), where every temporary file in flight is registered; after a
+// SIGKILL or a crash, a "<target>.tmp-XXXXXX" that the first AtomicFile::Create in the same
+// folder by any later process removes (FileSystem::RemoveStaleTempFiles: only files whose
+// writer is gone, known by the lock every live writer holds on its file).
 #ifndef PDSM_CORE_UTIL_ATOMIC_FILE_H_
 #define PDSM_CORE_UTIL_ATOMIC_FILE_H_
 
@@ -29,7 +36,10 @@ namespace pdsm {
 class AtomicFile {
  public:
   // Creates the temporary file. `fs` null means FileSystem::Default(); it must outlive the
-  // AtomicFile.
+  // AtomicFile. The first call of a process for a folder first removes the stale temporary
+  // files there (FileSystem::RemoveStaleTempFiles). FAILED_PRECONDITION when `path` exists
+  // and is not a regular file (CheckReplaceable: a device, a folder, a FIFO, a link): the
+  // rename would replace that node.
   static absl::StatusOr<std::unique_ptr<AtomicFile>> Create(const std::string& path,
                                                             FileSystem* fs = nullptr);
   ~AtomicFile();
@@ -68,7 +78,8 @@ class AtomicFile {
   const std::string path_;
   const std::string temp_path_;
   FileSystem* const fs_;
-  std::unique_ptr<WritableFile> file_;  // null once closed
+  std::unique_ptr<WritableFile> file_;  // null once renamed or removed (holds the lock until)
+  int cleanup_handle_ = -1;             // RegisterTempFile's, while the temporary file exists
   uint64_t size_ = 0;
   absl::Status status_;
   bool committed_ = false;

@@ -1,6 +1,9 @@
 #include "core/util/file_system.h"
 
+#include <dirent.h>
 #include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -8,6 +11,7 @@
 #include <filesystem>
 #include <random>
 
+#include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 
 namespace pdsm {
@@ -24,9 +28,13 @@ constexpr size_t kBufferBytes = 64 * 1024;
 
 class PosixWritableFile final : public WritableFile {
  public:
-  PosixWritableFile(int fd, std::string path) : fd_(fd), path_(std::move(path)) {}
+  // `lock_fd`: a duplicate of `fd` (same open file, so the same flock), kept open after
+  // Close() so that the file stays locked until this object goes.
+  PosixWritableFile(int fd, int lock_fd, std::string path)
+      : fd_(fd), lock_fd_(lock_fd), path_(std::move(path)) {}
   ~PosixWritableFile() override {
     if (fd_ >= 0) ::close(fd_);
+    if (lock_fd_ >= 0) ::close(lock_fd_);
   }
 
   absl::Status WriteAt(uint64_t offset, absl::string_view data) override {
@@ -80,6 +88,7 @@ class PosixWritableFile final : public WritableFile {
   }
 
   int fd_;
+  const int lock_fd_;
   const std::string path_;
   std::string buffer_;  // bytes for [buffer_offset_, buffer_offset_ + size)
   uint64_t buffer_offset_ = 0;
@@ -94,6 +103,33 @@ std::string RandomSuffix() {
   return suffix;
 }
 
+// Whether `name` still names the file open as `fd` (a sweeper may have removed it between
+// our open() and our lock).
+bool StillNamed(int fd, const std::string& name) {
+  struct stat open_file, named;
+  return ::fstat(fd, &open_file) == 0 && ::lstat(name.c_str(), &named) == 0 &&
+         open_file.st_dev == named.st_dev && open_file.st_ino == named.st_ino;
+}
+
+// Removes `path` if it is a stale temporary file: a regular file of ours whose lock we get.
+// The lock is held across the unlink, so a writer that created the file a moment ago and is
+// waiting for its lock sees the name gone (StillNamed) and picks another.
+bool RemoveIfStale(const std::string& path) {
+  struct stat entry;
+  if (::lstat(path.c_str(), &entry) != 0 || !S_ISREG(entry.st_mode) ||
+      entry.st_uid != ::geteuid()) {
+    return false;
+  }
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return false;
+  bool removed = false;
+  if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && StillNamed(fd, path)) {
+    removed = ::unlink(path.c_str()) == 0;
+  }
+  ::close(fd);  // drops the lock
+  return removed;
+}
+
 class PosixFileSystem final : public FileSystem {
  public:
   absl::StatusOr<std::unique_ptr<WritableFile>> NewTempFile(const std::string& target) override {
@@ -102,13 +138,44 @@ class PosixFileSystem final : public FileSystem {
     for (int attempt = 0; attempt < 100; ++attempt) {
       std::string name = absl::StrCat(target, ".tmp-", RandomSuffix());
       const int fd = ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-      if (fd >= 0) return std::make_unique<PosixWritableFile>(fd, std::move(name));
-      if (errno == EEXIST) continue;
-      const int error_number = errno;
-      return ErrnoStatus(error_number, absl::StrCat("cannot create a temporary file for ", target,
-                                                    " in ", ParentDir(target)));
+      if (fd < 0) {
+        if (errno == EEXIST) continue;
+        const int error_number = errno;
+        return ErrnoStatus(error_number, absl::StrCat("cannot create a temporary file for ", target,
+                                                      " in ", ParentDir(target)));
+      }
+      // Blocking: only a sweeper that found the file before we locked it holds the lock, for
+      // as long as it takes to remove it. Where the file system has no flock, the sweeper
+      // cannot lock either and removes nothing, so the file is simply not locked.
+      while (::flock(fd, LOCK_EX) != 0 && errno == EINTR) {
+      }
+      if (!StillNamed(fd, name)) {  // a sweeper took it before we locked it
+        ::close(fd);
+        continue;
+      }
+      const int lock_fd = ::fcntl(fd, F_DUPFD_CLOEXEC, 0);
+      if (lock_fd < 0) {
+        const int error_number = errno;
+        ::unlink(name.c_str());
+        ::close(fd);
+        return ErrnoStatus(error_number, absl::StrCat("cannot lock ", name));
+      }
+      return std::make_unique<PosixWritableFile>(fd, lock_fd, std::move(name));
     }
     return absl::AlreadyExistsError(absl::StrCat("no free temporary name for ", target));
+  }
+
+  int RemoveStaleTempFiles(const std::string& dir) override {
+    const std::string folder = dir.empty() ? "." : dir;
+    DIR* listing = ::opendir(folder.c_str());
+    if (listing == nullptr) return 0;
+    int removed = 0;
+    while (const dirent* entry = ::readdir(listing)) {
+      if (!IsTempFileName(entry->d_name)) continue;
+      if (RemoveIfStale(absl::StrCat(folder, "/", entry->d_name))) ++removed;
+    }
+    ::closedir(listing);
+    return removed;
   }
 
   absl::Status RenameFile(const std::string& from, const std::string& to) override {
@@ -150,6 +217,36 @@ FileSystem* FileSystem::Default() {
 std::string ParentDir(const std::string& path) {
   const std::filesystem::path parent = std::filesystem::path(path).parent_path();
   return parent.empty() ? std::string(".") : parent.string();
+}
+
+bool IsTempFileName(absl::string_view file_name) {
+  constexpr absl::string_view kInfix = ".tmp-";
+  constexpr size_t kSuffix = 6;
+  if (file_name.size() < 1 + kInfix.size() + kSuffix) return false;
+  const size_t infix_at = file_name.size() - kSuffix - kInfix.size();
+  if (file_name.substr(infix_at, kInfix.size()) != kInfix) return false;
+  for (const char c : file_name.substr(file_name.size() - kSuffix)) {
+    if (!absl::ascii_isalnum(static_cast<unsigned char>(c))) return false;
+  }
+  return true;
+}
+
+absl::Status CheckReplaceable(const std::string& path) {
+  struct stat info;
+  if (::lstat(path.c_str(), &info) != 0) {
+    if (errno == ENOENT || errno == ENOTDIR) return absl::OkStatus();  // a new path
+    return LastErrnoStatus("cannot inspect", path);
+  }
+  if (S_ISREG(info.st_mode)) return absl::OkStatus();
+  const char* what = S_ISDIR(info.st_mode)    ? "a folder"
+                     : S_ISLNK(info.st_mode)  ? "a symbolic link (name the file it points to)"
+                     : S_ISCHR(info.st_mode)  ? "a character device"
+                     : S_ISBLK(info.st_mode)  ? "a block device"
+                     : S_ISFIFO(info.st_mode) ? "a FIFO"
+                     : S_ISSOCK(info.st_mode) ? "a socket"
+                                              : "not a regular file";
+  return absl::FailedPreconditionError(
+      absl::StrCat(path, " is ", what, ": only a regular file or a new path can be written"));
 }
 
 }  // namespace pdsm

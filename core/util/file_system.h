@@ -62,9 +62,19 @@ class FileSystem {
   // Creates a new, empty file named "<target>.tmp-XXXXXX" (six random letters and digits,
   // created exclusively: concurrent writers of one target never share a name) in the folder
   // of `target`, with the mode a new file gets (0666 less the umask; not mkstemp's 0600).
+  // The file is locked (flock, exclusive) from its creation until the WritableFile is
+  // destroyed — Close() ends the writing, not the lock — so RemoveStaleTempFiles never takes
+  // the file of a live writer, whichever process it is in; the kernel drops the lock when the
+  // process dies, even by SIGKILL.
   // Errors: the errno's status (NOT_FOUND when the folder does not exist, PERMISSION_DENIED
   // when it cannot be written), naming `target`.
   virtual absl::StatusOr<std::unique_ptr<WritableFile>> NewTempFile(const std::string& target) = 0;
+
+  // Removes what writers that died left behind: every entry of `dir` ("" is ".") whose name
+  // is a temporary name of NewTempFile (IsTempFileName), that is a regular file of this user
+  // (not followed if a link) and whose lock no process holds. Best effort: an entry that
+  // cannot be checked or removed is left. Returns how many files were removed.
+  virtual int RemoveStaleTempFiles(const std::string& dir) = 0;
 
   // rename(2): replaces `to` atomically; a reader sees the old file or the new one.
   virtual absl::Status RenameFile(const std::string& from, const std::string& to) = 0;
@@ -90,6 +100,9 @@ class FileSystemWrapper : public FileSystem {
   }
   absl::Status SyncDir(const std::string& dir) override { return target_->SyncDir(dir); }
   absl::Status RemoveFile(const std::string& path) override { return target_->RemoveFile(path); }
+  int RemoveStaleTempFiles(const std::string& dir) override {
+    return target_->RemoveStaleTempFiles(dir);
+  }
 
  private:
   FileSystem* const target_;
@@ -97,6 +110,17 @@ class FileSystemWrapper : public FileSystem {
 
 // The folder holding `path`, "." for a bare name: what SyncDir must sync after a rename.
 std::string ParentDir(const std::string& path);
+
+// True for a file name (no folder) that NewTempFile makes: at least one character, then
+// ".tmp-" and exactly six ASCII letters or digits at the end.
+bool IsTempFileName(absl::string_view file_name);
+
+// Whether a writer may replace `path` by renaming a new file onto it: OK when nothing is
+// there or it is a regular file. FAILED_PRECONDITION naming `path` and what it is otherwise
+// (a folder, a device such as /dev/full, a FIFO, a socket, a symbolic link — a rename would
+// replace the node itself, not write through it). Not followed: a link is refused whatever
+// it points to.
+absl::Status CheckReplaceable(const std::string& path);
 
 }  // namespace pdsm
 

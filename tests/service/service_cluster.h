@@ -10,7 +10,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <fstream>
 #include <memory>
 #include <optional>
@@ -217,9 +219,13 @@ class ServiceCluster {
     });
   }
 
+  // `timeout` is multiplied by $PDSM_TEST_TIME_SCALE (an integer, 1 when unset): the
+  // sanitizer jobs run instrumented workers several times slower (scripts/sanitize.sh).
   template <typename Predicate>
   pdsm::v1::Job WaitUntil(const std::string& job_id, std::chrono::seconds timeout, Predicate done) {
-    const auto end = std::chrono::steady_clock::now() + timeout;
+    const char* scale = std::getenv("PDSM_TEST_TIME_SCALE");
+    const int factor = scale != nullptr ? std::max(1, std::atoi(scale)) : 1;
+    const auto end = std::chrono::steady_clock::now() + timeout * factor;
     pdsm::v1::Job job;
     while (std::chrono::steady_clock::now() < end) {
       if (GetJob(job_id, &job).ok() && done(job)) break;

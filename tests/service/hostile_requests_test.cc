@@ -1,0 +1,224 @@
+// Requests an attacker or a broken client sends (issue #17, finding 8), against a real
+// coordinator: what a status echoes stays short, ids and names are bounded, control
+// characters cannot forge log lines, asset chunks keep to the protocol, tile indices are
+// checked, and health answers per service.
+#include <climits>
+#include <condition_variable>
+#include <mutex>
+#include <sstream>
+#include <string>
+
+#include <grpcpp/generic/generic_stub.h>
+#include <gtest/gtest.h>
+
+#include "core/assets/mesh_asset.h"
+#include "tests/service/service_cluster.h"
+
+namespace pdsm::testing {
+namespace {
+
+using std::chrono::seconds;
+
+// Short enough for any client's metadata limit, whatever the request held.
+constexpr size_t kShortMessage = 4096;
+
+grpc::Status CallGetJob(ServiceCluster& cluster, const std::string& job_id) {
+  pdsm::v1::Job job;
+  return cluster.GetJob(job_id, &job);
+}
+
+// grpc.health.v1.Health/Check for `service` over a generic stub (the health proto is not in
+// our schema): HealthCheckRequest.service is field 1; the reply's status SERVING is 08 01.
+grpc::Status HealthCheck(ServiceCluster& cluster, const std::string& service, std::string* reply) {
+  grpc::GenericStub stub(*MakeChannel({cluster.address(), ""}));
+  grpc::ClientContext context;
+  PrepareCall(&context, "", seconds(10));
+  std::string request_bytes;
+  if (!service.empty()) {
+    request_bytes = std::string("\x0a", 1) + static_cast<char>(service.size()) + service;
+  }
+  grpc::Slice slice(request_bytes);
+  grpc::ByteBuffer request(&slice, 1), response;
+  std::mutex mu;
+  std::condition_variable cv;
+  bool done = false;
+  grpc::Status status;
+  stub.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,
+                 [&](grpc::Status s) {
+                   std::lock_guard<std::mutex> lock(mu);
+                   status = s;
+                   done = true;
+                   cv.notify_one();
+                 });
+  std::unique_lock<std::mutex> lock(mu);
+  cv.wait(lock, [&] { return done; });
+  std::vector<grpc::Slice> slices;
+  reply->clear();
+  if (status.ok() && response.Dump(&slices).ok()) {
+    for (const grpc::Slice& s : slices) {
+      reply->append(reinterpret_cast<const char*>(s.begin()), s.size());
+    }
+  }
+  return status;
+}
+
+grpc::Status Upload(ServiceCluster& cluster, const std::vector<pdsm::v1::AssetChunk>& chunks) {
+  grpc::ClientContext context;
+  PrepareCall(&context, "", seconds(30));
+  pdsm::v1::UploadAssetResponse response;
+  std::unique_ptr<grpc::ClientWriter<pdsm::v1::AssetChunk>> writer =
+      cluster.JobsStub()->UploadAsset(&context, &response);
+  for (const pdsm::v1::AssetChunk& chunk : chunks) {
+    if (!writer->Write(chunk)) break;
+  }
+  writer->WritesDone();
+  return writer->Finish();
+}
+
+grpc::Status FetchTile(ServiceCluster& cluster, const std::string& job_id, int index) {
+  grpc::ClientContext context;
+  PrepareCall(&context, "", seconds(10));
+  pdsm::v1::FetchTileRequest request;
+  request.set_job_id(job_id);
+  request.set_tile_index(index);
+  auto reader = cluster.JobsStub()->FetchTile(&context, request);
+  pdsm::v1::PdsmChunk chunk;
+  while (reader->Read(&chunk)) {
+  }
+  return reader->Finish();
+}
+
+TEST(HostileRequests, EchoedInputIsBoundedAndIdsAreChecked) {
+  ServiceCluster cluster;
+  ASSERT_TRUE(cluster.StartCoordinator());
+  // A 1,000,000-character job_id used to come back whole in the status message.
+  for (const std::string& id : {std::string(1'000'000, 'a'), std::string("a\nb"), std::string()}) {
+    const grpc::Status s = CallGetJob(cluster, id);
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << id.size();
+    EXPECT_LT(s.error_message().size(), kShortMessage);
+    EXPECT_NE(s.error_message().find("job_id"), std::string::npos) << s.error_message();
+  }
+  EXPECT_EQ(CallGetJob(cluster, "0123456789abcdef").error_code(), grpc::StatusCode::NOT_FOUND);
+  {
+    grpc::ClientContext context;
+    PrepareCall(&context, "", seconds(10));
+    pdsm::v1::GetJobRequest request;
+    request.set_job_id(std::string(100'000, 'z'));
+    auto reader = cluster.JobsStub()->WatchJob(&context, request);
+    pdsm::v1::Job job;
+    while (reader->Read(&job)) {
+    }
+    const grpc::Status s = reader->Finish();
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_LT(s.error_message().size(), kShortMessage);
+  }
+  // A 5 MiB scene name: refused naming the field (it made ListJobs outgrow 4 MiB).
+  pdsm::v1::SubmitBakeRequest submit;
+  submit.set_idempotency_key("long-name");
+  submit.mutable_scene()->set_name(std::string(5 << 20, 'n'));
+  {
+    grpc::ClientContext context;
+    PrepareCall(&context, "", seconds(30));
+    pdsm::v1::Job job;
+    const grpc::Status s = cluster.JobsStub()->SubmitBake(&context, submit, &job);
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_NE(s.error_message().find(": name: at most 256 bytes"), std::string::npos)
+        << s.error_message().substr(0, 200);
+    EXPECT_LT(s.error_message().size(), kShortMessage);
+  }
+}
+
+TEST(HostileRequests, ControlCharactersCannotForgeLogLines) {
+  ServiceCluster cluster;
+  ASSERT_TRUE(cluster.StartCoordinator());
+  const auto workers = cluster.WorkersStub();
+  {
+    grpc::ClientContext context;
+    PrepareCall(&context, "", seconds(10));
+    pdsm::v1::LeaseTaskRequest request;
+    request.set_worker_id("w1\n[coordinator] [info] forged by worker_id");
+    pdsm::v1::LeaseTaskResponse response;
+    EXPECT_EQ(workers->LeaseTask(&context, request, &response).error_code(),
+              grpc::StatusCode::INVALID_ARGUMENT);
+  }
+  {
+    grpc::ClientContext context;
+    PrepareCall(&context, "", seconds(10));
+    pdsm::v1::ReportFailureRequest request;
+    request.set_worker_id("w1");
+    request.set_lease_id(12345);
+    request.set_reason("boom\n[2030-01-01 00:00:00.000] [coordinator] [error] forged\x1b[2J");
+    pdsm::v1::ReportFailureResponse response;
+    ASSERT_TRUE(workers->ReportFailure(&context, request, &response).ok());
+  }
+  {
+    grpc::ClientContext context;
+    PrepareCall(&context, "", seconds(10));
+    pdsm::v1::ReportFailureRequest request;
+    request.set_worker_id("w1\r\nforged by a failure's worker_id");
+    pdsm::v1::ReportFailureResponse response;
+    EXPECT_EQ(workers->ReportFailure(&context, request, &response).error_code(),
+              grpc::StatusCode::INVALID_ARGUMENT);
+  }
+  cluster.coordinator().Signal(SIGTERM);
+  cluster.coordinator().Wait(std::chrono::seconds(30));
+  const std::string log = cluster.Log("coordinator.log");
+  ASSERT_NE(log.find("boom\\n[2030-01-01"), std::string::npos) << log;
+  std::istringstream lines(log);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.find("forged") == std::string::npos) continue;
+    EXPECT_NE(line.find("boom"), std::string::npos) << "a forged line: " << line;
+    EXPECT_EQ(line.find('\x1b'), std::string::npos) << "a raw escape sequence: " << line;
+  }
+}
+
+TEST(HostileRequests, AssetChunksKeepToTheProtocol) {
+  ServiceCluster cluster;
+  ASSERT_TRUE(cluster.StartCoordinator());
+  const std::string big(2'400'000, 'x');  // proto: at most 1 MiB per chunk
+  pdsm::v1::AssetChunk chunk;
+  chunk.set_sha256(Sha256Hex(big));
+  chunk.set_total_bytes(big.size());
+  chunk.set_data(big);
+  grpc::Status s = Upload(cluster, {chunk});
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(s.error_message().find("at most 1048576"), std::string::npos) << s.error_message();
+
+  pdsm::v1::AssetChunk first, second;
+  first.set_sha256(std::string(64, 'a'));
+  first.set_total_bytes(200);
+  first.set_data(std::string(100, 'y'));
+  second.set_sha256(std::string(64, 'b'));  // another blob mid-stream
+  second.set_data(std::string(100, 'y'));
+  s = Upload(cluster, {first, second});
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(s.error_message().find("another blob"), std::string::npos) << s.error_message();
+}
+
+TEST(HostileRequests, TileIndicesOutsideTheJobAreInvalidAndHealthIsPerService) {
+  ServiceCluster cluster;
+  ASSERT_TRUE(cluster.StartCoordinator());
+  cluster.AddWorker();
+  const std::string job_id = cluster.Submit(WriteServiceScene(cluster.dir(), 32, 4, 16));
+  ASSERT_FALSE(job_id.empty());
+  ASSERT_EQ(cluster.WaitForEnd(job_id).state(), pdsm::v1::SUCCEEDED);
+  for (const int index : {-1, INT_MIN, 4, INT_MAX}) {  // 2 x 2 tiles
+    EXPECT_EQ(FetchTile(cluster, job_id, index).error_code(), grpc::StatusCode::INVALID_ARGUMENT)
+        << index;
+  }
+  EXPECT_EQ(FetchTile(cluster, job_id, 3).error_code(), grpc::StatusCode::FAILED_PRECONDITION)
+      << "a finished job's tiles are not served";
+  EXPECT_EQ(FetchTile(cluster, "0123456789abcdef", 0).error_code(), grpc::StatusCode::NOT_FOUND);
+
+  std::string reply;
+  for (const std::string& service : {"", "pdsm.v1.PdsmJobs", "pdsm.v1.PdsmWorkers"}) {
+    const grpc::Status s = HealthCheck(cluster, service, &reply);
+    ASSERT_TRUE(s.ok()) << service << ": " << s.error_message();
+    EXPECT_EQ(reply, std::string("\x08\x01", 2)) << service << ": not SERVING";
+  }
+  EXPECT_EQ(HealthCheck(cluster, "pdsm.v1.NoSuchService", &reply).error_code(),
+            grpc::StatusCode::NOT_FOUND);
+}
+
+}  // namespace
+}  // namespace pdsm::testing
