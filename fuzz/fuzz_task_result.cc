@@ -17,6 +17,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   tile.height = 1 + (data[0] / 8) % 8;
   pdsm::v1::TileEventsData events;
   if (!events.ParseFromArray(data + 1, static_cast<int>(size - 1))) return 0;
-  pdsm::TileEventsFromProto(events, tile).status().IgnoreError();
+  const pdsm::ResultBounds bounds{.batch_samples = 1 + data[0] % 64, .z_min = 0.5};
+  pdsm::TileEventsFromProto(events, tile, bounds).status().IgnoreError();
   return 0;
 }

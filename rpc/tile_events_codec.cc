@@ -17,7 +17,7 @@ void TileEventsToProto(const TileEvents& events, pdsm::v1::TileEventsData* data)
 }
 
 absl::StatusOr<TileEvents> TileEventsFromProto(const pdsm::v1::TileEventsData& data,
-                                               const TileRect& tile) {
+                                               const TileRect& tile, const ResultBounds& bounds) {
   const size_t pixels = static_cast<size_t>(tile.width) * tile.height;
   const auto bad = [&](const std::string& what) {
     return absl::InvalidArgumentError(absl::StrCat("events (tile ", tile.index, "): ", what));
@@ -48,16 +48,28 @@ absl::StatusOr<TileEvents> TileEventsFromProto(const pdsm::v1::TileEventsData& d
   events.height = tile.height;
   events.offsets.assign(data.offsets().begin(), data.offsets().end());
   events.events.reserve(data.z_size());
+  // Events are stored as float: a depth rounded from z_min may sit just below it.
+  const float z_min = std::nextafter(static_cast<float>(bounds.z_min), -1.0f);
   for (size_t p = 0; p < pixels; ++p) {
     const uint64_t begin = events.offsets[p], end = events.offsets[p + 1];
+    int64_t shadowed = 0;
     for (uint64_t e = begin; e < end; ++e) {
       const float z = data.z(static_cast<int>(e));
       const int32_t count = data.count(static_cast<int>(e));
       if (!std::isfinite(z)) return bad(absl::StrCat("z[", e, "]: must be finite"));
+      if (z < z_min) {
+        return bad(absl::StrCat("z[", e, "]: nearer than the plan's rays start (", z, " < ",
+                                bounds.z_min, ")"));
+      }
       if (e > begin && !(z > events.events.back().z)) {
         return bad(absl::StrCat("z[", e, "]: depths of pixel ", p, " must increase"));
       }
       if (count == 0) return bad(absl::StrCat("count[", e, "]: must not be 0"));
+      shadowed += count;
+      if (shadowed < 0 || shadowed > bounds.batch_samples) {
+        return bad(absl::StrCat("count[", e, "]: pixel ", p, " would have ", shadowed,
+                                " shadowed samples of a batch of ", bounds.batch_samples));
+      }
       events.events.push_back(Event{z, count});
     }
   }

@@ -14,11 +14,24 @@ namespace pdsm {
 // Fills `data` with the events' offsets and (z, count) columns.
 void TileEventsToProto(const TileEvents& events, pdsm::v1::TileEventsData* data);
 
+// What a correct result of one task can hold (the plan and the lease say it): each pixel's
+// running count of shadowed samples stays within [0, batch_samples] after every event (a
+// sample enters at most once before it leaves), and every depth is at least z_min, the
+// nearest depth any ray of the plan starts at (BakePlan::z_clip_near: tile reach clips every
+// ray there, and scan conversion emits nothing before a ray's start).
+struct ResultBounds {
+  int batch_samples = 0;  // Task.sample_end - Task.sample_begin
+  double z_min = 0;       // world units, light space
+};
+
 // INVALID_ARGUMENT naming the field when: offsets are not tile pixels + 1, do not start at 0,
 // decrease or do not end at the event count; z and count differ in length; a depth is not
-// finite; a pixel's depths are not strictly increasing; a count is 0.
+// finite, is nearer than bounds.z_min, or a pixel's depths are not strictly increasing; a
+// count is 0 or takes the pixel's running sum outside [0, bounds.batch_samples]. The last two
+// are what keeps a forged but well-formed result (issue #17: counts of +2147483647 or -5,
+// negative depths) out of a PDSM.
 absl::StatusOr<TileEvents> TileEventsFromProto(const pdsm::v1::TileEventsData& data,
-                                               const TileRect& tile);
+                                               const TileRect& tile, const ResultBounds& bounds);
 
 }  // namespace pdsm
 

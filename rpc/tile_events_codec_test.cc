@@ -1,5 +1,6 @@
 #include "rpc/tile_events_codec.h"
 
+#include <cmath>
 #include <limits>
 
 #include <gtest/gtest.h>
@@ -10,6 +11,9 @@ namespace {
 // A 2x1 tile: pixel 0 has two events, pixel 1 none.
 TileRect Tile() { return TileRect{.index = 3, .x0 = 4, .y0 = 8, .width = 2, .height = 1}; }
 
+// A batch of 2 samples; rays start at depth 1.
+ResultBounds Bounds() { return ResultBounds{.batch_samples = 2, .z_min = 1.0}; }
+
 pdsm::v1::TileEventsData Valid() {
   pdsm::v1::TileEventsData data;
   for (uint64_t o : {0, 2, 2}) data.add_offsets(o);
@@ -19,7 +23,7 @@ pdsm::v1::TileEventsData Valid() {
 }
 
 TEST(TileEventsFromProto, DecodesAValidResult) {
-  absl::StatusOr<TileEvents> events = TileEventsFromProto(Valid(), Tile());
+  absl::StatusOr<TileEvents> events = TileEventsFromProto(Valid(), Tile(), Bounds());
   ASSERT_TRUE(events.ok()) << events.status();
   EXPECT_EQ(events->tile_index, 3);
   EXPECT_EQ(events->x0, 4);
@@ -30,7 +34,7 @@ TEST(TileEventsFromProto, DecodesAValidResult) {
 }
 
 void ExpectRefused(const pdsm::v1::TileEventsData& data, const std::string& field) {
-  absl::StatusOr<TileEvents> events = TileEventsFromProto(data, Tile());
+  absl::StatusOr<TileEvents> events = TileEventsFromProto(data, Tile(), Bounds());
   ASSERT_EQ(events.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(events.status().message().find(field), std::string::npos) << events.status();
 }
@@ -66,8 +70,41 @@ TEST(TileEventsFromProto, RefusesWhatDoesNotFitTheTile) {
   ExpectRefused(data, "count[0]");
 }
 
+// Issue #17 finding 3: well-formed results a correct worker cannot produce.
+TEST(TileEventsFromProto, RefusesCountsAndDepthsNoBakeCanProduce) {
+  pdsm::v1::TileEventsData data = Valid();
+  data.set_count(0, std::numeric_limits<int32_t>::max());
+  ExpectRefused(data, "count[0]: pixel 0 would have 2147483647 shadowed samples");
+
+  data = Valid();
+  data.set_count(0, -5);
+  ExpectRefused(data, "count[0]");  // below zero at once
+
+  data = Valid();
+  data.set_count(0, 3);  // more samples than the batch has
+  ExpectRefused(data, "count[0]");
+
+  data = Valid();
+  data.set_count(1, -3);  // leaves more samples than entered
+  ExpectRefused(data, "count[1]");
+
+  data = Valid();
+  data.set_z(0, -1.5f);
+  ExpectRefused(data, "z[0]: nearer than the plan's rays start");
+
+  // A depth at the start of the rays, rounded to float below it, is a real event.
+  data = Valid();
+  data.set_z(0, std::nextafter(1.0f, 0.0f));
+  EXPECT_TRUE(TileEventsFromProto(data, Tile(), Bounds()).ok());
+
+  // Ending shadowed (an open ray behind the last occluder) is within the bounds.
+  data = Valid();
+  data.set_count(1, -1);
+  EXPECT_TRUE(TileEventsFromProto(data, Tile(), Bounds()).ok());
+}
+
 TEST(TileEventsToProto, RoundTripsThroughTheDecoder) {
-  absl::StatusOr<TileEvents> events = TileEventsFromProto(Valid(), Tile());
+  absl::StatusOr<TileEvents> events = TileEventsFromProto(Valid(), Tile(), Bounds());
   ASSERT_TRUE(events.ok()) << events.status();
   pdsm::v1::TileEventsData encoded;
   TileEventsToProto(*events, &encoded);

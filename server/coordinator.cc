@@ -359,9 +359,11 @@ absl::StatusOr<bool> Coordinator::ReportResult(
   // outside every lock, and what keeps a hostile result from reaching the tile.
   std::vector<TileEvents> events;
   events.reserve(lease->tiles.size());
+  const ResultBounds bounds{.batch_samples = lease->sample_end - lease->sample_begin,
+                            .z_min = plan->z_clip_near};
   for (size_t i = 0; i < lease->tiles.size(); ++i) {
     absl::StatusOr<TileEvents> decoded =
-        TileEventsFromProto(tiles[static_cast<int>(i)], plan->tiles.at(lease->tiles[i]));
+        TileEventsFromProto(tiles[static_cast<int>(i)], plan->tiles.at(lease->tiles[i]), bounds);
     if (!decoded.ok()) return decoded.status();
     events.push_back(*std::move(decoded));
   }

@@ -1,5 +1,7 @@
 #include "server/workers_service.h"
 
+#include <cmath>
+
 #include "absl/strings/str_cat.h"
 #include "rpc/grpc_support.h"
 #include "server/call_replies.h"
@@ -85,6 +87,11 @@ grpc::ServerUnaryReactor* WorkersService::ReportResult(grpc::CallbackServerConte
     return Answer(context, s);
   }
   if (absl::Status s = CheckWorkerId(request->worker_id()); !s.ok()) return Answer(context, s);
+  if (!std::isfinite(request->seconds()) || request->seconds() < 0) {
+    return Answer(
+        context,
+        ToGrpcStatus(absl::InvalidArgumentError("seconds: must be finite and not negative")));
+  }
   absl::StatusOr<bool> accepted =
       coordinator_->ReportResult(request->worker_id(), request->lease_id(), request->tiles());
   if (!accepted.ok()) return Answer(context, accepted.status());

@@ -3,6 +3,7 @@
 // characters cannot forge log lines, asset chunks keep to the protocol, tile indices are
 // checked, and health answers per service.
 #include <climits>
+#include <cmath>
 #include <condition_variable>
 #include <mutex>
 #include <sstream>
@@ -218,6 +219,68 @@ TEST(HostileRequests, TileIndicesOutsideTheJobAreInvalidAndHealthIsPerService) {
   }
   EXPECT_EQ(HealthCheck(cluster, "pdsm.v1.NoSuchService", &reply).error_code(),
             grpc::StatusCode::NOT_FOUND);
+}
+
+// Issue #17 finding 3: a worker that leases a real task and answers it with well-formed but
+// impossible events (a count no batch has, a negative depth, NaN seconds) is refused, its
+// lease stays open, and once it expires an honest worker bakes the same bytes as `pdsm bake`.
+TEST(HostileRequests, ForgedResultsAreRefusedAndTheBakeStaysExact) {
+  ServiceCluster cluster(CoordinatorArgs({"--lease-seconds", "2"}));
+  ASSERT_TRUE(cluster.StartCoordinator());
+  const std::string scene = WriteServiceScene(cluster.dir(), 64, 16, 32);
+  const std::string expected = LocalBakeBytes(cluster.dir(), scene);
+  const std::string job_id = cluster.Submit(scene);
+  const auto workers = cluster.WorkersStub();
+
+  pdsm::v1::Task task;
+  for (int attempt = 0; attempt < 100 && task.tile_indices_size() == 0; ++attempt) {
+    grpc::ClientContext context;
+    PrepareCall(&context, "", seconds(10));
+    pdsm::v1::LeaseTaskRequest request;
+    request.set_worker_id("forger");
+    pdsm::v1::LeaseTaskResponse response;
+    ASSERT_TRUE(workers->LeaseTask(&context, request, &response).ok());
+    if (response.has_task()) task = response.task();
+  }
+  ASSERT_GT(task.tile_indices_size(), 0) << "no task leased";
+  const int batch = task.sample_end() - task.sample_begin();
+
+  // One pixel with events, the others none: each tile of the task is 32x32.
+  const auto forged = [&](float z, int32_t count, double seconds_spent) {
+    pdsm::v1::ReportResultRequest request;
+    request.set_worker_id("forger");
+    request.set_lease_id(task.lease_id());
+    request.set_seconds(seconds_spent);
+    for (int i = 0; i < task.tile_indices_size(); ++i) {
+      pdsm::v1::TileEventsData* tile = request.add_tiles();
+      tile->add_offsets(0);
+      for (int p = 0; p < 32 * 32; ++p) tile->add_offsets(i == 0 ? 1 : 0);
+      if (i == 0) {
+        tile->add_z(z);
+        tile->add_count(count);
+      }
+    }
+    grpc::ClientContext context;
+    PrepareCall(&context, "", seconds(10));
+    pdsm::v1::ReportResultResponse response;
+    return workers->ReportResult(&context, request, &response);
+  };
+  const grpc::Status too_many = forged(9.0f, 2147483647, 1.0);
+  EXPECT_EQ(too_many.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(
+      too_many.error_message().find("shadowed samples of a batch of " + std::to_string(batch)),
+      std::string::npos)
+      << too_many.error_message();
+  EXPECT_EQ(forged(9.0f, -5, 1.0).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(forged(-1.0f, 1, 1.0).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(forged(9.0f, 1, std::nan("")).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+
+  cluster.AddWorker();
+  const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
+  ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error();
+  const std::string out = cluster.dir().File("fetched.exr");
+  ASSERT_EQ(cluster.Pdsm("fetch " + job_id + " -o " + out).exit_code, 0);
+  EXPECT_TRUE(ReadBytes(out) == expected) << "a forged result reached the PDSM";
 }
 
 }  // namespace
