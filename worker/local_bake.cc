@@ -13,6 +13,7 @@
 #include "core/pdsm/pdsm_file.h"
 #include "core/pipeline/bake_engine.h"
 #include "core/util/work_queue.h"
+#include "gl/platform/osmesa_context.h"
 #include "worker/local_output.h"
 
 namespace pdsm {
@@ -147,6 +148,9 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
       std::make_shared<LocalOutput>(*plan, writer->get(), options.preview_path, options.fs);
 
   const int threads = ThreadCount(*plan, options);
+  // One GL context per thread: llvmpipe's own helper threads per context would only
+  // oversubscribe the cores and cost ~27 MiB each (docs/performance.md, "GL memory").
+  gl::ShareCoresBetweenContexts(threads);
   EngineOptions engine_options;
   engine_options.scheduler.lease_ms = kLocalLeaseMs;
   // Enough open groups that no thread waits while another judges a stage.

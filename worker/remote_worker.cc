@@ -12,6 +12,7 @@
 #include "core/bake/plan_fingerprint.h"
 #include "core/scene/scene_loader.h"
 #include "core/util/work_queue.h"
+#include "gl/platform/osmesa_context.h"
 #include "worker/bake_task.h"
 
 namespace pdsm {
@@ -46,7 +47,8 @@ RemoteWorker::~RemoteWorker() = default;
 
 absl::Status RemoteWorker::Run(const std::atomic<bool>& stop) {
   const int threads = std::max(1, options_.threads);
-  WorkQueue queue(threads + 1);  // the task threads and the lease keeper
+  gl::ShareCoresBetweenContexts(threads);  // one context per task thread, as the local bake
+  WorkQueue queue(threads + 1);            // the task threads and the lease keeper
   queue.Post([&] { KeepLeases(stop); });
   for (int t = 0; t < threads; ++t) queue.Post([&] { ThreadLoop(stop); });
   queue.Wait();
