@@ -41,6 +41,8 @@ class EventEmitter {
     shadowed_ = false;
   }
 
+  bool shadowed() const { return shadowed_; }
+
   void Piece(double z_in, double z_out, double z_sm) {
     if (z_sm <= z_in) {
       if (!shadowed_) Emit(z_in, +1);
@@ -87,14 +89,31 @@ int64_t ScanConvertRay(const ShadowMapView& sm, const RayInShadowMap& ray, Proje
 
   const DepthAlongRay depth_at(ray, projection);
   EventEmitter emitter(events);
-  double z_in = ray.z_near;
+  // A piece's depths are computed only when its texel holds a caster, or when a shadowed ray
+  // leaves at z_in: most texels a ray crosses are empty, and each depth is a division. The
+  // depth at a fraction is a pure function of it, so the events are the same.
+  double f_in = 0.0, z_in = ray.z_near;
+  bool z_in_known = true;
   int64_t walked = 0;
   while (true) {
     ++walked;
     const double f_out = std::min({next_x, next_y, 1.0});
-    const double z_out = depth_at(f_out);
-    const double z_sm = sm.depth[static_cast<size_t>(iy) * win.width + ix];
-    emitter.Piece(z_in, z_out, z_sm);
+    const float z_sm = sm.depth[static_cast<size_t>(iy) * win.width + ix];
+    if (z_sm == std::numeric_limits<float>::infinity()) {
+      // No caster: the piece is lit whatever its depths (Piece's last case).
+      if (emitter.shadowed()) {
+        if (!z_in_known) z_in = depth_at(f_in);
+        emitter.Piece(z_in, kInf, kInf);
+      }
+      z_in_known = false;
+    } else {
+      if (!z_in_known) z_in = depth_at(f_in);
+      const double z_out = depth_at(f_out);
+      emitter.Piece(z_in, z_out, z_sm);
+      z_in = z_out;
+      z_in_known = true;
+    }
+    f_in = f_out;
     if (f_out >= 1.0) break;
     // Step into the next texel; stepping out of the window can only be rounding at the end.
     if (next_x <= next_y) {
@@ -105,7 +124,6 @@ int64_t ScanConvertRay(const ShadowMapView& sm, const RayInShadowMap& ray, Proje
       next_y += delta_y;
     }
     if (ix < 0 || ix >= win.width || iy < 0 || iy >= win.height) break;
-    z_in = z_out;
   }
   if (end == SegmentEnd::kClose) emitter.Close(ray.z_far);
   return walked;
