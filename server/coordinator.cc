@@ -73,6 +73,9 @@ absl::StatusOr<std::unique_ptr<Coordinator>> Coordinator::Start(const Coordinato
 }
 
 Coordinator::~Coordinator() {
+  // Every queued submit is answered: its caller's reactor waits for it.
+  admission_.Wait();
+  admission_.Stop();
   stopping_.Notify();
   // Unfinished work is safe to drop: everything not yet durable is redone on restart.
   pool_.Stop();
@@ -101,6 +104,11 @@ absl::StatusOr<pdsm::v1::Job> Coordinator::SubmitBake(const pdsm::v1::SubmitBake
     if (absl::Status s = Activate(*stored, {}, *std::move(plan)); !s.ok()) return s;
   }
   return GetJob(stored->job_id);
+}
+
+void Coordinator::SubmitBakeAsync(const pdsm::v1::SubmitBakeRequest* request,
+                                  std::function<void(absl::StatusOr<pdsm::v1::Job>)> done) {
+  admission_.Post([this, request, done = std::move(done)] { done(SubmitBake(*request)); });
 }
 
 absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<int>& done_tiles,

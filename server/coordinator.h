@@ -10,11 +10,14 @@
 // On start every unfinished job found in the data dir resumes with only its missing tiles.
 //
 // Thread-safe. Heavy work (tile assembly, the final file) runs on an internal pool, never on
-// the caller's thread, except SubmitBake's scene validation and planning.
+// the caller's thread; scene validation and planning of a submit run on an admission thread
+// of their own (SubmitBakeAsync), one submit at a time, so that a large submit neither
+// blocks a gRPC thread nor runs beside another one.
 #ifndef PDSM_SERVER_COORDINATOR_H_
 #define PDSM_SERVER_COORDINATOR_H_
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -67,6 +70,11 @@ class Coordinator {
   // ---- Job API ----
   CoordinatorAssets& assets() { return *assets_; }
   absl::StatusOr<pdsm::v1::Job> SubmitBake(const pdsm::v1::SubmitBakeRequest& request);
+  // SubmitBake on the admission thread; `done` is called there with its result, exactly once
+  // (also when the coordinator is being destroyed: queued submits run before it stops).
+  // `request` must outlive the call of `done`.
+  void SubmitBakeAsync(const pdsm::v1::SubmitBakeRequest* request,
+                       std::function<void(absl::StatusOr<pdsm::v1::Job>)> done);
   absl::StatusOr<pdsm::v1::Job> GetJob(const std::string& job_id);
   absl::StatusOr<std::vector<pdsm::v1::Job>> ListJobs(int limit);
   absl::StatusOr<pdsm::v1::Job> CancelJob(const std::string& job_id);
@@ -122,6 +130,8 @@ class Coordinator {
   // Declared last: destroyed (stopped, joined) first, while what its work uses still exists.
   // Runs the ticker and the engine's heavy work.
   WorkQueue pool_;
+  // Submits, one at a time; drained (not dropped) by the destructor, which answers them.
+  WorkQueue admission_{1};
 };
 
 }  // namespace pdsm

@@ -206,6 +206,10 @@ int main(int argc, char** argv) {
   app.add_option("--max-job-pixels", o.limits.max_job_pixels, "Largest PDSM (width x height)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  app.add_option("--max-job-tiles", o.limits.max_job_tiles,
+                 "Most tiles per job (resolution / tileSize, squared)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   app.add_option("--max-samples", o.limits.max_samples, "Most light samples per job")
       ->check(CLI::Range(1, 65536))
       ->capture_default_str();

@@ -1,5 +1,7 @@
 #include "server/job_admission.h"
 
+#include <algorithm>
+
 #include <random>
 
 #include "absl/base/thread_annotations.h"
@@ -46,6 +48,16 @@ absl::StatusOr<BakePlan> PlanJobScene(const pdsm::v1::Scene& scene, const std::s
       return absl::ResourceExhaustedError(absl::StrFormat(
           "%s: bake.resolution: %dx%d is %d pixels, above this coordinator's limit of %d", label,
           loaded->bake.width, loaded->bake.height, pixels, limits->max_job_pixels));
+    }
+    const int tile = std::max(1, loaded->bake.tile_size);
+    const int64_t tiles = ((int64_t{loaded->bake.width} + tile - 1) / tile) *
+                          ((int64_t{loaded->bake.height} + tile - 1) / tile);
+    if (tiles > limits->max_job_tiles) {
+      return absl::ResourceExhaustedError(absl::StrFormat(
+          "%s: bake.tileSize: %d makes %d tiles of the %dx%d PDSM, above this coordinator's "
+          "limit of %d (a larger tileSize)",
+          label, loaded->bake.tile_size, tiles, loaded->bake.width, loaded->bake.height,
+          limits->max_job_tiles));
     }
     if (loaded->bake.samples > limits->max_samples) {
       return absl::ResourceExhaustedError(

@@ -18,6 +18,10 @@ namespace pdsm {
 
 struct AdmissionLimits {
   int64_t max_job_pixels = int64_t{8192} * 8192;
+  // Tiles are the unit of the plan, the job store and the tile files: checked before the plan
+  // is made, so that a 1 KB request cannot make the coordinator plan 67 million tiles (8192^2
+  // at tile size 1 took 87 s and 5 GB). 2^18 is 8192^2 at tile size 16.
+  int64_t max_job_tiles = int64_t{1} << 18;
   int max_samples = 65536;
   int64_t max_triangles = 20'000'000;
 };

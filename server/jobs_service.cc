@@ -183,14 +183,19 @@ grpc::ServerUnaryReactor* JobsService::SubmitBake(grpc::CallbackServerContext* c
   if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
     return Answer(context, s);
   }
-  absl::StatusOr<pdsm::v1::Job> job = coordinator_->SubmitBake(*request);
-  if (!job.ok()) {
-    spdlog::warn("SubmitBake refused ({}): {}", context->peer(),
-                 Printable(job.status().message(), 1024));
-    return Answer(context, job.status());
-  }
-  *response = *std::move(job);
-  return Answer(context, grpc::Status::OK);
+  // Planned on the coordinator's admission thread: a gRPC thread only hands it over.
+  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  coordinator_->SubmitBakeAsync(request, [reactor, response, peer = context->peer()](
+                                             absl::StatusOr<pdsm::v1::Job> job) {
+    if (!job.ok()) {
+      spdlog::warn("SubmitBake refused ({}): {}", peer, Printable(job.status().message(), 1024));
+      reactor->Finish(ToGrpcStatus(job.status()));
+      return;
+    }
+    *response = *std::move(job);
+    reactor->Finish(grpc::Status::OK);
+  });
+  return reactor;
 }
 
 grpc::ServerUnaryReactor* JobsService::GetJob(grpc::CallbackServerContext* context,

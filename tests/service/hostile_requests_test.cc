@@ -283,5 +283,29 @@ TEST(HostileRequests, ForgedResultsAreRefusedAndTheBakeStaysExact) {
   EXPECT_TRUE(ReadBytes(out) == expected) << "a forged result reached the PDSM";
 }
 
+// Issue #17 finding 1: the legal worst submit of the default limits (8192^2 pixels at tile
+// size 1, one sample: 67 million tiles) is refused before anything is planned, naming the
+// field and the way out; the coordinator then takes the same scene at a tile size within the
+// limit (planned on its admission thread) and keeps answering.
+TEST(HostileRequests, TilesPerJobAreBoundedBeforePlanning) {
+  ServiceCluster cluster;
+  ASSERT_TRUE(cluster.StartCoordinator());
+  const std::string worst = WriteServiceScene(cluster.dir(), 8192, 1, 1);
+  const CommandResult refused = cluster.Pdsm("submit " + worst);
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.err.find("bake.tileSize: 1 makes 67108864 tiles"), std::string::npos)
+      << refused.err;
+  EXPECT_NE(refused.err.find("limit of 262144"), std::string::npos) << refused.err;
+
+  TempDir within_dir;
+  const std::string within = WriteServiceScene(within_dir, 8192, 1, 16);
+  const std::string job_id = cluster.Submit(within);
+  ASSERT_FALSE(job_id.empty());
+  pdsm::v1::Job job;
+  ASSERT_TRUE(cluster.GetJob(job_id, &job).ok());
+  EXPECT_EQ(job.tiles_total(), 262144);
+  EXPECT_TRUE(cluster.Pdsm("cancel " + job_id).exit_code == 0);
+}
+
 }  // namespace
 }  // namespace pdsm::testing
