@@ -216,6 +216,19 @@ pdsm::v1::Job Coordinator::ToProto(const JobRecord& record) const {
   job.set_height(record.height);
   job.set_samples(record.samples);
   job.set_eta_seconds(record.state == pdsm::v1::SUCCEEDED ? 0 : -1);
+  // What a viewer needs to plan the job's PDSM itself (ListJobs' records carry no scene).
+  if (!record.scene.empty()) {
+    absl::StatusOr<pdsm::v1::BakeParams> bake =
+        JobBakeParams(record.scene, absl::StrCat("job ", record.job_id));
+    if (bake.ok()) {
+      *job.mutable_bake() = *std::move(bake);
+    } else {
+      spdlog::warn("{}", std::string(bake.status().message()));
+    }
+  }
+  if (const std::shared_ptr<StoredJob> active = Active(record.job_id); active && !active->ended()) {
+    job.set_plan_fingerprint(active->fingerprint());
+  }
   if (!IsTerminal(record.state)) {
     if (const std::optional<JobProgress> p = engine_.Progress(record.job_id)) {
       if (p->started) job.set_state(pdsm::v1::RUNNING);

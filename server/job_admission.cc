@@ -1,8 +1,10 @@
 #include "server/job_admission.h"
 
 #include <algorithm>
-
 #include <random>
+
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/wire_format_lite.h>
 
 #include "absl/base/thread_annotations.h"
 #include "absl/strings/str_cat.h"
@@ -91,6 +93,39 @@ absl::StatusOr<JobRecord> NewJobRecord(const pdsm::v1::SubmitBakeRequest& reques
     return absl::InternalError("cannot serialize the scene");
   }
   return record;
+}
+
+absl::StatusOr<pdsm::v1::BakeParams> JobBakeParams(const std::string& serialized_scene,
+                                                   const std::string& label) {
+  using google::protobuf::internal::WireFormatLite;
+  // Only Scene.light (3) and Scene.bake (4) are parsed; the meshes (which may be large inline
+  // arrays) are skipped by length.
+  constexpr int kLightField = 3, kBakeField = 4;
+  google::protobuf::io::CodedInputStream in(
+      reinterpret_cast<const uint8_t*>(serialized_scene.data()),
+      static_cast<int>(serialized_scene.size()));
+  pdsm::v1::Scene scene;
+  const absl::Status corrupt =
+      absl::DataLossError(absl::StrCat(label, ": stored scene is corrupt"));
+  while (const uint32_t tag = in.ReadTag()) {
+    const int field = WireFormatLite::GetTagFieldNumber(tag);
+    const bool wanted = field == kLightField || field == kBakeField;
+    if (!wanted ||
+        WireFormatLite::GetTagWireType(tag) != WireFormatLite::WIRETYPE_LENGTH_DELIMITED) {
+      if (!WireFormatLite::SkipField(&in, tag)) return corrupt;
+      continue;
+    }
+    uint32_t length = 0;
+    if (!in.ReadVarint32(&length)) return corrupt;
+    const auto limit = in.PushLimit(static_cast<int>(length));
+    google::protobuf::MessageLite* target =
+        field == kLightField ? static_cast<google::protobuf::MessageLite*>(scene.mutable_light())
+                             : scene.mutable_bake();
+    if (!target->MergeFromCodedStream(&in) || !in.ConsumedEntireMessage()) return corrupt;
+    in.PopLimit(limit);
+  }
+  if (!in.ConsumedEntireMessage()) return corrupt;
+  return EffectiveBakeParams(scene.bake(), scene.light().has_sun(), label);
 }
 
 std::string RandomHex(int bytes) {

@@ -41,6 +41,13 @@ absl::StatusOr<BakePlan> PlanJobScene(const pdsm::v1::Scene& scene, const std::s
 absl::StatusOr<JobRecord> NewJobRecord(const pdsm::v1::SubmitBakeRequest& request,
                                        const BakePlan& plan, int64_t now_unix_ms);
 
+// The effective bake settings (EffectiveBakeParams, core/scene/scene_loader.h) of a job's
+// stored scene, read from its serialized bytes without parsing the meshes. DATA_LOSS when the
+// bytes are not a scene; INVALID_ARGUMENT (prefixed with `label`) for bake fields the loader
+// refuses.
+absl::StatusOr<pdsm::v1::BakeParams> JobBakeParams(const std::string& serialized_scene,
+                                                   const std::string& label);
+
 // `bytes` random bytes in lowercase hex (std::random_device).
 std::string RandomHex(int bytes);
 

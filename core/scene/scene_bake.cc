@@ -220,4 +220,49 @@ absl::StatusOr<BakeSettings> BuildBake(const FieldChecker& checks, const pdsm::v
   return out;
 }
 
+pdsm::v1::BakeParams BakeParamsOf(const BakeSettings& b) {
+  pdsm::v1::BakeParams out;
+  out.add_resolution(b.width);
+  out.add_resolution(b.height);
+  out.set_samples(b.samples);
+  out.set_shadow_map_resolution(b.shadow_map_resolution);
+  out.set_epsilon(b.epsilon);
+  if (b.depth_bias) out.set_depth_bias(*b.depth_bias);
+  out.set_slope_bias(b.slope_bias);
+  out.set_tile_size(b.tile_size);
+  out.set_seed(b.seed);
+  switch (b.sampling) {
+    case SamplingPattern::kStratified:
+      out.set_sampling(pdsm::v1::STRATIFIED);
+      break;
+    case SamplingPattern::kUniform:
+      out.set_sampling(pdsm::v1::UNIFORM);
+      break;
+    case SamplingPattern::kSobol:
+      out.set_sampling(pdsm::v1::SOBOL);
+      break;
+    case SamplingPattern::kHalton:
+      out.set_sampling(pdsm::v1::HALTON);
+      break;
+    case SamplingPattern::kBlueNoise:
+      out.set_sampling(pdsm::v1::BLUE_NOISE);
+      break;
+  }
+  out.set_compression_metric(b.compression_metric == CompressionMetric::kVertical
+                                 ? pdsm::v1::VERTICAL
+                                 : pdsm::v1::PERPENDICULAR);
+  if (b.frustum) {
+    pdsm::v1::Frustum* f = out.mutable_frustum();
+    for (double x : {b.frustum->s_min, b.frustum->s_max, b.frustum->t_min, b.frustum->t_max}) {
+      f->add_window(x);
+    }
+    f->add_depth_range(b.frustum->z_near);
+    f->add_depth_range(b.frustum->z_far);
+  }
+  out.set_adaptive_tolerance(b.adaptive_tolerance);
+  out.set_adaptive_min_samples(b.adaptive_min_samples);
+  out.set_surfaces_only(b.surfaces_only);
+  return out;
+}
+
 }  // namespace pdsm::internal

@@ -20,6 +20,10 @@ namespace pdsm::internal {
 absl::StatusOr<BakeSettings> BuildBake(const FieldChecker& checks, const pdsm::v1::BakeParams& bake,
                                        LightShape shape);
 
+// `settings` as a message with every field set (depthBias only when the settings hold one):
+// BuildBake of the result gives `settings` back, whatever the defaults.
+pdsm::v1::BakeParams BakeParamsOf(const BakeSettings& settings);
+
 }  // namespace pdsm::internal
 
 #endif  // PDSM_CORE_SCENE_SCENE_BAKE_H_

@@ -21,6 +21,7 @@
 #include "absl/strings/str_split.h"
 #include "absl/strings/string_view.h"
 #include "core/scene/json_number_range.h"
+#include "core/scene/scene_bake.h"
 #include "core/scene/scene_builder.h"
 #include "core/scene/scene_mesh.h"
 
@@ -113,6 +114,14 @@ absl::StatusOr<pdsm::v1::Scene> ParseSceneFile(const std::string& path,
   absl::StatusOr<std::set<std::string>> overridden = ParseWithOverrides(path, overrides, &message);
   if (!overridden.ok()) return overridden.status();
   return message;
+}
+
+absl::StatusOr<pdsm::v1::BakeParams> EffectiveBakeParams(const pdsm::v1::BakeParams& bake, bool sun,
+                                                         const std::string& label) {
+  absl::StatusOr<BakeSettings> settings = internal::BuildBake(
+      internal::FieldChecker(label, {}), bake, sun ? LightShape::kSun : LightShape::kRect);
+  if (!settings.ok()) return settings.status();
+  return internal::BakeParamsOf(*settings);
 }
 
 std::string ResolveMeshPath(const std::string& scene_path, const std::string& mesh_path) {

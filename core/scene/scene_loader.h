@@ -30,6 +30,15 @@ absl::StatusOr<Scene> LoadSceneFile(const std::string& path,
 absl::StatusOr<pdsm::v1::Scene> ParseSceneFile(const std::string& path,
                                                const pdsm::v1::BakeParams& overrides = {});
 
+// `bake` with every default filled in, as a bake of a scene with that light (`sun`: a sun
+// light) resolves it, written back with every field set: loading the same scene with the
+// result as overrides gives the same settings in any build, whatever its defaults (depthBias
+// stays unset where the plan derives it). What a job's GetJob reports, so that a viewer plans
+// the job's PDSM from the scene file. Errors as LoadSceneFile's for bake fields, prefixed
+// with `label`.
+absl::StatusOr<pdsm::v1::BakeParams> EffectiveBakeParams(const pdsm::v1::BakeParams& bake, bool sun,
+                                                         const std::string& label);
+
 // The file a scene's `meshes[i].path` names: an absolute `mesh_path` as is, a relative one
 // against the folder of `scene_path` (the working directory for a bare file name), normalized
 // lexically. What LoadSceneFile opens.

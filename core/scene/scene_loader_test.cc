@@ -10,6 +10,7 @@
 #include <memory>
 #include <numbers>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <gmock/gmock.h>
@@ -473,6 +474,50 @@ TEST_F(SceneLoaderTest, BadAdaptiveSettingsNameTheField) {
     EXPECT_EQ(scene.status().code(), absl::StatusCode::kInvalidArgument);
     EXPECT_NE(scene.status().message().find(field), std::string::npos) << scene.status();
   }
+}
+
+// What a job reports as its settings: every default filled in, so that loading the scene with
+// them as overrides gives the same settings whatever the loader's defaults.
+TEST_F(SceneLoaderTest, EffectiveBakeParamsRoundTrip) {
+  for (const std::string bake :
+       {std::string("{}"),
+        std::string(R"({"resolution": [300, 200], "samples": 9, "depthBias": 0.25, "seed": "77",
+            "sampling": "HALTON", "compressionMetric": "PERPENDICULAR", "surfacesOnly": true,
+            "frustum": {"window": [-0.5, 0.5, -0.25, 0.75], "depthRange": [1, 20]}})"),
+        std::string(R"({"samples": 64, "adaptiveTolerance": 0.05})")}) {
+    absl::StatusOr<Scene> scene = Load(SceneJson(kSquare, kRect, bake));
+    ASSERT_TRUE(scene.ok()) << scene.status();
+    absl::StatusOr<pdsm::v1::Scene> message =
+        ParseSceneFile(Write("effective.json", SceneJson(kSquare, kRect, bake)));
+    ASSERT_TRUE(message.ok());
+    absl::StatusOr<pdsm::v1::BakeParams> effective =
+        EffectiveBakeParams(message->bake(), /*sun=*/false, "job 1");
+    ASSERT_TRUE(effective.ok()) << effective.status();
+    // Every field is set (depthBias only when given: the plan derives it otherwise).
+    EXPECT_TRUE(effective->has_samples() && effective->has_seed() && effective->has_epsilon());
+    EXPECT_NE(effective->sampling(), pdsm::v1::SAMPLING_DEFAULT);
+    EXPECT_EQ(effective->has_depth_bias(), scene->bake.depth_bias.has_value());
+    // Loading an empty bake block with them as overrides gives the same settings.
+    absl::StatusOr<Scene> again = Load(SceneJson(kSquare, kRect, "{}"), *effective);
+    ASSERT_TRUE(again.ok()) << again.status();
+    const BakeSettings& x = scene->bake;
+    const BakeSettings& y = again->bake;
+    EXPECT_EQ(
+        std::tie(x.width, x.height, x.samples, x.shadow_map_resolution, x.epsilon, x.depth_bias,
+                 x.slope_bias, x.tile_size, x.seed, x.sampling, x.compression_metric,
+                 x.adaptive_tolerance, x.adaptive_min_samples, x.surfaces_only),
+        std::tie(y.width, y.height, y.samples, y.shadow_map_resolution, y.epsilon, y.depth_bias,
+                 y.slope_bias, y.tile_size, y.seed, y.sampling, y.compression_metric,
+                 y.adaptive_tolerance, y.adaptive_min_samples, y.surfaces_only))
+        << bake;
+    EXPECT_EQ(x.frustum.has_value(), y.frustum.has_value());
+  }
+  pdsm::v1::BakeParams bad;
+  bad.set_samples(0);
+  absl::StatusOr<pdsm::v1::BakeParams> refused = EffectiveBakeParams(bad, false, "job 7");
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("job 7: bake.samples"), std::string::npos)
+      << refused.status();
 }
 
 TEST_F(SceneLoaderTest, OverridesReplaceSetFieldsOnly) {
