@@ -7,9 +7,48 @@
 
 #include "absl/strings/str_cat.h"
 #include "client/view/pdsm_source.h"
+#include "core/bake/plan_fingerprint.h"
 #include "core/pipeline/tile_file.h"
+#include "core/scene/scene_loader.h"
+#include "spdlog/spdlog.h"
 
 namespace pdsm::view {
+
+absl::StatusOr<pdsm::v1::Job> FetchJob(const ServiceFlags& service, const std::string& job_id) {
+  absl::StatusOr<ServiceConnection> c = Connect(service);
+  if (!c.ok()) return c.status();
+  pdsm::v1::GetJobRequest request;
+  request.set_job_id(job_id);
+  pdsm::v1::Job job;
+  auto context = c->Call();
+  if (grpc::Status s = c->stub->GetJob(context.get(), request, &job); !s.ok()) {
+    return CallError("job " + job_id, s, service.server);
+  }
+  return job;
+}
+
+absl::StatusOr<Scene> LoadJobScene(const std::string& scene_path, const pdsm::v1::Job& job) {
+  if (!job.has_bake()) {
+    spdlog::warn(
+        "job {}: the coordinator does not report its bake settings (an older build): planning "
+        "with {}'s own, which fails if the submit overrode any",
+        job.job_id(), scene_path);
+    return LoadSceneFile(scene_path);
+  }
+  return LoadSceneFile(scene_path, job.bake());
+}
+
+absl::Status CheckPlanMatchesJob(const BakePlan& plan, const pdsm::v1::Job& job,
+                                 const std::string& scene_path) {
+  if (job.plan_fingerprint().empty()) return absl::OkStatus();
+  const std::string ours = PlanFingerprint(plan);
+  if (ours == job.plan_fingerprint()) return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrCat(
+      "--job ", job.job_id(), ": ", scene_path,
+      " with the job's bake settings plans another PDSM than the job's (plan fingerprint ",
+      ours.substr(0, 12), " vs ", job.plan_fingerprint().substr(0, 12),
+      "): give the scene file the job was submitted from, as it was then"));
+}
 
 PartialPdsm EmptyPartialPdsm(const BakePlan& plan) { return AssemblePartialPdsm(plan, {}); }
 
@@ -90,10 +129,10 @@ absl::StatusOr<JobSnapshot> JobFollower::Poll() {
   const PdsmGeometry& g = plan_->header.geometry;
   if (job.width() != g.width || job.height() != g.height ||
       job.samples() != plan_->header.samples) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--job ", job_id_, ": the job bakes ", job.width(), "x", job.height(), " x ",
-                     job.samples(), " samples, the scene file plans ", g.width, "x", g.height,
-                     " x ", plan_->header.samples, " (another scene?)"));
+    return absl::InvalidArgumentError(absl::StrCat(
+        "--job ", job_id_, ": the job bakes ", job.width(), "x", job.height(), " x ", job.samples(),
+        " samples, the scene file plans ", g.width, "x", g.height, " x ", plan_->header.samples,
+        " with the job's settings (give the scene file the job was submitted from)"));
   }
   if (finished_) return snapshot;
   if (job.state() == pdsm::v1::FAILED || job.state() == pdsm::v1::CANCELLED) {

@@ -2,9 +2,10 @@
 // finished so far (ListFinishedTiles, FetchTile), assembled into a PDSM whose unfinished
 // pixels are marked pending; once it has succeeded, the whole file (FetchPdsm).
 //
-// The PDSM's geometry comes from planning the scene file locally (PlanBake, the coordinator's
-// own planner: the same scene gives the same plan), checked against the job's size and
-// sample count.
+// The PDSM's geometry comes from planning the scene file locally with the job's own bake
+// settings (GetJob's `bake`: every override of the submit, every default as the coordinator
+// resolved it) through PlanBake, the coordinator's own planner: the same scene and settings
+// give the same plan, which the job's plan fingerprint confirms.
 #ifndef PDSM_CLIENT_VIEW_JOB_FOLLOWER_H_
 #define PDSM_CLIENT_VIEW_JOB_FOLLOWER_H_
 
@@ -32,6 +33,19 @@ struct PartialPdsm {
   std::vector<uint8_t> pending;  // per pixel, row-major; empty when the PDSM is complete
   bool complete() const { return pending.empty(); }
 };
+
+// The job now (GetJob).
+absl::StatusOr<pdsm::v1::Job> FetchJob(const ServiceFlags& service, const std::string& job_id);
+
+// The scene file loaded with the job's bake settings (Job.bake), so that planning it gives the
+// job's plan whatever was overridden at submit. A job from a coordinator that reports no
+// settings (an older build) loads with the file's own, with a warning.
+absl::StatusOr<Scene> LoadJobScene(const std::string& scene_path, const pdsm::v1::Job& job);
+
+// INVALID_ARGUMENT when the job reports a plan fingerprint and `plan` has another one: the
+// scene file is not the one the job was submitted from (or was edited since).
+absl::Status CheckPlanMatchesJob(const BakePlan& plan, const pdsm::v1::Job& job,
+                                 const std::string& scene_path);
 
 // The plan's header with every tile pending.
 PartialPdsm EmptyPartialPdsm(const BakePlan& plan);

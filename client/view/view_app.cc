@@ -33,12 +33,13 @@ absl::StatusOr<DynamicObject> MakeDynamicObject(const DynamicObjectSpec& spec, s
   return object;
 }
 
-// --job shown while it runs: plans the scene (the coordinator's planner: same scene, same
-// plan) and, headless with --partial, takes the tiles finished now; a window starts with every
-// tile pending and follows the job (RunWindow).
-absl::Status StartFromPlan(const ViewOptions& options, ViewScene* view) {
+// --job shown while it runs: plans the scene with the job's settings (the coordinator's
+// planner: same scene, same settings, same plan) and, headless with --partial, takes the tiles
+// finished now; a window starts with every tile pending and follows the job (RunWindow).
+absl::Status StartFromPlan(const ViewOptions& options, const pdsm::v1::Job& job, ViewScene* view) {
   absl::StatusOr<BakePlan> plan = PlanBake(view->scene);
   if (!plan.ok()) return plan.status();
+  if (absl::Status s = CheckPlanMatchesJob(*plan, job, options.scene_path); !s.ok()) return s;
   view->plan = std::make_shared<const BakePlan>(*std::move(plan));
   PartialPdsm partial = EmptyPartialPdsm(*view->plan);
   if (options.headless) {
@@ -61,12 +62,20 @@ absl::Status StartFromPlan(const ViewOptions& options, ViewScene* view) {
 
 absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
   ViewScene view;
-  absl::StatusOr<Scene> scene = LoadSceneFile(options.scene_path);
+  pdsm::v1::Job job;
+  if (!options.job_id.empty()) {
+    // The job's own settings first: a submit may have overridden any of the file's.
+    absl::StatusOr<pdsm::v1::Job> fetched = FetchJob(options.service, options.job_id);
+    if (!fetched.ok()) return fetched.status();
+    job = *std::move(fetched);
+  }
+  absl::StatusOr<Scene> scene = options.job_id.empty() ? LoadSceneFile(options.scene_path)
+                                                       : LoadJobScene(options.scene_path, job);
   if (!scene.ok()) return scene.status();
   view.scene = *std::move(scene);
   if (!options.job_id.empty() && (!options.headless || options.partial)) {
     // Shown while it runs: the geometry from the local plan, tiles as they finish.
-    if (absl::Status s = StartFromPlan(options, &view); !s.ok()) return s;
+    if (absl::Status s = StartFromPlan(options, job, &view); !s.ok()) return s;
   } else {
     absl::StatusOr<PdsmImage> pdsm = options.job_id.empty()
                                          ? LoadPdsmFile(options.pdsm_path)

@@ -100,7 +100,9 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
   app.add_option("--object", meshes, "Dynamic mesh file, repeatable");
   app.add_option("--object-transform", transforms,
                  "16 numbers, row-major world_from_object of the matching --object");
-  app.add_option("--frames", o.frames, "Window: render N frames, write --screenshot, exit");
+  app.add_option("--frames", o.frames,
+                 "Window: render N frames (with --job: after the final PDSM arrived), write "
+                 "--screenshot, exit");
   app.add_option("--bench", o.bench_frames,
                  "Headless: time N frames of each mode (--compare or all)");
   app.add_flag("--partial", o.partial,

@@ -208,20 +208,26 @@ absl::Status RunWindow(const ViewOptions& options, ViewScene& scene) {
     follower->Start(/*interval_ms=*/300);
   }
   bool follow_error_reported = false;
+  absl::Status follow_error;
+  bool final_shown = follower == nullptr;  // --frames counts from here on (scripted runs)
+  int frames_counted = 0;
 
   absl::Status status;
-  for (int frame = 0; !glfwWindowShouldClose(window->get()); ++frame) {
+  while (!glfwWindowShouldClose(window->get())) {
     if (follower != nullptr) {
       if (std::optional<JobSnapshot> snapshot = follower->Take()) {
         job = snapshot->job;
         if (snapshot->pdsm) {
+          const bool complete = snapshot->pdsm->complete();
           status = AdoptPdsm(options, *std::move(snapshot->pdsm), scene, **renderer);
           if (!status.ok()) break;
+          final_shown = final_shown || complete;
         }
       }
       if (absl::Status e = follower->error(); !e.ok() && !follow_error_reported) {
         spdlog::error("{}", std::string(e.message()));  // keep showing what arrived
         follow_error_reported = true;
+        follow_error = e;
       }
     }
     int width = 0, height = 0;
@@ -251,9 +257,15 @@ absl::Status RunWindow(const ViewOptions& options, ViewScene& scene) {
       if (!status.ok()) break;
     }
     glfwSwapBuffers(window->get());
-    if (options.frames > 0 && frame + 1 >= options.frames) {
-      if (!options.screenshot_path.empty())
+    // --frames with --job: N frames of the finished job (a script wants the final image), or
+    // the error that stopped following it as the exit status.
+    if (options.frames > 0 && (final_shown || !follow_error.ok()) &&
+        ++frames_counted >= options.frames) {
+      if (!follow_error.ok()) {
+        status = follow_error;
+      } else if (!options.screenshot_path.empty()) {
         status = SaveScreenshot(**renderer, options.screenshot_path);
+      }
       break;
     }
     glfwPollEvents();
