@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include <glm/gtc/matrix_inverse.hpp>
 
@@ -23,8 +24,9 @@ double SecondsSince(Clock::time_point start) {
 }
 
 // Texture units of shade.frag's samplers, and its SSBO bindings.
-constexpr int kUnitPdsmIndex = 0, kUnitCpuAttenuation = 1, kUnitShadowMap = 2, kUnitShadowMaps = 3;
-constexpr int kBindingPdsmVertices = 0, kBindingLightSamples = 1;
+constexpr int kUnitPdsmIndex = 0, kUnitCpuAttenuation = 1, kUnitShadowMap = 2, kUnitShadowMaps = 3,
+              kUnitDynamicMaps = 4;
+constexpr int kBindingPdsmVertices = 0, kBindingLightSamples = 1, kBindingDynamicSamples = 2;
 constexpr float kBackgroundColour[4] = {0.11f, 0.12f, 0.14f, 1.0f};
 
 struct MeshGpu {
@@ -84,17 +86,30 @@ LightSpec LightFromHeader(const PdsmHeader& h) {
   return light;
 }
 
+gl::Buffer UploadSamples(const gl::GlFunctions& gl, const std::vector<glm::dvec2>& samples) {
+  std::vector<glm::vec2> samples_f(samples.begin(), samples.end());
+  if (samples_f.empty()) samples_f.emplace_back(0.0f);
+  gl::Buffer buffer = gl::MakeBuffer(gl);
+  gl.BindBuffer(GL_SHADER_STORAGE_BUFFER, buffer.name());
+  gl.BufferData(GL_SHADER_STORAGE_BUFFER, samples_f.size() * sizeof(glm::vec2), samples_f.data(),
+                GL_STATIC_DRAW);
+  gl.BindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+  return buffer;
+}
+
 }  // namespace
 
 struct FrameRenderer::Impl {
-  explicit Impl(const gl::GlFunctions& gl) : shadow_maps(gl) {}
+  explicit Impl(const gl::GlFunctions& gl) : shadow_maps(gl), dynamic_maps(gl) {}
   gl::Program shade, gbuffer, depth;
   PdsmGpu pdsm;
   std::vector<MeshGpu> baked;
   std::vector<MeshGpu> dynamic;  // parallel to ViewScene::dynamic_objects
   gl::Buffer samples;            // SSBO of vec2, multi-sm
+  gl::Buffer dynamic_samples;    // SSBO of vec2, the dynamic objects' maps
   ShadowMapTargets shadow_maps;
-  ShadowMapLayout single_layout, multi_layout;
+  ShadowMapTargets dynamic_maps;  // layers of the dynamic objects alone (pdsm, cpu)
+  ShadowMapLayout single_layout, multi_layout, dynamic_layout;
   gl::Framebuffer target, gbuffer_target;
   gl::Texture colour, attenuation, depth_buffer, positions, cpu_attenuation;
   int width = 0, height = 0;
@@ -157,13 +172,23 @@ absl::Status FrameRenderer::Init() {
   im.multi_layout = MakeShadowMapLayout(header, multi_size, /*grow_for_samples=*/true);
   const int count = settings_.sm_count > 0 ? settings_.sm_count : header.samples;
   samples_ = GenerateLightSamples(LightFromHeader(header), count, header.sampling, header.seed);
-  std::vector<glm::vec2> samples_f(samples_.begin(), samples_.end());
-  if (samples_f.empty()) samples_f.emplace_back(0.0f);
-  im.samples = gl::MakeBuffer(gl_);
-  gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, im.samples.name());
-  gl_.BufferData(GL_SHADER_STORAGE_BUFFER, samples_f.size() * sizeof(glm::vec2), samples_f.data(),
-                 GL_STATIC_DRAW);
-  gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+  im.samples = UploadSamples(gl_, samples_);
+  // The dynamic objects' own soft shadow: a few maps from well-spread samples (Sobol) that
+  // cover what a sample at the light's edge shifts a receiver, like multi-sm's.
+  im.dynamic_layout = MakeShadowMapLayout(header, std::max(settings_.dynamic_sm_size, 1),
+                                          /*grow_for_samples=*/true);
+  if (!scene_->dynamic_objects.empty() && settings_.dynamic_shadows) {
+    dynamic_samples_ =
+        GenerateLightSamples(LightFromHeader(header), std::max(settings_.dynamic_sm_count, 1),
+                             SamplingPattern::kSobol, header.seed);
+  }
+  im.dynamic_samples = UploadSamples(gl_, dynamic_samples_);
+  dynamic_sample_min_ = glm::dvec2(std::numeric_limits<double>::infinity());
+  dynamic_sample_max_ = -dynamic_sample_min_;
+  for (const glm::dvec2& a : dynamic_samples_) {
+    dynamic_sample_min_ = glm::min(dynamic_sample_min_, a);
+    dynamic_sample_max_ = glm::max(dynamic_sample_max_, a);
+  }
 
   gl_.UseProgram(im.shade.name());
   const gl::UniformSetter u(gl_, im.shade.name());
@@ -171,6 +196,7 @@ absl::Status FrameRenderer::Init() {
   u.Int("cpu_attenuation", kUnitCpuAttenuation);
   u.Int("shadow_map", kUnitShadowMap);
   u.Int("shadow_maps", kUnitShadowMaps);
+  u.Int("dynamic_maps", kUnitDynamicMaps);
   gl_.UseProgram(0);
   return gl::CheckGlError(gl_, "uploading the scene");
 }
@@ -183,7 +209,9 @@ absl::Status FrameRenderer::ReplacePdsm() {
   impl_->pdsm = *std::move(pdsm);
   return absl::OkStatus();
 }
-uint64_t FrameRenderer::shadow_map_bytes() const { return impl_->shadow_maps.bytes(); }
+uint64_t FrameRenderer::shadow_map_bytes() const {
+  return impl_->shadow_maps.bytes() + impl_->dynamic_maps.bytes();
+}
 
 absl::Status FrameRenderer::EnsureTarget(int width, int height) {
   Impl& im = *impl_;
@@ -225,7 +253,7 @@ absl::Status FrameRenderer::EnsureTarget(int width, int height) {
   return gl::CheckGlError(gl_, absl::StrCat("allocating a ", width, "x", height, " frame"));
 }
 
-void FrameRenderer::DrawScene(const gl::UniformSetter& u, bool casters_only) const {
+void FrameRenderer::DrawScene(const gl::UniformSetter& u, DrawSet set) const {
   const Impl& im = *impl_;
   const auto draw = [&](const MeshGpu& mesh, const glm::dmat4& light_from_object) {
     u.Mat4("light_from_object", glm::mat4(light_from_object));
@@ -235,10 +263,12 @@ void FrameRenderer::DrawScene(const gl::UniformSetter& u, bool casters_only) con
     gl_.DrawArrays(GL_TRIANGLES, 0, mesh.vertex_count);
   };
   for (const MeshGpu& mesh : im.baked) {
-    if (!casters_only || mesh.casts) draw(mesh, glm::dmat4(1.0));
+    if (set == DrawSet::kAll || (set == DrawSet::kCasters && mesh.casts)) {
+      draw(mesh, glm::dmat4(1.0));
+    }
   }
-  // Dynamic objects were not in the bake: they receive the PDSM's shadow and, in the
-  // shadow-map modes, also cast (drawn into the maps).
+  // Dynamic objects were not in the bake: they receive the PDSM's shadow and cast, into the
+  // shadow-map modes' maps and into maps of their own for the PDSM modes.
   const glm::dmat4 light_from_world = scene_->LightFromWorld();
   for (size_t i = 0; i < im.dynamic.size(); ++i) {
     draw(im.dynamic[i], light_from_world * scene_->dynamic_objects[i].world_from_object);
@@ -246,15 +276,8 @@ void FrameRenderer::DrawScene(const gl::UniformSetter& u, bool casters_only) con
   gl_.BindVertexArray(0);
 }
 
-absl::Status FrameRenderer::EnsureShadowMaps(ViewMode mode) {
-  Impl& im = *impl_;
-  const bool single = UsesShadowMap(mode) && !single_valid_;
-  const bool layers = mode == ViewMode::kMultiSm && !layers_valid_;
-  if (!single && !layers) return absl::OkStatus();
-  const auto start = Clock::now();
+void FrameRenderer::SetDepthUniforms(const gl::UniformSetter& u) const {
   const PdsmHeader& header = scene_->pdsm.header;
-  gl_.UseProgram(im.depth.name());
-  const gl::UniformSetter u(gl_, im.depth.name());
   u.Float("depth_bias", static_cast<float>(header.depth_bias));
   u.Float("slope_bias", static_cast<float>(header.slope_bias));
   // The bake widens the slope bias to a PDSM pixel (footprint_scale = PDSM pixel / texel)
@@ -269,9 +292,82 @@ absl::Status FrameRenderer::EnsureShadowMaps(ViewMode mode) {
   u.Float("clip_near", static_cast<float>(clip.near));
   u.Float("clip_far", static_cast<float>(clip.far));
   u.Int("orthographic", header.geometry.projection == Projection::kOrthographic);
+}
+
+void FrameRenderer::UpdateDynamicReach() {
+  const PdsmGeometry& g = scene_->pdsm.header.geometry;
+  const bool orthographic = g.projection == Projection::kOrthographic;
+  const glm::dmat4 light_from_world = scene_->LightFromWorld();
+  glm::dvec2 lo(std::numeric_limits<double>::infinity()), hi(-lo);
+  dynamic_reach_bounded_ = true;
+  for (const DynamicObject& object : scene_->dynamic_objects) {
+    // The object's light-space box: (x - a) / z and x - a z take their extremes over a box at
+    // its corners, so 8 corners per sample bound the whole projection.
+    const glm::dmat4 light_from_object = light_from_world * object.world_from_object;
+    glm::dvec3 box_lo(std::numeric_limits<double>::infinity()), box_hi(-box_lo);
+    for (const glm::vec3& p : object.mesh.positions) {
+      const glm::dvec3 q(light_from_object * glm::dvec4(glm::dvec3(p), 1.0));
+      box_lo = glm::min(box_lo, q);
+      box_hi = glm::max(box_hi, q);
+    }
+    if (!orthographic && !(box_lo.z > 0)) {
+      dynamic_reach_bounded_ = false;
+      return;
+    }
+    for (int c = 0; c < 8; ++c) {
+      const glm::dvec3 q((c & 1) ? box_hi.x : box_lo.x, (c & 2) ? box_hi.y : box_lo.y,
+                         (c & 4) ? box_hi.z : box_lo.z);
+      for (const glm::dvec2& a : dynamic_samples_) {
+        const glm::dvec2 st = orthographic ? glm::dvec2(q) - a * q.z : (glm::dvec2(q) - a) / q.z;
+        lo = glm::min(lo, st);
+        hi = glm::max(hi, st);
+      }
+    }
+  }
+  const glm::dvec2 texel = impl_->dynamic_layout.window_size / double(impl_->dynamic_layout.size);
+  dynamic_reach_min_ = lo - texel;
+  dynamic_reach_max_ = hi + texel;
+}
+
+bool FrameRenderer::CastsDynamicShadows(ViewMode mode) const {
+  return (mode == ViewMode::kPdsm || mode == ViewMode::kCpu) && settings_.dynamic_shadows &&
+         !dynamic_samples_.empty();
+}
+
+absl::Status FrameRenderer::EnsureDynamicShadowMaps(ViewMode mode) {
+  Impl& im = *impl_;
+  if (!CastsDynamicShadows(mode) || dynamic_valid_) return absl::OkStatus();
+  const auto start = Clock::now();
+  UpdateDynamicReach();
+  gl_.UseProgram(im.depth.name());
+  const gl::UniformSetter u(gl_, im.depth.name());
+  SetDepthUniforms(u);
+  absl::Status s =
+      im.dynamic_maps.RenderLayers(scene_->pdsm.header, im.dynamic_layout, dynamic_samples_,
+                                   [&](const glm::mat4& clip_from_light) {
+                                     u.Mat4("clip_from_light", clip_from_light);
+                                     DrawScene(u, DrawSet::kDynamic);
+                                   });
+  if (!s.ok()) return s;
+  dynamic_valid_ = true;
+  gl_.Finish();
+  timings_.shadow_map_seconds += SecondsSince(start);
+  return absl::OkStatus();
+}
+
+absl::Status FrameRenderer::EnsureShadowMaps(ViewMode mode) {
+  Impl& im = *impl_;
+  const bool single = UsesShadowMap(mode) && !single_valid_;
+  const bool layers = mode == ViewMode::kMultiSm && !layers_valid_;
+  if (!single && !layers) return EnsureDynamicShadowMaps(mode);
+  const auto start = Clock::now();
+  const PdsmHeader& header = scene_->pdsm.header;
+  gl_.UseProgram(im.depth.name());
+  const gl::UniformSetter u(gl_, im.depth.name());
+  SetDepthUniforms(u);
   const auto draw = [&](const glm::mat4& clip_from_light) {
     u.Mat4("clip_from_light", clip_from_light);
-    DrawScene(u, /*casters_only=*/true);
+    DrawScene(u, DrawSet::kCasters);
   };
   if (single) {
     if (absl::Status s = im.shadow_maps.RenderSingle(header, im.single_layout, draw); !s.ok()) {
@@ -289,9 +385,9 @@ absl::Status FrameRenderer::EnsureShadowMaps(ViewMode mode) {
   return absl::OkStatus();
 }
 
-absl::Status FrameRenderer::RenderCpuAttenuation(const glm::mat4& clip_from_light) {
+absl::Status FrameRenderer::RenderGbuffer(const glm::mat4& clip_from_light,
+                                          std::vector<float>* gbuffer) {
   Impl& im = *impl_;
-  const auto start = Clock::now();
   gl_.BindFramebuffer(GL_FRAMEBUFFER, im.gbuffer_target.name());
   const float no_surface[4] = {0, 0, 0, 0};
   const float far_depth = 1.0f;
@@ -300,11 +396,43 @@ absl::Status FrameRenderer::RenderCpuAttenuation(const glm::mat4& clip_from_ligh
   gl_.UseProgram(im.gbuffer.name());
   const gl::UniformSetter u(gl_, im.gbuffer.name());
   u.Mat4("clip_from_light", clip_from_light);
-  DrawScene(u, false);
-  std::vector<float> gbuffer(static_cast<size_t>(im.width) * im.height * 4);
+  DrawScene(u, DrawSet::kAll);
+  gbuffer->resize(static_cast<size_t>(im.width) * im.height * 4);
   gl_.ReadBuffer(GL_COLOR_ATTACHMENT0);
   gl_.PixelStorei(GL_PACK_ALIGNMENT, 4);
-  gl_.ReadPixels(0, 0, im.width, im.height, GL_RGBA, GL_FLOAT, gbuffer.data());
+  gl_.ReadPixels(0, 0, im.width, im.height, GL_RGBA, GL_FLOAT, gbuffer->data());
+  return gl::CheckGlError(gl_, "rendering the G-buffer");
+}
+
+absl::StatusOr<std::vector<float>> FrameRenderer::ReadPositions(const Camera& camera, int width,
+                                                                int height) {
+  if (absl::Status s = EnsureTarget(width, height); !s.ok()) return s;
+  gl_.Viewport(0, 0, width, height);
+  gl_.ClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
+  gl_.Enable(GL_DEPTH_TEST);
+  gl_.DepthFunc(GL_LESS);
+  gl_.DepthMask(GL_TRUE);
+  gl_.Disable(GL_CULL_FACE);
+  std::vector<float> gbuffer;
+  if (absl::Status s = RenderGbuffer(
+          ClipFromLight(camera, *scene_, static_cast<double>(width) / height), &gbuffer);
+      !s.ok()) {
+    return s;
+  }
+  // GL's row 0 is the bottom; images start at the top.
+  std::vector<float> out(gbuffer.size());
+  const size_t row = static_cast<size_t>(width) * 4;
+  for (int y = 0; y < height; ++y) {
+    std::copy_n(&gbuffer[static_cast<size_t>(height - 1 - y) * row], row, &out[y * row]);
+  }
+  return out;
+}
+
+absl::Status FrameRenderer::RenderCpuAttenuation(const glm::mat4& clip_from_light) {
+  Impl& im = *impl_;
+  const auto start = Clock::now();
+  std::vector<float> gbuffer;
+  if (absl::Status s = RenderGbuffer(clip_from_light, &gbuffer); !s.ok()) return s;
   const std::vector<float> attenuation = EvaluateAttenuationImage(
       scene_->pdsm, gbuffer, im.width, im.height, scene_->pending, kPending);
   gl_.BindTexture(GL_TEXTURE_2D, im.cpu_attenuation.name());
@@ -338,6 +466,16 @@ void FrameRenderer::SetShadeUniforms(ViewMode mode, const Camera& camera,
   u.Float("z_near", static_cast<float>(g.z_near));
   u.Float("z_far", static_cast<float>(g.z_far));
   u.Int("filter_radius", settings_.filter_radius);
+  u.Int("dynamic_count", CastsDynamicShadows(mode) ? static_cast<int>(dynamic_samples_.size()) : 0);
+  u.Vec2("dynamic_window_min", glm::vec2(im.dynamic_layout.window_min));
+  u.Vec2("dynamic_window_size", glm::vec2(im.dynamic_layout.window_size));
+  u.Int2("dynamic_sm_size", glm::ivec2(im.dynamic_layout.size));
+  u.Int("dynamic_combine", static_cast<int>(settings_.dynamic_combine));
+  u.Int("dynamic_bounded", dynamic_reach_bounded_ ? 1 : 0);
+  u.Vec2("dynamic_reach_min", glm::vec2(dynamic_reach_min_));
+  u.Vec2("dynamic_reach_max", glm::vec2(dynamic_reach_max_));
+  u.Vec2("dynamic_sample_min", glm::vec2(dynamic_sample_min_));
+  u.Vec2("dynamic_sample_max", glm::vec2(dynamic_sample_max_));
 }
 
 absl::Status FrameRenderer::Render(ViewMode mode, const Camera& camera, int width, int height) {
@@ -376,10 +514,13 @@ absl::Status FrameRenderer::Render(ViewMode mode, const Camera& camera, int widt
   gl_.BindTexture(GL_TEXTURE_2D, im.shadow_maps.single());
   gl_.ActiveTexture(GL_TEXTURE0 + kUnitShadowMaps);
   gl_.BindTexture(GL_TEXTURE_2D_ARRAY, im.shadow_maps.layers());
+  gl_.ActiveTexture(GL_TEXTURE0 + kUnitDynamicMaps);
+  gl_.BindTexture(GL_TEXTURE_2D_ARRAY, im.dynamic_maps.layers());
   gl_.ActiveTexture(GL_TEXTURE0);
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, kBindingPdsmVertices, im.pdsm.vertices.name());
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, kBindingLightSamples, im.samples.name());
-  DrawScene(u, false);
+  gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, kBindingDynamicSamples, im.dynamic_samples.name());
+  DrawScene(u, DrawSet::kAll);
   gl_.Finish();
   timings_.shade_seconds = SecondsSince(start);
   return gl::CheckGlError(gl_, absl::StrCat("rendering mode ", ModeName(mode)));

@@ -22,6 +22,13 @@
 
 namespace pdsm::view {
 
+// How the PDSM modes combine the baked attenuation A_b with the dynamic objects' own soft
+// shadow A_d (docs/viewer.md, "Dynamic objects" has the measurement behind the default).
+enum class DynamicCombine {
+  kMax = 0,      // max(A_b, A_d): the two hide the same part of the light where they overlap
+  kProduct = 1,  // 1 - (1 - A_b)(1 - A_d): they hide independent parts of it
+};
+
 struct RenderSettings {
   bool bilinear = true;   // PDSM: blend 4 pixels (thesis 4.2); off: nearest pixel
   int sm_size = 0;        // hard/pcf/pcss/vsm map, texels per side; 0: the bake's
@@ -29,6 +36,13 @@ struct RenderSettings {
   int multi_sm_size = 0;  // multi-sm texels per side; 0: the bake's, at most 1024
   int filter_radius = 2;  // pcf and vsm kernel half-width, texels
   float ambient = 0.15f;
+  // pdsm and cpu modes: the dynamic objects (not in the bake) cast a real-time soft shadow,
+  // the average of `dynamic_sm_count` shadow maps of those objects alone from light samples
+  // (Sobol, the bake's seed), combined with the baked attenuation by `dynamic_combine`.
+  bool dynamic_shadows = true;
+  int dynamic_sm_count = 32;
+  int dynamic_sm_size = 512;
+  DynamicCombine dynamic_combine = DynamicCombine::kProduct;  // measured best (docs/viewer.md)
 };
 
 // Attenuation read back per pixel: the value shaded with, or one of these.
@@ -74,12 +88,19 @@ class FrameRenderer {
   void InvalidateShadowMaps() {
     layers_valid_ = false;
     single_valid_ = false;
+    dynamic_valid_ = false;
   }
+
+  // The light-space position of the surface each pixel of `camera`'s view shows (x, y, z, 1),
+  // or (0, 0, 0, 0) for the background; row 0 at the top, width * height * 4 floats. For
+  // measurements against a reference at the very points a frame shaded.
+  absl::StatusOr<std::vector<float>> ReadPositions(const Camera& camera, int width, int height);
   RenderSettings& settings() { return settings_; }
   const PdsmGpu& pdsm_gpu() const;
   uint64_t shadow_map_bytes() const;
   const FrameTimings& last_timings() const { return timings_; }
   const std::vector<glm::dvec2>& multi_sm_samples() const { return samples_; }
+  const std::vector<glm::dvec2>& dynamic_sm_samples() const { return dynamic_samples_; }
 
  private:
   struct Impl;
@@ -87,17 +108,33 @@ class FrameRenderer {
   absl::Status Init();
   absl::Status EnsureTarget(int width, int height);
   absl::Status EnsureShadowMaps(ViewMode mode);
+  absl::Status EnsureDynamicShadowMaps(ViewMode mode);
+  void UpdateDynamicReach();
+  bool CastsDynamicShadows(ViewMode mode) const;
+  absl::Status RenderGbuffer(const glm::mat4& clip_from_light, std::vector<float>* gbuffer);
   absl::Status RenderCpuAttenuation(const glm::mat4& clip_from_light);
-  void DrawScene(const gl::UniformSetter& u, bool casters_only) const;
+  // What a pass draws: everything, what casts into the comparison modes' maps (baked casters
+  // and the dynamic objects), or the dynamic objects alone.
+  enum class DrawSet { kAll, kCasters, kDynamic };
+  void DrawScene(const gl::UniformSetter& u, DrawSet set) const;
+  void SetDepthUniforms(const gl::UniformSetter& u) const;
   void SetShadeUniforms(ViewMode mode, const Camera& camera, const gl::UniformSetter& u) const;
 
   const gl::GlFunctions& gl_;
   const ViewScene* scene_;
   RenderSettings settings_;
   std::unique_ptr<Impl> impl_;
-  bool single_valid_ = false;  // the centre shadow map (hard, pcf, pcss, vsm)
-  bool layers_valid_ = false;  // the multi-sm maps
+  bool single_valid_ = false;   // the centre shadow map (hard, pcf, pcss, vsm)
+  bool layers_valid_ = false;   // the multi-sm maps
+  bool dynamic_valid_ = false;  // the dynamic objects' maps
   std::vector<glm::dvec2> samples_;
+  std::vector<glm::dvec2> dynamic_samples_;
+  // Window coordinates where the dynamic maps hold an object, over every sample (grown by a
+  // texel): a fragment looking up none of them has none of its shadow, and skips the maps.
+  // Unbounded when an object reaches behind a perspective light.
+  bool dynamic_reach_bounded_ = false;
+  glm::dvec2 dynamic_reach_min_{0.0}, dynamic_reach_max_{0.0};
+  glm::dvec2 dynamic_sample_min_{0.0}, dynamic_sample_max_{0.0};
   FrameTimings timings_;
 };
 

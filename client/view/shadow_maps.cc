@@ -1,6 +1,7 @@
 #include "client/view/shadow_maps.h"
 
 #include <algorithm>
+#include <limits>
 
 #include "absl/strings/str_cat.h"
 #include "gl/gl_program.h"
@@ -129,7 +130,7 @@ absl::Status ShadowMapTargets::RenderSingle(const PdsmHeader& header, const Shad
     bytes_single_ = uint64_t{8} * layout.size * layout.size;
   }
   if (absl::Status s = Bind(single_.name(), -1, layout.size); !s.ok()) return s;
-  Clear(header);
+  Clear(header, /*layered=*/false);
   draw(ShadowClipFromLight(header, layout, glm::dvec2(0.0)));
   return gl::CheckGlError(gl, "rendering the shadow map");
 }
@@ -144,9 +145,10 @@ absl::Status ShadowMapTargets::RenderLayers(const PdsmHeader& header, const Shad
   const uint64_t bytes = uint64_t{4} * layout.size * layout.size * count;
   if (count > max_layers || bytes > kMaxLayerBytes) {
     return absl::ResourceExhaustedError(
-        absl::StrCat("multi-sm: ", count, " shadow maps of ", layout.size, "^2 (", bytes >> 20,
-                     " MiB; at most ", max_layers, " layers and ", kMaxLayerBytes >> 20,
-                     " MiB here): lower --sm-count or --multi-sm-size"));
+        absl::StrCat(count, " shadow maps of ", layout.size, "^2 (", bytes >> 20, " MiB; at most ",
+                     max_layers, " layers and ", kMaxLayerBytes >> 20,
+                     " MiB here): lower the map count or size (--sm-count, --multi-sm-size, "
+                     "--dynamic-sm-count, --dynamic-sm-size)"));
   }
   if (layers_size_ != layout.size || layer_count_ != count) {
     layers_ = gl::MakeTexture(gl);
@@ -161,18 +163,22 @@ absl::Status ShadowMapTargets::RenderLayers(const PdsmHeader& header, const Shad
   }
   for (int k = 0; k < count; ++k) {
     if (absl::Status s = Bind(layers_.name(), k, layout.size); !s.ok()) return s;
-    Clear(header);
+    Clear(header, /*layered=*/true);
     draw(ShadowClipFromLight(header, layout, samples[k]));
   }
-  return gl::CheckGlError(gl, "rendering the multi-sm shadow maps");
+  return gl::CheckGlError(gl, "rendering the layered shadow maps");
 }
 
-void ShadowMapTargets::Clear(const PdsmHeader& header) {
-  // "No caster": a depth beyond every receiver (z_far + range, normalised depth 2), finite so
-  // that VSM's filtered moments stay meaningful next to a silhouette.
+void ShadowMapTargets::Clear(const PdsmHeader& header, bool layered) {
+  // "No caster": the single map (VSM's moments) a depth beyond every receiver (z_far + range,
+  // normalised depth 2), finite so that filtered moments stay meaningful next to a silhouette;
+  // the layers (plain depth tests) +infinity, so that a dynamic object moved farther than that
+  // is not taken for shadowed.
   const PdsmGeometry& g = header.geometry;
   const double range = std::max(g.z_far - g.z_near, 1e-6);
-  const float no_caster[4] = {static_cast<float>(g.z_far + range), 4.0f, 0, 0};
+  const float no_caster[4] = {
+      layered ? std::numeric_limits<float>::infinity() : static_cast<float>(g.z_far + range), 4.0f,
+      0, 0};
   const float beyond_everything = 0.0f;
   gl_->ClearBufferfv(GL_COLOR, 0, no_caster);
   gl_->ClearBufferfv(GL_DEPTH, 0, &beyond_everything);

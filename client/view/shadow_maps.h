@@ -5,7 +5,8 @@
 //
 // hard, pcf, pcss and vsm use one map from the light centre (RG32F: biased depth, second
 // moment); multi-sm renders one R32F layer per light sample of the bake, the brute force a
-// PDSM replaces. Both are drawn with the bake's depth bias and slope bias (PDSM header).
+// PDSM replaces, and the PDSM modes a few layers of the dynamic objects alone (their real-time
+// soft shadow). All are drawn with the bake's depth bias and slope bias (PDSM header).
 #ifndef PDSM_CLIENT_VIEW_SHADOW_MAPS_H_
 #define PDSM_CLIENT_VIEW_SHADOW_MAPS_H_
 
@@ -72,7 +73,7 @@ class ShadowMapTargets {
 
  private:
   absl::Status Bind(GLuint colour, int layer, int size);
-  void Clear(const PdsmHeader& header);
+  void Clear(const PdsmHeader& header, bool layered);
 
   const gl::GlFunctions* gl_;
   gl::Framebuffer framebuffer_;

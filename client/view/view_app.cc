@@ -89,9 +89,7 @@ absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
     if (!options.allow_mismatch) return s;
     spdlog::warn("{}", std::string(s.message()));
   }
-  view.baked = BuildBakedMeshes(view.scene, view.frame());
-  SceneBounds(view.scene, false, &view.bounds_min_world, &view.bounds_max_world);
-  SceneBounds(view.scene, true, &view.casters_min_world, &view.casters_max_world);
+  PrepareViewScene(&view);
   for (size_t i = 0; i < options.objects.size(); ++i) {
     absl::StatusOr<DynamicObject> object = MakeDynamicObject(options.objects[i], i);
     if (!object.ok()) return object.status();

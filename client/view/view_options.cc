@@ -68,7 +68,8 @@ absl::StatusOr<std::vector<DynamicObjectSpec>> ParseObjects(
 
 absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
   ViewOptions o;
-  std::string size = "1280x720", mode = "pdsm", compare, camera;
+  std::string size = "1280x720", mode = "pdsm", compare, camera, combine = "product";
+  bool no_dynamic_shadows = false;
   std::vector<std::string> spheres, meshes, transforms;
   bool no_bilinear = false;
   CLI::App app{"pdsm-view: look at a penumbra deep shadow map on the GPU (docs/viewer.md)",
@@ -100,6 +101,17 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
   app.add_option("--object", meshes, "Dynamic mesh file, repeatable");
   app.add_option("--object-transform", transforms,
                  "16 numbers, row-major world_from_object of the matching --object");
+  app.add_flag("--no-dynamic-shadows", no_dynamic_shadows,
+               "pdsm/cpu: the dynamic objects receive the baked shadow but cast none");
+  app.add_option("--dynamic-sm-count", o.render.dynamic_sm_count,
+                 "pdsm/cpu: shadow maps of the dynamic objects (light samples)")
+      ->default_val(o.render.dynamic_sm_count);
+  app.add_option("--dynamic-sm-size", o.render.dynamic_sm_size,
+                 "pdsm/cpu: texels per side of those maps")
+      ->default_val(o.render.dynamic_sm_size);
+  app.add_option("--dynamic-combine", combine,
+                 "product | max: how baked and dynamic attenuation combine (docs/viewer.md)")
+      ->default_val(combine);
   app.add_option("--frames", o.frames,
                  "Window: render N frames (with --job: after the final PDSM arrived), write "
                  "--screenshot, exit");
@@ -118,6 +130,20 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
     return absl::InvalidArgumentError(e.what());
   }
   o.render.bilinear = !no_bilinear;
+  o.render.dynamic_shadows = !no_dynamic_shadows;
+  if (combine == "max") {
+    o.render.dynamic_combine = DynamicCombine::kMax;
+  } else if (combine == "product") {
+    o.render.dynamic_combine = DynamicCombine::kProduct;
+  } else {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--dynamic-combine: expected max or product, got \"", combine, "\""));
+  }
+  if (o.render.dynamic_sm_count < 1 || o.render.dynamic_sm_count > 1024 ||
+      o.render.dynamic_sm_size < 16 || o.render.dynamic_sm_size > 8192) {
+    return absl::InvalidArgumentError(
+        "--dynamic-sm-count in 1..1024, --dynamic-sm-size in 16..8192");
+  }
   const std::vector<std::string> wh = absl::StrSplit(size, 'x');
   if (wh.size() != 2 || !absl::SimpleAtoi(wh[0], &o.width) || !absl::SimpleAtoi(wh[1], &o.height) ||
       o.width < 1 || o.height < 1 || o.width > 16384 || o.height > 16384) {

@@ -121,6 +121,12 @@ std::vector<DrawMesh> BuildBakedMeshes(const Scene& scene, const LightFrame& fra
   return meshes;
 }
 
+void PrepareViewScene(ViewScene* view) {
+  view->baked = BuildBakedMeshes(view->scene, view->frame());
+  SceneBounds(view->scene, false, &view->bounds_min_world, &view->bounds_max_world);
+  SceneBounds(view->scene, true, &view->casters_min_world, &view->casters_max_world);
+}
+
 DrawMesh MakeUnitSphere(int segments, int rings) {
   DrawMesh mesh;
   mesh.label = "sphere";

@@ -62,6 +62,9 @@ absl::Status CheckPdsmMatchesScene(const Scene& scene, const PdsmHeader& header,
 // The scene's meshes in the PDSM's light space, flat-shaded, one colour each.
 std::vector<DrawMesh> BuildBakedMeshes(const Scene& scene, const LightFrame& frame);
 
+// Fills `view`'s baked meshes and bounds from its scene and its PDSM's light frame.
+void PrepareViewScene(ViewScene* view);
+
 // A UV sphere of radius 1 at the origin.
 DrawMesh MakeUnitSphere(int segments = 48, int rings = 24);
 

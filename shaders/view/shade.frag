@@ -50,6 +50,22 @@ uniform float z_near;
 uniform float z_far;
 uniform int filter_radius;    // texels, pcf and vsm
 
+// ---- pdsm and cpu modes: the dynamic objects' own soft shadow (they were not in the bake).
+uniform int dynamic_count;           // maps (light samples); 0: no dynamic object casts
+uniform sampler2DArray dynamic_maps;  // R32F (in .r), the dynamic objects alone, +inf: none
+layout(std430, binding = 2) readonly buffer DynamicSamples { vec2 dynamic_samples[]; };
+uniform vec2 dynamic_window_min;
+uniform vec2 dynamic_window_size;
+uniform ivec2 dynamic_sm_size;
+uniform int dynamic_combine;  // 0: max(A_baked, A_dynamic); 1: 1 - (1 - A_baked)(1 - A_dynamic)
+// Where the maps hold an object (window coordinates, over every sample, grown by a texel), and
+// the samples' range: a fragment whose lookups all fall outside skips the maps.
+uniform int dynamic_bounded;
+uniform vec2 dynamic_reach_min;
+uniform vec2 dynamic_reach_max;
+uniform vec2 dynamic_sample_min;
+uniform vec2 dynamic_sample_max;
+
 // A(z) of one PDSM pixel: the last vertex with depth <= z and the next one, by binary search;
 // linear between them, 0 before the first, the last value after the last (right-continuous at
 // jumps) -- EvaluateAttenuation in core/pdsm/attenuation_function.cc.
@@ -218,11 +234,41 @@ float MultiShadowMap(vec3 p) {
   return hidden / float(max(sample_count, 1));
 }
 
+// The fraction of the dynamic objects' light samples they hide from p: the average of
+// dynamic_count hard tests, one per map (the same parallel shadow maps as multi-sm's).
+float DynamicAttenuation(vec3 p) {
+  if (orthographic == 0 && !(p.z > 0.0)) return 0.0;
+  if (dynamic_bounded != 0) {
+    vec2 a = WindowFromLight(p, dynamic_sample_min), b = WindowFromLight(p, dynamic_sample_max);
+    if (any(lessThan(max(a, b), dynamic_reach_min)) ||
+        any(greaterThan(min(a, b), dynamic_reach_max))) {
+      return 0.0;
+    }
+  }
+  float hidden = 0.0;
+  for (int k = 0; k < dynamic_count; ++k) {
+    vec2 st = WindowFromLight(p, dynamic_samples[k]);
+    ivec2 texel = ivec2(floor((st - dynamic_window_min) / dynamic_window_size *
+                              vec2(dynamic_sm_size)));
+    if (any(lessThan(texel, ivec2(0))) || any(greaterThanEqual(texel, dynamic_sm_size))) continue;
+    if (p.z > texelFetch(dynamic_maps, ivec3(texel, k), 0).r) hidden += 1.0;
+  }
+  return hidden / float(dynamic_count);
+}
+
+// The baked attenuation (or -1 outside the PDSM, -3 pending) with the dynamic objects' shadow.
+float WithDynamicShadow(float baked, vec3 p) {
+  if (dynamic_count == 0 || baked == kPending) return baked;
+  float d = DynamicAttenuation(p);
+  if (baked < 0.0) return d > 0.0 ? d : baked;  // outside the PDSM: only the dynamic shadow
+  return dynamic_combine == 0 ? max(baked, d) : 1.0 - (1.0 - baked) * (1.0 - d);
+}
+
 float Attenuation(vec3 p) {
-  if (mode == kModePdsm) return PdsmAttenuation(p);
+  if (mode == kModePdsm) return WithDynamicShadow(PdsmAttenuation(p), p);
   if (mode == kModeCpu) {
     float a = texelFetch(cpu_attenuation, ivec2(gl_FragCoord.xy), 0).r;
-    return isnan(a) ? -1.0 : a;
+    return WithDynamicShadow(isnan(a) ? -1.0 : a, p);
   }
   // Behind a perspective light the shadow maps have no projection (and float-to-int of the
   // inf/NaN it would give is undefined): such points are lit.

@@ -85,6 +85,14 @@ TEST(ViewBadInput, MissingFilesAndBadFlags) {
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("--mode"), std::string::npos) << r.err;
 
+  r = Headless("plates", SmallBake("plates"), "--dynamic-combine sum", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--dynamic-combine"), std::string::npos) << r.err;
+
+  r = Headless("plates", SmallBake("plates"), "--dynamic-sm-count 0", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--dynamic-sm-count"), std::string::npos) << r.err;
+
   WriteText(dir.File("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
   r = Headless(
       "plates", SmallBake("plates"),
