@@ -67,7 +67,8 @@ absl::Status RunHeadless(const ViewOptions& options, const ViewScene& scene) {
         FrameRenderer::Create(*gl, &scene, options.render);
     if (!renderer.ok()) return renderer.status();
     const Camera camera = options.camera ? *options.camera : DefaultCamera(scene);
-    if (!options.screenshot_path.empty()) status = RenderScreenshot(**renderer, options, camera);
+    if (!options.screenshot_path.empty())
+      status = RenderScreenshot(**renderer, options, scene, camera);
     if (status.ok() && options.bench_frames > 0) {
       status = RunBenchmark(**renderer, options, camera);
     }

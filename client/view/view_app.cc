@@ -1,14 +1,20 @@
 #include "client/view/view_app.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <string>
 
+#include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "client/cli_common.h"
 #include "client/view/image_io.h"
 #include "client/view/job_follower.h"
 #include "client/view/pdsm_source.h"
+#include "client/view/text_overlay.h"
 #include "core/bake/bake_plan.h"
 #include "core/scene/scene_loader.h"
 #include "spdlog/sinks/stdout_color_sinks.h"
@@ -98,8 +104,72 @@ absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
   return view;
 }
 
+namespace {
+
+std::vector<std::string> LegendLines(const ViewScene& scene, const FrameRenderer& renderer) {
+  const PdsmHeader& h = scene.pdsm.header;
+  std::vector<std::string> lines = {
+      absl::StrCat("SCENE ", scene.scene.name),
+      absl::StrFormat("PDSM %dX%d, %d SAMPLES", h.geometry.width, h.geometry.height, h.samples)};
+  switch (h.light_shape) {
+    case LightShape::kRect:
+      lines.push_back(absl::StrFormat("RECT LIGHT %.3g X %.3g", 2 * h.light_half_width,
+                                      2 * h.light_half_height));
+      break;
+    case LightShape::kDisk:
+      lines.push_back(absl::StrFormat("DISK LIGHT, RADIUS %.3g", h.light_radius));
+      break;
+    case LightShape::kSun:
+      lines.push_back(absl::StrFormat("SUN, %.3g DEG ACROSS",
+                                      2 * std::atan(h.tan_half_angle) * 180 / std::numbers::pi));
+      break;
+  }
+  if (!scene.dynamic_objects.empty()) {
+    lines.push_back(absl::StrCat("+ ", scene.dynamic_objects.size(), " DYNAMIC OBJECT",
+                                 scene.dynamic_objects.size() > 1 ? "S" : ""));
+    lines.push_back(
+        renderer.dynamic_sm_samples().empty()
+            ? "(RECEIVE ONLY IN PDSM)"
+            : absl::StrCat("(THEIR SHADOW: ", renderer.dynamic_sm_samples().size(), " MAPS)"));
+  }
+  return lines;
+}
+
+// The tiles of --compare, each labelled with its mode, in rows; spare cells of the last row get
+// the legend (the scene and its bake) instead of staying black.
+RgbImage CompareImage(std::vector<RgbImage> tiles, const std::vector<ViewMode>& modes, int columns,
+                      const std::vector<std::string>& legend) {
+  const int scale = LabelScale(tiles.front().height);
+  for (size_t i = 0; i < tiles.size(); ++i) {
+    DrawLabel(&tiles[i], 3 * scale, 3 * scale, absl::AsciiStrToUpper(ModeName(modes[i])), scale);
+  }
+  const int n = static_cast<int>(tiles.size());
+  columns = std::clamp(columns, 1, n);
+  const int spare = (columns - n % columns) % columns;
+  if (spare > 0) {
+    RgbImage cell = tiles.front();
+    for (size_t p = 0; p < cell.rgb.size(); p += 3) {
+      cell.rgb[p] = 28, cell.rgb[p + 1] = 31, cell.rgb[p + 2] = 36;  // the viewer's background
+    }
+    RgbImage with_legend = cell;
+    DrawText(&with_legend, 6 * scale, 6 * scale, legend, scale);
+    tiles.push_back(with_legend);
+    for (int i = 1; i < spare; ++i) tiles.push_back(cell);
+  }
+  return Composite(tiles, columns, 4);
+}
+
+}  // namespace
+
+int CompareColumns(int tiles) {
+  if (tiles <= 4) return std::max(tiles, 1);
+  // 3 or 4: fewer would make tall images.
+  const int spare4 = (4 - tiles % 4) % 4, spare3 = (3 - tiles % 3) % 3;
+  return spare3 < spare4 ? 3 : 4;
+}
+
 absl::Status RenderScreenshot(FrameRenderer& renderer, const ViewOptions& options,
-                              const Camera& camera) {
+                              const ViewScene& scene, const Camera& camera) {
   const std::vector<ViewMode> modes =
       options.compare.empty() ? std::vector<ViewMode>{options.mode} : options.compare;
   std::vector<RgbImage> tiles;
@@ -116,11 +186,13 @@ absl::Status RenderScreenshot(FrameRenderer& renderer, const ViewOptions& option
     names.push_back(ModeName(mode));
   }
   const int columns =
-      options.compare_columns > 0 ? options.compare_columns : std::min<int>(modes.size(), 4);
-  const RgbImage image = tiles.size() == 1 ? tiles.front() : Composite(tiles, columns, 4);
+      options.compare_columns > 0 ? options.compare_columns : CompareColumns(modes.size());
+  const RgbImage image = options.compare.empty() ? tiles.front()
+                                                 : CompareImage(std::move(tiles), modes, columns,
+                                                                LegendLines(scene, renderer));
   if (absl::Status s = WritePng(options.screenshot_path, image); !s.ok()) return s;
   if (!options.compare.empty()) {
-    std::printf("compare (left to right, top to bottom, %d per row): %s\n", columns,
+    std::printf("compare (left to right, top to bottom, %d per row, labelled): %s\n", columns,
                 absl::StrJoin(names, ",").c_str());
   }
   std::printf("wrote %s (%dx%d)\n", options.screenshot_path.c_str(), image.width, image.height);

@@ -16,10 +16,15 @@ int RunViewer(int argc, char** argv);
 // Loads everything the options name into a ViewScene (no GL needed).
 absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options);
 
-// Renders the options' mode, or the --compare tiles, into --screenshot (and the attenuation
-// into --save-attenuation, single mode only); prints the tile order.
+// Renders the options' mode, or the --compare tiles (each labelled with its mode; spare cells
+// of the last row hold a legend of the scene and its bake), into --screenshot (and the
+// attenuation into --save-attenuation, single mode only); prints the tile order.
 absl::Status RenderScreenshot(FrameRenderer& renderer, const ViewOptions& options,
-                              const Camera& camera);
+                              const ViewScene& scene, const Camera& camera);
+
+// --compare without --compare-columns: all in one row up to 4, else 3 or 4 per row, whichever
+// leaves fewer spare cells (ties: 4).
+int CompareColumns(int tiles);
 
 absl::Status RunHeadless(const ViewOptions& options, const ViewScene& scene);
 absl::Status RunWindow(const ViewOptions& options, ViewScene& scene);

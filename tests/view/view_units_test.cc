@@ -6,6 +6,8 @@
 
 #include "client/view/camera.h"
 #include "client/view/shadow_maps.h"
+#include "client/view/text_overlay.h"
+#include "client/view/view_app.h"
 #include "client/view/view_mode.h"
 #include "client/view/view_scene.h"
 #include "core/scene/scene_loader.h"
@@ -24,6 +26,39 @@ TEST(ViewUnits, ModeListsRoundTripAndNameTheBadEntry) {
   ASSERT_FALSE(bad.ok());
   EXPECT_NE(bad.status().message().find("--compare"), std::string::npos);
   EXPECT_NE(bad.status().message().find("soft"), std::string::npos);
+}
+
+// --compare's layout: up to 4 per row, as few spare cells as can be.
+TEST(ViewUnits, CompareColumnsLeaveFewSpareCells) {
+  for (auto [tiles, columns] :
+       {std::pair{1, 1}, {2, 2}, {3, 3}, {4, 4}, {5, 3}, {6, 3}, {7, 4}, {8, 4}, {9, 3}, {10, 4}}) {
+    EXPECT_EQ(view::CompareColumns(tiles), columns) << tiles;
+  }
+}
+
+// Labels change only the pixels of their box, and a label of other text looks different.
+TEST(ViewUnits, LabelsDrawTextInTheirBoxOnly) {
+  view::RgbImage a{60, 30, std::vector<uint8_t>(60 * 30 * 3, 128)};
+  view::RgbImage b = a;
+  view::DrawLabel(&a, 2, 3, "PDSM", 1);
+  view::DrawLabel(&b, 2, 3, "HARD", 1);
+  const int box_w = view::TextWidth("PDSM", 1) + 4, box_h = view::TextHeight(1) + 4;
+  int white = 0, differing = 0;
+  for (int y = 0; y < 30; ++y) {
+    for (int x = 0; x < 60; ++x) {
+      const size_t p = (static_cast<size_t>(y) * 60 + x) * 3;
+      const bool in_box = x >= 2 && x < 2 + box_w && y >= 3 && y < 3 + box_h;
+      if (!in_box) {
+        EXPECT_EQ(a.rgb[p], 128) << x << "," << y;
+      }
+      white += a.rgb[p] == 255;
+      differing += a.rgb[p] != b.rgb[p];
+    }
+  }
+  EXPECT_GT(white, 30);
+  EXPECT_GT(differing, 10);
+  EXPECT_EQ(view::LabelScale(120), 1);
+  EXPECT_EQ(view::LabelScale(720), 5);
 }
 
 TEST(ViewUnits, CameraParsesAndRefusesNonsense) {
