@@ -10,6 +10,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
+#include "core/pdsm/pdsm_query.h"
 
 namespace pdsm::view {
 namespace {
@@ -20,13 +21,55 @@ double SceneRadius(const ViewScene& scene) {
 
 }  // namespace
 
-Camera DefaultCamera(const ViewScene& scene) {
+void DefaultFraming(const ViewScene& scene, glm::dvec3* min_world, glm::dvec3* max_world) {
+  glm::dvec3 lo = scene.casters_min_world, hi = scene.casters_max_world;
+  if (!scene.pdsm.vertices.empty()) {
+    // Receiver points, area-weighted: a fixed count spread over the triangles by error
+    // diffusion (small triangles may get none), placed by the R2 sequence (Roberts 2018).
+    constexpr int kPoints = 16384;
+    constexpr double kShadow = 0.02;
+    const double g = 1.32471795724474602596;  // the plastic number
+    const double a1 = 1.0 / g, a2 = 1.0 / (g * g);
+    double total = 0;
+    for (const TriangleMesh& mesh : scene.scene.meshes) {
+      if (!Receives(mesh.role)) continue;
+      for (size_t i = 0; i + 2 < mesh.indices.size(); i += 3) {
+        const glm::dvec3& p0 = mesh.positions_world[mesh.indices[i]];
+        total += 0.5 * glm::length(glm::cross(mesh.positions_world[mesh.indices[i + 1]] - p0,
+                                              mesh.positions_world[mesh.indices[i + 2]] - p0));
+      }
+    }
+    double carry = 0;
+    int64_t k = 0;
+    for (const TriangleMesh& mesh : scene.scene.meshes) {
+      if (!Receives(mesh.role) || !(total > 0)) continue;
+      for (size_t i = 0; i + 2 < mesh.indices.size(); i += 3) {
+        const glm::dvec3& p0 = mesh.positions_world[mesh.indices[i]];
+        const glm::dvec3 e1 = mesh.positions_world[mesh.indices[i + 1]] - p0;
+        const glm::dvec3 e2 = mesh.positions_world[mesh.indices[i + 2]] - p0;
+        carry += kPoints * 0.5 * glm::length(glm::cross(e1, e2)) / total;
+        for (; carry >= 1.0; carry -= 1.0, ++k) {
+          double u = std::fmod(0.5 + a1 * k, 1.0), v = std::fmod(0.5 + a2 * k, 1.0);
+          if (u + v > 1) u = 1 - u, v = 1 - v;
+          const glm::dvec3 p = p0 + u * e1 + v * e2;
+          if (QueryAttenuation(scene.pdsm, p) >= kShadow) {  // false for NaN
+            lo = glm::min(lo, p);
+            hi = glm::max(hi, p);
+          }
+        }
+      }
+    }
+  }
+  *min_world = lo;
+  *max_world = hi;
+}
+
+Camera DefaultCamera(const ViewScene& scene, double aspect) {
   const LightFrame& f = scene.frame();
   Camera camera;
-  // The casters and the shadows they throw around them.
-  camera.target_world = 0.5 * (scene.casters_min_world + scene.casters_max_world);
-  const double radius =
-      std::max(0.75 * glm::length(scene.casters_max_world - scene.casters_min_world), 1e-3);
+  glm::dvec3 lo, hi;
+  DefaultFraming(scene, &lo, &hi);
+  camera.target_world = 0.5 * (lo + hi);
   // From above, turned about 60 degrees in azimuth away from the light's side: shadows fall
   // beside their casters in view instead of hiding behind them.
   const glm::dvec3 up(0, 1, 0);
@@ -35,10 +78,25 @@ Camera DefaultCamera(const ViewScene& scene) {
   if (glm::length(toward_light) < 1e-6) toward_light = glm::dvec3(1, 0, 0);
   toward_light = glm::normalize(toward_light);
   const glm::dvec3 side = glm::cross(up, toward_light);
-  const glm::dvec3 direction = glm::normalize(0.9 * up + 0.7 * side + 0.35 * toward_light);
-  const double half_fov = 0.5 * glm::radians(camera.fov_y_degrees);
-  const double distance = radius / std::sin(half_fov);
-  camera.eye_world = camera.target_world + distance * direction;
+  const glm::dvec3 back = glm::normalize(0.9 * up + 0.7 * side + 0.35 * toward_light);
+  // As close as holds every corner of the box: a corner at (x, y) across and z toward the eye
+  // from the target needs a distance D with |x| <= tan_h (D - z) and |y| <= tan_v (D - z).
+  const glm::dvec3 forward = -back;
+  const glm::dvec3 right = glm::normalize(glm::cross(forward, up));
+  const glm::dvec3 view_up = glm::cross(right, forward);
+  const double tan_v = std::tan(0.5 * glm::radians(camera.fov_y_degrees));
+  const double tan_h = tan_v * std::max(aspect, 1e-3);
+  constexpr double kMargin = 1.1;
+  double distance = 1e-3 + 0.5 * glm::length(hi - lo);  // never inside the box
+  for (int corner = 0; corner < 8; ++corner) {
+    const glm::dvec3 c((corner & 1) ? hi.x : lo.x, (corner & 2) ? hi.y : lo.y,
+                       (corner & 4) ? hi.z : lo.z);
+    const glm::dvec3 r = c - camera.target_world;
+    const double z = glm::dot(r, back);
+    distance = std::max({distance, z + kMargin * std::abs(glm::dot(r, right)) / tan_h,
+                         z + kMargin * std::abs(glm::dot(r, view_up)) / tan_v});
+  }
+  camera.eye_world = camera.target_world + distance * back;
   return camera;
 }
 

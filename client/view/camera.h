@@ -20,9 +20,15 @@ struct Camera {
   double fov_y_degrees = 45;
 };
 
-// Looks down at the casters' bounds from above, turned away from the light's side so that
-// shadows fall beside their casters, far enough to hold 1.5x their bounding sphere.
-Camera DefaultCamera(const ViewScene& scene);
+// What the default camera frames: the casters' bounds and the shadows they throw on the
+// receivers (receiver points where the PDSM says A >= 0.02, sampled area-weighted). Only the
+// casters while no PDSM pixel is baked yet; the whole scene when nothing casts.
+void DefaultFraming(const ViewScene& scene, glm::dvec3* min_world, glm::dvec3* max_world);
+
+// Looks down at DefaultFraming's box from above, turned about 60 degrees in azimuth away from
+// the light's side so that shadows fall beside their casters, as close as holds the whole box
+// in an image of `aspect` (width / height) with a 10% margin.
+Camera DefaultCamera(const ViewScene& scene, double aspect = 16.0 / 9.0);
 
 // The comma-separated finite numbers of a flag's value; INVALID_ARGUMENT naming `flag` and the
 // first part that is not one. Shared by --camera and the dynamic-object flags.

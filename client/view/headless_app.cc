@@ -66,7 +66,9 @@ absl::Status RunHeadless(const ViewOptions& options, const ViewScene& scene) {
     absl::StatusOr<std::unique_ptr<FrameRenderer>> renderer =
         FrameRenderer::Create(*gl, &scene, options.render);
     if (!renderer.ok()) return renderer.status();
-    const Camera camera = options.camera ? *options.camera : DefaultCamera(scene);
+    const Camera camera =
+        options.camera ? *options.camera
+                       : DefaultCamera(scene, static_cast<double>(options.width) / options.height);
     if (!options.screenshot_path.empty())
       status = RenderScreenshot(**renderer, options, scene, camera);
     if (status.ok() && options.bench_frames > 0) {

@@ -188,7 +188,9 @@ absl::Status RunWindow(const ViewOptions& options, ViewScene& scene) {
   WindowState state;
   state.scene = &scene;
   state.renderer = renderer->get();
-  state.home = state.camera = options.camera ? *options.camera : DefaultCamera(scene);
+  state.home = state.camera =
+      options.camera ? *options.camera
+                     : DefaultCamera(scene, static_cast<double>(options.width) / options.height);
   state.mode = options.mode;
   state.step = 0.02 * glm::length(scene.bounds_max_world - scene.bounds_min_world);
   glfwSetWindowUserPointer(window->get(), &state);

@@ -10,8 +10,10 @@
 #include "client/view/view_app.h"
 #include "client/view/view_mode.h"
 #include "client/view/view_scene.h"
+#include "core/pdsm/pdsm_file.h"
 #include "core/scene/scene_loader.h"
 #include "tests/test_support.h"
+#include "tests/view/view_test_support.h"
 
 namespace pdsm::testing {
 namespace {
@@ -59,6 +61,35 @@ TEST(ViewUnits, LabelsDrawTextInTheirBoxOnly) {
   EXPECT_GT(differing, 10);
   EXPECT_EQ(view::LabelScale(120), 1);
   EXPECT_EQ(view::LabelScale(720), 5);
+}
+
+// The default camera frames the casters and the shadows they throw: a shadowed ground point
+// well outside the casters' bounds is inside the framing, and in view.
+TEST(ViewUnits, DefaultCameraFramesTheShadowsToo) {
+  view::ViewScene scene;
+  absl::StatusOr<Scene> plates = LoadSceneFile(ExamplePath("plates"));
+  absl::StatusOr<PdsmImage> pdsm = ReadPdsm(SmallBake("plates"));
+  ASSERT_TRUE(plates.ok() && pdsm.ok());
+  scene.scene = *plates;
+  scene.pdsm = *pdsm;
+  view::PrepareViewScene(&scene);
+  glm::dvec3 lo, hi;
+  view::DefaultFraming(scene, &lo, &hi);
+  // The square (x in [-3, 0], z in [-2.5, 0.5] at y = 4) throws its shadow beyond the casters'
+  // bounds towards -x, -z (the light is at the origin's vertical, 10 up).
+  EXPECT_LT(lo.x, scene.casters_min_world.x - 0.5);
+  EXPECT_LT(lo.z, scene.casters_min_world.z - 0.5);
+  EXPECT_LT(lo.y, scene.casters_min_world.y + 0.01);  // the ground is in
+  EXPECT_LT(hi.x - lo.x, 20.0);                       // not the whole 20 x 20 ground
+  // Every corner of the framing projects inside the image.
+  const view::Camera camera = view::DefaultCamera(scene, 16.0 / 9.0);
+  const glm::mat4 clip = view::ClipFromLight(camera, scene, 16.0 / 9.0);
+  for (int c = 0; c < 8; ++c) {
+    const glm::dvec3 w((c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z);
+    const glm::vec4 p = clip * glm::vec4(glm::vec3(scene.frame().LightFromWorld(w)), 1.0f);
+    EXPECT_LE(std::abs(p.x / p.w), 1.0f) << c;
+    EXPECT_LE(std::abs(p.y / p.w), 1.0f) << c;
+  }
 }
 
 TEST(ViewUnits, CameraParsesAndRefusesNonsense) {
