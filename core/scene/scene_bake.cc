@@ -262,6 +262,7 @@ pdsm::v1::BakeParams BakeParamsOf(const BakeSettings& b) {
   out.set_adaptive_tolerance(b.adaptive_tolerance);
   out.set_adaptive_min_samples(b.adaptive_min_samples);
   out.set_surfaces_only(b.surfaces_only);
+  out.set_tile_group_size(b.tile_group_size);
   return out;
 }
 

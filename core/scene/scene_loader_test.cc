@@ -484,7 +484,7 @@ TEST_F(SceneLoaderTest, EffectiveBakeParamsRoundTrip) {
         std::string(R"({"resolution": [300, 200], "samples": 9, "depthBias": 0.25, "seed": "77",
             "sampling": "HALTON", "compressionMetric": "PERPENDICULAR", "surfacesOnly": true,
             "frustum": {"window": [-0.5, 0.5, -0.25, 0.75], "depthRange": [1, 20]}})"),
-        std::string(R"({"samples": 64, "adaptiveTolerance": 0.05})")}) {
+        std::string(R"({"samples": 64, "adaptiveTolerance": 0.05, "tileGroupSize": 2})")}) {
     absl::StatusOr<Scene> scene = Load(SceneJson(kSquare, kRect, bake));
     ASSERT_TRUE(scene.ok()) << scene.status();
     absl::StatusOr<pdsm::v1::Scene> message =
@@ -505,10 +505,10 @@ TEST_F(SceneLoaderTest, EffectiveBakeParamsRoundTrip) {
     EXPECT_EQ(
         std::tie(x.width, x.height, x.samples, x.shadow_map_resolution, x.epsilon, x.depth_bias,
                  x.slope_bias, x.tile_size, x.seed, x.sampling, x.compression_metric,
-                 x.adaptive_tolerance, x.adaptive_min_samples, x.surfaces_only),
+                 x.adaptive_tolerance, x.adaptive_min_samples, x.surfaces_only, x.tile_group_size),
         std::tie(y.width, y.height, y.samples, y.shadow_map_resolution, y.epsilon, y.depth_bias,
                  y.slope_bias, y.tile_size, y.seed, y.sampling, y.compression_metric,
-                 y.adaptive_tolerance, y.adaptive_min_samples, y.surfaces_only))
+                 y.adaptive_tolerance, y.adaptive_min_samples, y.surfaces_only, y.tile_group_size))
         << bake;
     EXPECT_EQ(x.frustum.has_value(), y.frustum.has_value());
   }

@@ -241,7 +241,13 @@ TEST(ViewServer, ReadmeSequenceWithOverridesInAWindowAndHeadless) {
   options.worker_token = "worker-secret";
   ServiceCluster cluster(options);
   ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
-  const std::string scene = WriteSmallPlates(cluster.dir());
+  // Each tile its own group (the file's, kept by the submit), so that tasks hold one tile each.
+  std::string text = ReadBytes(WriteSmallPlates(cluster.dir()));
+  const std::string samples = "\"samples\": 8";
+  ASSERT_NE(text.find(samples), std::string::npos);
+  text.replace(text.find(samples), samples.size(), "\"samples\": 8, \"tileGroupSize\": 1");
+  const std::string scene = cluster.dir().File("plates_groups.json");
+  WriteText(scene, text);
   const std::string overrides = "--samples 32 --resolution 96x96 --tile-size 32";
   const std::string job_id = cluster.Submit(scene, overrides);
   ASSERT_EQ(job_id.size(), 16u);
@@ -254,6 +260,7 @@ TEST(ViewServer, ReadmeSequenceWithOverridesInAWindowAndHeadless) {
   EXPECT_EQ(job.bake().tile_size(), 32u);
   EXPECT_NE(job.bake().sampling(), pdsm::v1::SAMPLING_DEFAULT);  // resolved, not left to the viewer
   EXPECT_EQ(job.bake().shadow_map_resolution(), 512u);           // the file's, kept
+  EXPECT_EQ(job.bake().tile_group_size(), 1u);                   // the file's, kept
   EXPECT_EQ(job.plan_fingerprint().size(), 64u);
 
   TaskHolder holder(&cluster, options.worker_token);
