@@ -145,7 +145,8 @@ TEST(OutputSafety, NewFilesGetTheUmasksMode) {
       RunCommand("umask 027 && " + kPdsm + " bake " + scene + " -o " + dir.File("out.exr"), dir);
   ASSERT_EQ(bake.exit_code, 0) << bake.err;
   EXPECT_EQ(ModeOf(dir.File("out.exr")), "0640");
-  EXPECT_EQ(ModeOf(dir.File("out.png")), "0640");
+  EXPECT_EQ(ModeOf(dir.File("out.png")), "0640");        // the camera view
+  EXPECT_EQ(ModeOf(dir.File("out.light.png")), "0640");  // the map from the light
   const CommandResult sweep =
       RunCommand("umask 002 && " + kPdsm + " sweep " + scene + " --out " + dir.File("s") +
                      " --samples 4 --surface-points 20 --free-points 20 --reference-samples 16",

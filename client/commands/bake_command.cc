@@ -13,6 +13,8 @@
 #include "client/commands.h"
 #include "client/measure/target_error.h"
 #include "client/progress_reporter.h"
+#include "client/view/camera_view.h"
+#include "core/pdsm/pdsm_file.h"
 #include "core/scene/scene_loader.h"
 #include "core/util/output_path.h"
 #include "worker/local_bake.h"
@@ -36,7 +38,23 @@ std::string HumanBytes(uint64_t bytes) {
   return absl::StrFormat("%d B", bytes);
 }
 
-void PrintSummary(const Scene& scene, const BakeFlags& flags, const std::string& preview,
+// The two pictures a bake ends with: the camera view (what a user wants to see: the scene
+// with its soft shadows) and the map from the light (where every shadow hides behind its
+// caster, but every PDSM pixel shows). "" both with --no-preview.
+struct PreviewPaths {
+  std::string camera, light;
+};
+
+PreviewPaths PreviewPathsOf(const BakeFlags& flags) {
+  if (flags.no_preview) return {};
+  namespace fs = std::filesystem;
+  const fs::path camera = !flags.preview_path.empty()
+                              ? fs::path(flags.preview_path)
+                              : fs::path(flags.output_path).replace_extension(".png");
+  return {camera.string(), fs::path(camera).replace_extension(".light.png").string()};
+}
+
+void PrintSummary(const Scene& scene, const BakeFlags& flags, const PreviewPaths& previews,
                   const BakeSummary& s) {
   std::fprintf(
       stderr,
@@ -73,7 +91,10 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags, const std::string&
                  scene.bake.adaptive_min_samples, scene.bake.samples);
   }
   std::printf("pdsm: %s (%s)\n", flags.output_path.c_str(), HumanBytes(s.file_bytes).c_str());
-  if (!preview.empty()) std::printf("preview: %s\n", preview.c_str());
+  if (!previews.camera.empty()) {
+    std::printf("preview: %s (camera view, the baked soft shadows)\n", previews.camera.c_str());
+    std::printf("light view: %s (the map seen from the light)\n", previews.light.c_str());
+  }
 }
 
 // --target-error E: the knobs given on the command line stay fixed, the others are chosen.
@@ -141,14 +162,12 @@ int RunBake(const BakeFlags& flags) {
 
   LocalBakeOptions options;
   options.output_path = flags.output_path;
-  if (!flags.no_preview) {
-    options.preview_path =
-        !flags.preview_path.empty()
-            ? flags.preview_path
-            : std::filesystem::path(flags.output_path).replace_extension(".png").string();
-  }
-  if (absl::Status s = CheckOutputPaths(
-          {{"-o", flags.output_path}, {"--preview", options.preview_path}}, {flags.scene_path});
+  const PreviewPaths previews = PreviewPathsOf(flags);
+  options.preview_path = previews.light;
+  if (absl::Status s = CheckOutputPaths({{"-o", flags.output_path},
+                                         {"--preview", previews.camera},
+                                         {"--preview (its .light.png)", previews.light}},
+                                        {flags.scene_path});
       !s.ok()) {
     return ReportError(s);
   }
@@ -161,7 +180,18 @@ int RunBake(const BakeFlags& flags) {
   absl::StatusOr<BakeSummary> summary = RunLocalBake(*scene, options);
   progress.Finish();
   if (!summary.ok()) return ReportError(summary.status());
-  PrintSummary(*scene, flags, options.preview_path, *summary);
+  if (!previews.camera.empty()) {
+    // From the file just written, so the picture shows what the file holds.
+    absl::StatusOr<PdsmImage> pdsm = ReadPdsm(flags.output_path);
+    absl::Status s = pdsm.status();
+    if (s.ok()) s = view::WriteCameraView(*scene, *std::move(pdsm), previews.camera);
+    if (!s.ok()) {
+      return ReportError(absl::Status(
+          s.code(), absl::StrCat(flags.output_path, " was written, but not its camera view ",
+                                 previews.camera, ": ", s.message(), " (--no-preview skips it)")));
+    }
+  }
+  PrintSummary(*scene, flags, previews, *summary);
   return kExitOk;
 }
 
@@ -178,8 +208,10 @@ void RegisterBakeCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--samples-per-task", flags->samples_per_task,
                   "Light samples per task (default: all); does not change the result")
       ->check(CLI::Range(1, 1 << 20));
-  cmd->add_option("--preview", flags->preview_path, "Preview PNG (default: OUT with .png)");
-  cmd->add_flag("--no-preview", flags->no_preview, "Write no preview image");
+  cmd->add_option("--preview", flags->preview_path,
+                  "Camera view PNG (default: OUT with .png); the map from the light goes beside "
+                  "it, with .light.png");
+  cmd->add_flag("--no-preview", flags->no_preview, "Write neither picture");
   cmd->add_option("--target-error", flags->target_error,
                   "Choose the knobs not given to reach this mean attenuation error at least "
                   "cost (pilot bakes against the reference; writes no preview)")

@@ -136,8 +136,8 @@ absl::StatusOr<std::unique_ptr<FrameRenderer>> FrameRenderer::Create(
   if (absl::Status s = renderer->Init(); !s.ok()) return s;
   GLint max_block = 0;
   gl.GetIntegerv(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
-  spdlog::info("GL {}.{} ({}), largest PDSM vertex buffer {} bytes", major, minor,
-               reinterpret_cast<const char*>(gl.GetString(GL_RENDERER)), max_block);
+  spdlog::debug("GL {}.{} ({}), largest PDSM vertex buffer {} bytes", major, minor,
+                reinterpret_cast<const char*>(gl.GetString(GL_RENDERER)), max_block);
   return renderer;
 }
 

@@ -17,7 +17,6 @@
 #include "client/view/text_overlay.h"
 #include "core/bake/bake_plan.h"
 #include "core/scene/scene_loader.h"
-#include "spdlog/sinks/stdout_color_sinks.h"
 #include "spdlog/spdlog.h"
 
 namespace pdsm::view {
@@ -200,32 +199,6 @@ absl::Status RenderScreenshot(FrameRenderer& renderer, const ViewOptions& option
     if (absl::Status s = WritePfm(options.attenuation_path, attenuation); !s.ok()) return s;
   }
   return absl::OkStatus();
-}
-
-int RunViewer(int argc, char** argv) {
-  absl::StatusOr<ViewOptions> options = ParseViewOptions(argc, argv);
-  if (!options.ok()) {
-    if (options.status().code() == absl::StatusCode::kCancelled) {
-      std::printf("%s", std::string(options.status().message()).c_str());
-      return kExitOk;
-    }
-    std::fprintf(stderr, "pdsm-view: %s\n", std::string(options.status().message()).c_str());
-    return kExitBadInput;
-  }
-  // Logs (warnings, GL details) go to stderr: stdout carries the tile order and file names.
-  spdlog::set_default_logger(spdlog::stderr_color_mt("pdsm-view"));
-  spdlog::set_level(options->verbose ? spdlog::level::debug
-                                     : spdlog::level::warn);  // -v: GL details
-  absl::StatusOr<ViewScene> scene = LoadViewScene(*options);
-  absl::Status status = scene.status();
-  if (status.ok()) {
-    status = options->headless ? RunHeadless(*options, *scene) : RunWindow(*options, *scene);
-  }
-  if (!status.ok()) {
-    std::fprintf(stderr, "pdsm-view: %s\n", std::string(status.message()).c_str());
-    return ExitCodeFor(status);
-  }
-  return kExitOk;
 }
 
 }  // namespace pdsm::view

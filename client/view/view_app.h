@@ -11,6 +11,7 @@
 
 namespace pdsm::view {
 
+// The whole program (view_main.cc, which links the window).
 int RunViewer(int argc, char** argv);
 
 // Loads everything the options name into a ViewScene (no GL needed).

@@ -40,7 +40,8 @@ absl::Status CheckOutputPaths(const OutputPaths& outputs, const std::vector<std:
     for (const auto& [other_flag, other] : seen) {
       if (other == normal) {
         return absl::InvalidArgumentError(
-            absl::StrCat(flag, " ", path, ": the same file as ", other_flag));
+            absl::StrCat(flag, " ", path, ": the same file as ", other_flag,
+                         " (two outputs cannot share a path: give one of them another)"));
       }
     }
     seen.emplace_back(flag, normal);
