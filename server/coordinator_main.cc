@@ -14,6 +14,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/util/atomic_file.h"
+#include "core/util/version.h"
 #include "rpc/grpc_support.h"
 #include "server/caller_auth.h"
 #include "server/coordinator.h"
@@ -222,6 +223,7 @@ int main(int argc, char** argv) {
   app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}))
       ->capture_default_str();
+  app.set_version_flag("--version", pdsm::VersionLine("pdsm-coordinator"));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

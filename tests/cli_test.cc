@@ -1,10 +1,14 @@
 // The `pdsm` command line as a user runs it: exit codes 0 / 2 / 1, messages naming the file
 // and field, no output left behind on failure, query and info output formats.
+#include <cctype>
 #include <filesystem>
 #include <string>
+#include <utility>
 
 #include <gtest/gtest.h>
 
+#include "core/pdsm/pdsm_image.h"
+#include "core/util/version.h"
 #include "tests/test_support.h"
 
 namespace pdsm {
@@ -166,10 +170,38 @@ TEST(Cli, UnwritableOutputExits1OrTwoWithPath) {
   EXPECT_NE(r.err.find("/nonexistent-dir/x/out.exr"), std::string::npos) << r.err;
 }
 
+// The flag parser's errors too exit 2 with the "pdsm: " of every other error, and say where
+// the flags are listed; --help still succeeds.
 TEST(Cli, UsageErrorExits2) {
   TempDir dir;
-  EXPECT_EQ(RunCommand(kPdsm + " bake", dir).exit_code, 2);
-  EXPECT_EQ(RunCommand(kPdsm + " frobnicate", dir).exit_code, 2);
+  for (const std::string args :
+       {" bake", " frobnicate", " bake x.json -o y.exr --samples abc", " query"}) {
+    const CommandResult r = RunCommand(kPdsm + args, dir);
+    EXPECT_EQ(r.exit_code, 2) << args;
+    EXPECT_EQ(r.err.rfind("pdsm: ", 0), 0u) << args << ": " << r.err;
+    EXPECT_NE(r.err.find("--help"), std::string::npos) << args << ": " << r.err;
+  }
+  const CommandResult help = RunCommand(kPdsm + " bake --help", dir);
+  EXPECT_EQ(help.exit_code, 0) << help.err;
+  EXPECT_NE(help.out.find("--no-preview"), std::string::npos) << help.out;
+}
+
+// Every binary answers --version on stdout with exit 0: the project version and the PDSM
+// format it writes, as one line.
+TEST(Cli, EveryBinaryPrintsItsVersion) {
+  TempDir dir;
+  for (const auto& [binary, name] : {std::pair<std::string, std::string>{PDSM_CLI, "pdsm"},
+                                     {PDSM_COORDINATOR, "pdsm-coordinator"},
+                                     {PDSM_WORKER, "pdsm-worker"},
+                                     {PDSM_VIEW, "pdsm-view"}}) {
+    CommandResult r = RunCommand(binary + " --version", dir);
+    EXPECT_EQ(r.exit_code, 0) << name << ": " << r.err;
+    EXPECT_EQ(r.out, VersionLine(name) + "\n") << name;
+  }
+  EXPECT_EQ(VersionLine("pdsm"), std::string("pdsm ") + std::string(ProjectVersion()) +
+                                     " (PDSM file format " + std::to_string(kPdsmFormatVersion) +
+                                     ")");
+  EXPECT_FALSE(ProjectVersion().empty());
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include <CLI/CLI.hpp>
 
 #include "absl/strings/str_format.h"
+#include "core/util/version.h"
 #include "rpc/grpc_support.h"
 #include "worker/coordinator_client.h"
 #include "worker/remote_worker.h"
@@ -119,6 +120,7 @@ int main(int argc, char** argv) {
   app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}))
       ->capture_default_str();
+  app.set_version_flag("--version", pdsm::VersionLine("pdsm-worker"));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -15,7 +15,7 @@ namespace pdsm::view {
 int RunViewer(int argc, char** argv) {
   absl::StatusOr<ViewOptions> options = ParseViewOptions(argc, argv);
   if (!options.ok()) {
-    if (options.status().code() == absl::StatusCode::kCancelled) {  // --help
+    if (options.status().code() == absl::StatusCode::kCancelled) {  // --help, --version
       std::printf("%s", std::string(options.status().message()).c_str());
       return kExitOk;
     }

@@ -8,6 +8,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
 #include "core/util/output_path.h"
+#include "core/util/version.h"
 
 namespace pdsm::view {
 namespace {
@@ -122,10 +123,13 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
   app.add_flag("--allow-mismatch", o.allow_mismatch,
                "Warn instead of failing when the PDSM was baked from another scene/light");
   app.add_flag("-v,--verbose", o.verbose, "Debug logging");
+  app.set_version_flag("--version", VersionLine("pdsm-view"));
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
     return absl::CancelledError(app.help());
+  } catch (const CLI::CallForVersion& e) {
+    return absl::CancelledError(VersionLine("pdsm-view") + "\n");
   } catch (const CLI::ParseError& e) {
     return absl::InvalidArgumentError(e.what());
   }
