@@ -1,5 +1,6 @@
 // Query points: a text file with one "x,y,z" per line (world units). Blank lines and lines
-// starting with '#' are skipped. Errors name the file and line.
+// starting with '#' are skipped, and so is a header row "x,y,z" (any case, any spaces) before
+// the first point, as spreadsheets and pandas write it. Errors name the file and line.
 #ifndef PDSM_CLIENT_POINTS_CSV_H_
 #define PDSM_CLIENT_POINTS_CSV_H_
 
@@ -18,6 +19,7 @@ struct QueryPoint {
   std::string text;  // the line's x,y,z as written, echoed in the output
 };
 
+// `path` "-" reads standard input (named "stdin" in errors).
 absl::StatusOr<std::vector<QueryPoint>> ReadPointsCsv(const std::string& path);
 
 // The same from a stream; `label` names it in errors (the path, for ReadPointsCsv).

@@ -93,6 +93,33 @@ TEST(Cli, BadPointsFileNamesFileAndLine) {
   EXPECT_NE(r.err.find("pts.csv:2"), std::string::npos) << r.err;
 }
 
+// A header row "x,y,z" (as spreadsheets write it) is skipped before the first point, and only
+// there; `--points -` reads standard input.
+TEST(Cli, QueryTakesAHeaderRowAndStdin) {
+  TempDir dir;
+  const std::string scene = dir.File("tiny.json");
+  WriteText(scene, kGoodScene);
+  const std::string out = dir.File("tiny.exr");
+  ASSERT_EQ(RunCommand(kPdsm + " bake " + scene + " -o " + out + " --no-preview", dir).exit_code,
+            0);
+  WriteText(dir.File("header.csv"), "# points\n X , y,Z\n0,0,0\n4.5,0,4.5\n");
+  CommandResult r =
+      RunCommand(kPdsm + " query " + out + " --points " + dir.File("header.csv"), dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, "0,0,0,1.000000\n4.5,0,4.5,0.000000\n");
+
+  r = RunCommand("cat " + dir.File("header.csv") + " | " + kPdsm + " query " + out + " --points -",
+                 dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, "0,0,0,1.000000\n4.5,0,4.5,0.000000\n");
+
+  WriteText(dir.File("late.csv"), "0,0,0\nx,y,z\n");
+  r = RunCommand("cat " + dir.File("late.csv") + " | " + kPdsm + " query " + out + " --points -",
+                 dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("stdin:2"), std::string::npos) << r.err;
+}
+
 TEST(Cli, NotAPdsmFileExits2) {
   TempDir dir;
   WriteText(dir.File("fake.exr"), "definitely not an EXR file");

@@ -86,7 +86,9 @@ void RegisterQueryCommand(CLI::App& app, int* exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "query", "Attenuation at world points, from a PDSM file or a coordinator's job");
   cmd->add_option("pdsm", flags->pdsm_path, "PDSM file (.exr)");
-  cmd->add_option("--points", flags->points_path, "Points file: one x,y,z per line")->required();
+  cmd->add_option("--points", flags->points_path,
+                  "Points file: one x,y,z per line (a header row x,y,z allowed; - reads stdin)")
+      ->required();
   cmd->add_option("--job", flags->job_id, "A finished job on the coordinator, instead of a file");
   AddServiceFlags(cmd, &flags->service, /*required=*/false);
   cmd->callback([flags, exit_code] { *exit_code = RunQuery(*flags); });

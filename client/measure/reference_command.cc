@@ -61,7 +61,9 @@ void RegisterReferenceCommand(CLI::App& app, int* exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "reference", "Ground-truth attenuation at world points (exact or ray-traced)");
   cmd->add_option("scene", flags->scene_path, "Scene file (JSON)")->required();
-  cmd->add_option("--points", flags->points_path, "Points file: one x,y,z per line")->required();
+  cmd->add_option("--points", flags->points_path,
+                  "Points file: one x,y,z per line (a header row x,y,z allowed; - reads stdin)")
+      ->required();
   cmd->add_option("--method", flags->method,
                   "exact (rect/disk lights), embree (any light), auto: exact "
                   "for rect lights")
