@@ -29,6 +29,12 @@ TEST(CliSampling, EveryPatternBakes) {
     r = RunCommand(kPdsm + " info --json " + out, dir);
     ASSERT_EQ(r.exit_code, 0) << r.err;
     EXPECT_NE(r.out.find("\"samples\": 8"), std::string::npos) << r.out;
+    // pdsm info names the pattern as --sampling takes it, and the seed.
+    EXPECT_NE(r.out.find("\"sampling\": \"" + name + "\", \"seed\": \"1\""), std::string::npos)
+        << r.out;
+    r = RunCommand(kPdsm + " info " + out, dir);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("8 samples (" + name + ", seed 1)"), std::string::npos) << r.out;
   }
 }
 

@@ -80,6 +80,58 @@ TEST(Cli, BakeQueryInfoRoundTrip) {
   EXPECT_NE(r.out.find("\"samples\": 16"), std::string::npos) << r.out;
 }
 
+// pdsm info gives the light's size (rect: size, sun: angular diameter) and prints every number
+// of its text with 6 significant digits; --json keeps them exact.
+TEST(Cli, InfoGivesTheLightSizeWithSixDigits) {
+  TempDir dir;
+  const std::string rect = dir.File("rect.json"), sun = dir.File("sun.json");
+  WriteText(rect, Replace(kGoodScene, "\"size\": [1,1]", "\"size\": [1.5,0.75]"));
+  WriteText(sun, Replace(kGoodScene,
+                         R"("rect": {"center": [0,6,0], "normal": [0,-1,0], "up": [0,0,1], )"
+                         R"("size": [1,1]})",
+                         R"("sun": {"direction": [-0.4,-1,-0.3], "angularDiameterDeg": 4})"));
+  for (const std::string& scene : {rect, sun}) {
+    ASSERT_EQ(
+        RunCommand(kPdsm + " bake " + scene + " -o " + scene + ".exr --no-preview", dir).exit_code,
+        0)
+        << scene;
+  }
+  CommandResult r = RunCommand(kPdsm + " info " + rect + ".exr", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("light       rect, size 1.5 x 0.75, centre [0, 6, 0], normal [0, -1, 0]"),
+            std::string::npos)
+      << r.out;
+  r = RunCommand(kPdsm + " info " + sun + ".exr", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("light       sun, 4 deg across, centre ["), std::string::npos) << r.out;
+  // No number in the text has more than 6 significant digits (the sun's centre had 17); the
+  // first line, which names the file (a temporary folder of many digits), aside.
+  for (size_t i = r.out.find('\n'); i < r.out.size();) {
+    if (!std::isdigit(static_cast<unsigned char>(r.out[i]))) {
+      ++i;
+      continue;
+    }
+    size_t digits = 0, j = i;
+    bool leading = true;
+    for (; j < r.out.size() &&
+           (std::isdigit(static_cast<unsigned char>(r.out[j])) || r.out[j] == '.');
+         ++j) {
+      if (r.out[j] == '.') continue;
+      if (leading && r.out[j] == '0') continue;
+      leading = false;
+      ++digits;
+    }
+    EXPECT_LE(digits, 6u) << r.out.substr(i, j - i) << " in " << r.out;
+    i = j;
+  }
+  r = RunCommand(kPdsm + " info --json " + sun + ".exr", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"angularDiameterDeg\": 4"), std::string::npos) << r.out;
+  r = RunCommand(kPdsm + " info --json " + rect + ".exr", dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"lightSize\": [1.5, 0.75]"), std::string::npos) << r.out;
+}
+
 TEST(Cli, BadPointsFileNamesFileAndLine) {
   TempDir dir;
   const std::string scene = dir.File("tiny.json");

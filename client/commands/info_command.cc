@@ -1,6 +1,8 @@
 // `pdsm info PDSM.exr [--json]`: what a PDSM file holds and how it was made.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <string>
 
 #include "absl/strings/str_format.h"
@@ -31,6 +33,54 @@ std::string JsonString(const std::string& s) {
   return out + "\"";
 }
 
+// As `--sampling` takes them ("blue-noise"; the file's attribute spells it blue_noise).
+const char* SamplingName(SamplingPattern pattern) {
+  switch (pattern) {
+    case SamplingPattern::kStratified:
+      return "stratified";
+    case SamplingPattern::kUniform:
+      return "uniform";
+    case SamplingPattern::kSobol:
+      return "sobol";
+    case SamplingPattern::kHalton:
+      return "halton";
+    case SamplingPattern::kBlueNoise:
+      return "blue-noise";
+  }
+  return "?";
+}
+
+double SunDiameterDegrees(const PdsmHeader& h) {
+  return 2 * std::atan(h.tan_half_angle) * 180 / std::numbers::pi;
+}
+
+// The light's size as the scene file gives it: "size 3 x 3", "radius 0.5", "0.53 deg across".
+std::string LightSizeText(const PdsmHeader& h) {
+  switch (h.light_shape) {
+    case LightShape::kRect:
+      return absl::StrFormat("size %.6g x %.6g", 2 * h.light_half_width, 2 * h.light_half_height);
+    case LightShape::kDisk:
+      return absl::StrFormat("radius %.6g", h.light_radius);
+    case LightShape::kSun:
+      return absl::StrFormat("%.6g deg across", SunDiameterDegrees(h));
+  }
+  return "";
+}
+
+// The same as JSON members (exact: 17 significant digits, like every JSON number here).
+std::string LightSizeJson(const PdsmHeader& h) {
+  switch (h.light_shape) {
+    case LightShape::kRect:
+      return absl::StrFormat(", \"lightSize\": [%.17g, %.17g]", 2 * h.light_half_width,
+                             2 * h.light_half_height);
+    case LightShape::kDisk:
+      return absl::StrFormat(", \"lightRadius\": %.17g", h.light_radius);
+    case LightShape::kSun:
+      return absl::StrFormat(", \"angularDiameterDeg\": %.17g", SunDiameterDegrees(h));
+  }
+  return "";
+}
+
 int RunInfo(const InfoFlags& flags) {
   absl::StatusOr<PdsmImage> pdsm = ReadPdsm(flags.pdsm_path);
   if (!pdsm.ok()) return ReportError(pdsm.status());
@@ -43,8 +93,13 @@ int RunInfo(const InfoFlags& flags) {
     max_vertices = std::max(max_vertices, n);
     empty_pixels += n == 0;
   }
-  const auto v3 = [](const glm::dvec3& v) {
+  // JSON is exact (17 significant digits, so it reads back to the same double); the text is
+  // for people: 6 significant digits everywhere.
+  const auto v3_json = [](const glm::dvec3& v) {
     return absl::StrFormat("[%.17g, %.17g, %.17g]", v.x, v.y, v.z);
+  };
+  const auto v3_text = [](const glm::dvec3& v) {
+    return absl::StrFormat("[%.6g, %.6g, %.6g]", v.x, v.y, v.z);
   };
   const std::string projection =
       g.projection == Projection::kPerspective ? "perspective" : "orthographic";
@@ -74,29 +129,33 @@ int RunInfo(const InfoFlags& flags) {
         "\"depthRange\": [%.17g, %.17g], \"lightCenter\": %s, \"lightNormal\": %s, "
         "\"samples\": %d, \"shadowMapResolution\": %d, \"epsilon\": %.17g, "
         "\"depthBias\": %.17g, \"slopeBias\": %.17g, \"tileSize\": %d, "
+        "\"sampling\": \"%s\", \"seed\": \"%d\"%s, "
         "\"vertices\": %zu, \"maxVerticesPerPixel\": %zu, \"emptyPixels\": %zu%s%s}\n",
         h.format_version, JsonString(h.scene_name).c_str(),
         JsonString(LightShapeName(h.light_shape)).c_str(), projection.c_str(), g.width, g.height,
-        g.s_min, g.s_max, g.t_min, g.t_max, g.z_near, g.z_far, v3(g.frame.center).c_str(),
-        v3(g.frame.n).c_str(), h.samples, h.shadow_map_resolution, h.epsilon, h.depth_bias,
-        h.slope_bias, h.tile_size, pdsm->vertices.size(), max_vertices, empty_pixels,
-        adaptive_json.c_str(), validity_json.c_str());
+        g.s_min, g.s_max, g.t_min, g.t_max, g.z_near, g.z_far, v3_json(g.frame.center).c_str(),
+        v3_json(g.frame.n).c_str(), h.samples, h.shadow_map_resolution, h.epsilon, h.depth_bias,
+        h.slope_bias, h.tile_size, SamplingName(h.sampling), h.seed, LightSizeJson(h).c_str(),
+        pdsm->vertices.size(), max_vertices, empty_pixels, adaptive_json.c_str(),
+        validity_json.c_str());
     return kExitOk;
   }
   std::printf("%s: PDSM format %d, scene \"%s\"\n", flags.pdsm_path.c_str(), h.format_version,
               h.scene_name.c_str());
-  std::printf("  light       %s, centre %s, normal %s\n", LightShapeName(h.light_shape),
-              v3(g.frame.center).c_str(), v3(g.frame.n).c_str());
-  std::printf("  projection  %s, %dx%d pixels, window s [%g, %g] t [%g, %g]\n", projection.c_str(),
-              g.width, g.height, g.s_min, g.s_max, g.t_min, g.t_max);
-  std::printf("  depths      [%g, %g]\n", g.z_near, g.z_far);
+  std::printf("  light       %s, %s, centre %s, normal %s\n", LightShapeName(h.light_shape),
+              LightSizeText(h).c_str(), v3_text(g.frame.center).c_str(),
+              v3_text(g.frame.n).c_str());
+  std::printf("  projection  %s, %dx%d pixels, window s [%.6g, %.6g] t [%.6g, %.6g]\n",
+              projection.c_str(), g.width, g.height, g.s_min, g.s_max, g.t_min, g.t_max);
+  std::printf("  depths      [%.6g, %.6g]\n", g.z_near, g.z_far);
   std::printf(
-      "  bake        %d samples, shadow maps %d, epsilon %g, bias %g + slope %g, "
-      "tiles %d\n",
-      h.samples, h.shadow_map_resolution, h.epsilon, h.depth_bias, h.slope_bias, h.tile_size);
+      "  bake        %d samples (%s, seed %d), shadow maps %d, epsilon %.6g, "
+      "bias %.6g + slope %.6g, tiles %d\n",
+      h.samples, SamplingName(h.sampling), h.seed, h.shadow_map_resolution, h.epsilon, h.depth_bias,
+      h.slope_bias, h.tile_size);
   if (h.adaptive()) {
     std::printf(
-        "  adaptive    tolerance %g, first batch %d; samples per tile min %d, mean %.1f, "
+        "  adaptive    tolerance %.6g, first batch %d; samples per tile min %d, mean %.1f, "
         "max %d\n",
         h.adaptive_tolerance, h.adaptive_min_samples, tile_min, tile_mean, tile_max);
   }
@@ -105,7 +164,7 @@ int RunInfo(const InfoFlags& flags) {
         "  defined     %s%s%s\n",
         h.surfaces_only ? "only near the receiver surfaces (surfaces-only bake)" : "",
         h.surfaces_only && g.z_valid_min != 0 ? "; " : "",
-        g.z_valid_min != 0 ? absl::StrFormat("from depth %g on", g.z_valid_min).c_str() : "");
+        g.z_valid_min != 0 ? absl::StrFormat("from depth %.6g on", g.z_valid_min).c_str() : "");
   }
   std::printf("  functions   %zu vertices, at most %zu per pixel, %zu empty pixels (all lit)\n",
               pdsm->vertices.size(), max_vertices, empty_pixels);
