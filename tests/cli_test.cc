@@ -247,6 +247,11 @@ TEST(Cli, UnwritableOutputExits1OrTwoWithPath) {
       RunCommand(kPdsm + " bake " + scene + " -o /nonexistent-dir/x/out.exr", dir);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("/nonexistent-dir/x/out.exr"), std::string::npos) << r.err;
+  // Says what to do, not which temporary name failed.
+  EXPECT_NE(r.err.find("the folder /nonexistent-dir/x does not exist (create it first)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find(".tmp-"), std::string::npos) << r.err;
 }
 
 // The flag parser's errors too exit 2 with the "pdsm: " of every other error, and say where

@@ -141,6 +141,11 @@ class PosixFileSystem final : public FileSystem {
       if (fd < 0) {
         if (errno == EEXIST) continue;
         const int error_number = errno;
+        if (error_number == ENOENT) {  // the usual slip: an output folder not made yet
+          return ErrnoStatus(error_number,
+                             absl::StrCat("cannot write ", target, ": the folder ",
+                                          ParentDir(target), " does not exist (create it first)"));
+        }
         return ErrnoStatus(error_number, absl::StrCat("cannot create a temporary file for ", target,
                                                       " in ", ParentDir(target)));
       }
