@@ -132,6 +132,50 @@ TEST(Cli, InfoGivesTheLightSizeWithSixDigits) {
   EXPECT_NE(r.out.find("\"lightSize\": [1.5, 0.75]"), std::string::npos) << r.out;
 }
 
+// The issue's case: a disk light 3 above a 100 x 100 floor bakes, but says that 53% of the
+// floor (beyond 85 degrees off the light's axis: 1 - (6 tan 85 / 100)^2) gets no shadow, and
+// what to do; a scene the frustum holds says nothing of the kind.
+TEST(Cli, WarnsWhenReceiversFallOutsideTheFrustum) {
+  TempDir dir;
+  WriteText(dir.File("wide.json"), R"({
+  "name": "wide",
+  "meshes": [
+    {"inline": {"positions": [-50,0,-50, 50,0,-50, 50,0,50, -50,0,50], "indices": [0,1,2, 0,2,3]},
+     "role": "RECEIVER_ONLY"},
+    {"inline": {"positions": [-1,1,-1, 1,1,-1, 1,1,1, -1,1,1], "indices": [0,1,2, 0,2,3]},
+     "role": "CASTER_ONLY"}
+  ],
+  "light": {"disk": {"center": [0,3,0], "normal": [0,-1,0], "radius": 0.5}},
+  "bake": {"resolution": [32,32], "samples": 4, "tileSize": 16}
+})");
+  CommandResult r = RunCommand(
+      kPdsm + " bake " + dir.File("wide.json") + " -o " + dir.File("wide.exr") + " --no-preview",
+      dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string warning = "pdsm: warning: ";
+  const size_t at = r.err.find(warning);
+  ASSERT_NE(at, std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("% of the receivers' area is outside the light's frustum", at),
+            std::string::npos)
+      << r.err;
+  // The plan widens the window by 1e-3 of its size on each side, hence 52.8 here.
+  const double percent = std::stod(r.err.substr(at + warning.size()));
+  const double covered = 6 * 11.430052302761343 / 100;
+  EXPECT_NEAR(percent, 100 * (1 - covered * covered), 0.5) << r.err;
+  EXPECT_NE(r.err.find("move the light back"), std::string::npos) << r.err;
+  WriteText(dir.File("far.csv"), "40,0,40\n");
+  r = RunCommand(kPdsm + " query " + dir.File("wide.exr") + " --points " + dir.File("far.csv"),
+                 dir);
+  EXPECT_EQ(r.out, "40,0,40,nan\n") << r.err;
+
+  WriteText(dir.File("tiny.json"), kGoodScene);
+  r = RunCommand(
+      kPdsm + " bake " + dir.File("tiny.json") + " -o " + dir.File("tiny.exr") + " --no-preview",
+      dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+}
+
 TEST(Cli, BadPointsFileNamesFileAndLine) {
   TempDir dir;
   const std::string scene = dir.File("tiny.json");

@@ -14,6 +14,7 @@
 #include "client/measure/target_error.h"
 #include "client/progress_reporter.h"
 #include "client/view/camera_view.h"
+#include "core/bake/receiver_coverage.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/scene/scene_loader.h"
 #include "core/util/output_path.h"
@@ -95,6 +96,21 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags, const PreviewPaths
     std::printf("preview: %s (camera view, the baked soft shadows)\n", previews.camera.c_str());
     std::printf("light view: %s (the map seen from the light)\n", previews.light.c_str());
   }
+}
+
+// Receivers the light's frustum does not hold get no shadow from the bake (query: nan): say how
+// much, and what to do, rather than bake silently. Under 0.1% is rounding at the window's edge.
+void WarnAboutUncoveredReceivers(const Scene& scene, const std::string& pdsm_path) {
+  absl::StatusOr<PdsmHeader> header = ReadPdsmHeader(pdsm_path);
+  if (!header.ok()) return;  // just written; a failure here is the camera view's to report
+  const double outside = ReceiverAreaOutsideFrustum(scene, header->geometry);
+  if (outside < 1e-3) return;
+  std::fprintf(stderr,
+               "pdsm: warning: %.1f%% of the receivers' area is outside the light's frustum "
+               "(behind the light, or more than 85 degrees off its axis): it gets no baked "
+               "shadow and `pdsm query` gives nan there; move the light back or away from the "
+               "receivers, aim it at them, or use a sun light for wide ground\n",
+               100 * outside);
 }
 
 // --target-error E: the knobs given on the command line stay fixed, the others are chosen.
@@ -180,6 +196,7 @@ int RunBake(const BakeFlags& flags) {
   absl::StatusOr<BakeSummary> summary = RunLocalBake(*scene, options);
   progress.Finish();
   if (!summary.ok()) return ReportError(summary.status());
+  WarnAboutUncoveredReceivers(*scene, flags.output_path);
   if (!previews.camera.empty()) {
     // From the file just written, so the picture shows what the file holds.
     absl::StatusOr<PdsmImage> pdsm = ReadPdsm(flags.output_path);
