@@ -223,9 +223,10 @@ absl::StatusOr<std::vector<float>> TaskRunner::ReceiverDepth(const TileRect& til
   camera.projection = g.projection;
   camera.lattice = ShadowMapLattice{g.s_min, g.t_min, g.PixelPitchS(), g.PixelPitchT()};
   camera.window = ShadowMapWindow{tile.x0, tile.y0, tile.width, tile.height};
-  // Receivers may lie nearer than any caster: clip only at the light plane.
-  camera.z_clip_near =
-      g.projection == Projection::kPerspective ? 1e-6 * g.z_far : plan_.z_clip_near;
+  // Receivers may lie nearer than any caster: clip only at the light plane, for the sun too
+  // (its frame puts the whole scene at z > 0). The casters' clip plane here cut off the ground
+  // nearest a low sun from the preview, though the PDSM holds it.
+  camera.z_clip_near = g.projection == Projection::kPerspective ? 1e-6 * g.z_far : 0.0;
   camera.z_clip_far = plan_.z_clip_far;
   std::vector<float> depth;
   if (absl::Status s = renderer_->Render(camera, &depth); !s.ok()) return s;

@@ -2,6 +2,7 @@
 // with its baked soft shadows (pdsm-view's headless renderer at its default camera, 1280x720),
 // and OUT.light.png, the map seen from the light. --preview names the first, --no-preview
 // skips both, and a picture that would land on another output is refused before the bake.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -9,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "client/view/image_io.h"
+#include "core/pdsm/pdsm_file.h"
 #include "tests/test_support.h"
 
 namespace pdsm::testing {
@@ -83,6 +85,49 @@ TEST(BakePreviews, PreviewFlagNamesBothAndNoPreviewSkipsThem) {
   EXPECT_FALSE(fs::exists(dir.File("b.png")));
   EXPECT_FALSE(fs::exists(dir.File("b.light.png")));
   EXPECT_EQ(r.out.find("preview"), std::string::npos) << r.out;
+}
+
+// The light's map of a sun bake shows every receiver pixel: the ground nearest a low sun lies
+// nearer than any caster, and the preview used to clip it there (a corner of the ground
+// missing, though the PDSM holds it). Each pixel whose ray meets the ground is not background.
+TEST(BakePreviews, SunLightMapShowsTheWholeGround) {
+  TempDir dir;
+  WriteText(dir.File("sun.json"), R"({
+  "name": "sun",
+  "meshes": [
+    {"inline": {"positions": [-5,0,-5, 5,0,-5, 5,0,5, -5,0,5], "indices": [0,1,2, 0,2,3]},
+     "role": "RECEIVER_ONLY"},
+    {"inline": {"positions": [-0.5,1,-0.5, 0.5,1,-0.5, 0.5,1,0.5, -0.5,1,0.5],
+                "indices": [0,1,2, 0,2,3]}, "role": "CASTER_ONLY"}
+  ],
+  "light": {"sun": {"direction": [-0.6,-0.5,-0.4], "angularDiameterDeg": 2}},
+  "bake": {"resolution": [64,64], "samples": 4, "tileSize": 16}
+})");
+  const std::string out = dir.File("sun.exr");
+  CommandResult r = RunCommand(kPdsm + " bake " + dir.File("sun.json") + " -o " + out, dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  absl::StatusOr<PdsmHeader> header = ReadPdsmHeader(out);
+  ASSERT_TRUE(header.ok()) << header.status();
+  absl::StatusOr<view::RgbImage> light = view::ReadPng(dir.File("sun.light.png"));
+  ASSERT_TRUE(light.ok()) << light.status();
+  const PdsmGeometry& g = header->geometry;
+  ASSERT_EQ(g.projection, Projection::kOrthographic);
+  size_t ground = 0, missing = 0;
+  for (int j = 0; j < g.height; ++j) {
+    for (int i = 0; i < g.width; ++i) {
+      // The pixel's ray (s, t, z), z along the sun's direction, meets y = 0 at one z.
+      const glm::dvec3 origin = g.frame.WorldFromLight({g.PixelCenterS(i), g.PixelCenterT(j), 0});
+      const double z = -origin.y / g.frame.n.y;
+      const glm::dvec3 p = origin + z * g.frame.n;
+      if (std::abs(p.x) > 4.9 || std::abs(p.z) > 4.9) continue;  // off the ground, or its rim
+      ++ground;
+      // As seen from the light (PreviewImage): t grows upwards, u runs right to left.
+      const size_t at = (static_cast<size_t>(g.height - 1 - j) * g.width + (g.width - 1 - i)) * 3;
+      missing += light->rgb[at] == 24 && light->rgb[at + 1] == 28 && light->rgb[at + 2] == 52;
+    }
+  }
+  EXPECT_GT(ground, 1000u);
+  EXPECT_EQ(missing, 0u) << "of " << ground << " ground pixels";
 }
 
 // A PDSM too large for the GL's storage buffer (plates at 1024^2 with epsilon 0: 17.2 M
