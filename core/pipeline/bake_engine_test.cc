@@ -560,7 +560,7 @@ TEST(BakeEngine, TilesNoCasterReachesAreStoredWithoutATask) {
       engine.Report("w", lease->lease_id, LeaseEvents(*plan, *lease));
     }
     ASSERT_EQ(output->end(), JobEnd::kSucceeded);
-    const PdsmTile& unreached = output->tiles().at(1);
+    const PdsmTile unreached = output->tiles().at(1);  // tiles() returns a copy
     EXPECT_TRUE(unreached.vertices.empty());
     // What a task would have given it: all samples (fixed), or its pilot's (adaptive).
     EXPECT_EQ(unreached.samples, adaptive ? 4 : 0);

@@ -479,7 +479,7 @@ TEST_F(SceneLoaderTest, BadAdaptiveSettingsNameTheField) {
 // What a job reports as its settings: every default filled in, so that loading the scene with
 // them as overrides gives the same settings whatever the loader's defaults.
 TEST_F(SceneLoaderTest, EffectiveBakeParamsRoundTrip) {
-  for (const std::string bake :
+  for (const std::string& bake :
        {std::string("{}"),
         std::string(R"({"resolution": [300, 200], "samples": 9, "depthBias": 0.25, "seed": "77",
             "sampling": "HALTON", "compressionMetric": "PERPENDICULAR", "surfacesOnly": true,
