@@ -301,10 +301,14 @@ TEST(ViewServer, ReadmeSequenceWithOverridesInAWindowAndHeadless) {
   const bool have_xvfb = RunCommand("command -v xvfb-run", cluster.dir()).exit_code == 0;
   std::unique_ptr<ChildProcess> window;
   if (have_xvfb) {
+    // Under ASan (scripts/sanitize.sh) leaks are not checked in this one child: the X server's
+    // GL driver leaks and is unloaded before LeakSanitizer reports, so no suppression can name
+    // it (as for the view_window_xvfb test). Memory errors stay fatal; elsewhere it is a no-op.
     window = std::make_unique<ChildProcess>(
         std::vector<std::string>{"/bin/sh", "-c",
-                                 "xvfb-run -a -s '-screen 0 640x480x24' " + view +
-                                     " --frames 2 --screenshot " +
+                                 "ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" "
+                                 "xvfb-run -a -s '-screen 0 640x480x24' " +
+                                     view + " --frames 2 --screenshot " +
                                      cluster.dir().File("window.png")},
         cluster.dir().File("window.log"));
     std::this_thread::sleep_for(std::chrono::seconds(1));  // it shows the running job first
