@@ -116,11 +116,9 @@ std::vector<DrawRange> VisibleClusters(const BakePlan& plan, const PreparedGroup
   const ShadowMapLattice& lattice = plan.lattice;
   std::vector<DrawRange> visible;
   for (const UploadedCluster& c : group.clusters) {
-    // Only the part of the box the shadow map draws: z >= z_clip_near (and, for the sun,
-    // <= z_clip_far).
-    const double z_lo = std::max(c.lo.z, plan.z_clip_near);
-    const double z_hi = sun ? std::min(c.hi.z, plan.z_clip_far) : c.hi.z;
-    if (!(z_lo <= z_hi)) continue;
+    // Only the part of the box the shadow map draws.
+    double z_lo, z_hi;
+    if (!DrawnDepths(plan, c.lo.z, c.hi.z, &z_lo, &z_hi)) continue;
     // The projection ((x - a) / z or x - a z) is monotone in x and in z on the box: its
     // extremes are at the corners.
     double s_lo = kInf, s_hi = -kInf, t_lo = kInf, t_hi = -kInf;

@@ -277,15 +277,22 @@ TileReach ComputeTileReach(const BakePlan& plan, const TileRect& tile) {
   return reach;
 }
 
+bool DrawnDepths(const BakePlan& plan, double box_lo_z, double box_hi_z, double* z_lo,
+                 double* z_hi) {
+  const bool sun = plan.geometry().projection == Projection::kOrthographic;
+  *z_lo = std::max(box_lo_z, plan.z_clip_near);
+  *z_hi = sun ? std::min(box_hi_z, plan.z_clip_far) : box_hi_z;
+  return *z_lo <= *z_hi;
+}
+
 std::vector<bool> TilesCastersMayReach(const BakePlan& plan) {
   std::vector<bool> reached(plan.tiles.size(), false);
   const PdsmGeometry& g = plan.geometry();
   const bool sun = g.projection == Projection::kOrthographic;
   const SampleExtent e = ExtentOf(plan);
   for (const CasterCluster& c : plan.caster_clusters) {
-    const double z_lo = std::max(c.lo.z, plan.z_clip_near);
-    const double z_hi = sun ? std::min(c.hi.z, plan.z_clip_far) : c.hi.z;
-    if (!(z_lo <= z_hi)) continue;
+    double z_lo, z_hi;
+    if (!DrawnDepths(plan, c.lo.z, c.hi.z, &z_lo, &z_hi)) continue;
     // The rays' (s, t) the box's points can shadow: perspective s = (x - a (1 - l)) / z over
     // a (1 - l) in [min(0, a), max(0, a)]; sun s = x + a (z_q - z), z_q - z in [0, z_far - z].
     double s_lo = kInf, s_hi = -kInf, t_lo = kInf, t_hi = -kInf;

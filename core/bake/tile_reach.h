@@ -46,6 +46,12 @@ TileReach ComputeTileReach(const BakePlan& plan, const TileRect& tile);
 // stopping at the first triangle kept. False: the tile is all lit and needs no shadow map.
 bool TileHasCasters(const BakePlan& plan, const TileRect& tile);
 
+// The part [*z_lo, *z_hi] of the depths [box_lo_z, box_hi_z] of a caster box that the plan's
+// shadow maps draw: from z_clip_near on, and for the sun up to z_clip_far. False when the
+// maps draw none of it.
+bool DrawnDepths(const BakePlan& plan, double box_lo_z, double box_hi_z, double* z_lo,
+                 double* z_hi);
+
 // For every tile of the plan, whether a caster may shadow it: each cluster's box marks the
 // tiles whose rays its points can shadow from some sample, by the same relation as the reach
 // (x_P - s z_P = a (1 - l), sun: x_P - s = -a (z - z_P)), widened by a pixel. A superset of
