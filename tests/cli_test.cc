@@ -22,16 +22,7 @@ using testing::WriteText;
 
 const std::string kPdsm = PDSM_CLI;
 
-constexpr char kGoodScene[] = R"({
-  "name": "tiny",
-  "meshes": [
-    {"inline": {"positions": [-5,0,-5, 5,0,-5, 5,0,5, -5,0,5], "indices": [0,1,2, 0,2,3]},
-     "role": "RECEIVER_ONLY"},
-    {"inline": {"positions": [-1,2,-1, 1,2,-1, 1,2,1, -1,2,1], "indices": [0,1,2, 0,2,3]}}
-  ],
-  "light": {"rect": {"center": [0,6,0], "normal": [0,-1,0], "up": [0,0,1], "size": [1,1]}},
-  "bake": {"resolution": [48,48], "samples": 16, "tileSize": 16}
-})";
+constexpr const char* kGoodScene = testing::kTinySceneJson;
 
 // A bad scene must exit 2, name the file and the field, and leave no output.
 void ExpectBadScene(const std::string& json, const std::string& field) {

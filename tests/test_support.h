@@ -77,6 +77,19 @@ inline std::string ExamplePath(const std::string& name) {
   return std::string(PDSM_SOURCE_DIR) + "/examples/" + name + "/scene.json";
 }
 
+// A scene small enough to bake in a fraction of a second: a 10 x 10 receiver-only floor, a
+// 2 x 2 square 2 above it, a 1 x 1 rect light at 6; 48^2 PDSM, 16 samples, 16-pixel tiles.
+inline constexpr char kTinySceneJson[] = R"({
+  "name": "tiny",
+  "meshes": [
+    {"inline": {"positions": [-5,0,-5, 5,0,-5, 5,0,5, -5,0,5], "indices": [0,1,2, 0,2,3]},
+     "role": "RECEIVER_ONLY"},
+    {"inline": {"positions": [-1,2,-1, 1,2,-1, 1,2,1, -1,2,1], "indices": [0,1,2, 0,2,3]}}
+  ],
+  "light": {"rect": {"center": [0,6,0], "normal": [0,-1,0], "up": [0,0,1], "size": [1,1]}},
+  "bake": {"resolution": [48,48], "samples": 16, "tileSize": 16}
+})";
+
 }  // namespace pdsm::testing
 
 #endif  // PDSM_TESTS_TEST_SUPPORT_H_

@@ -4,12 +4,9 @@
 // checked, and health answers per service.
 #include <climits>
 #include <cmath>
-#include <condition_variable>
-#include <mutex>
 #include <sstream>
 #include <string>
 
-#include <grpcpp/generic/generic_stub.h>
 #include <gtest/gtest.h>
 
 #include "core/assets/mesh_asset.h"
@@ -26,41 +23,6 @@ constexpr size_t kShortMessage = 4096;
 grpc::Status CallGetJob(ServiceCluster& cluster, const std::string& job_id) {
   pdsm::v1::Job job;
   return cluster.GetJob(job_id, &job);
-}
-
-// grpc.health.v1.Health/Check for `service` over a generic stub (the health proto is not in
-// our schema): HealthCheckRequest.service is field 1; the reply's status SERVING is 08 01.
-grpc::Status HealthCheck(ServiceCluster& cluster, const std::string& service, std::string* reply) {
-  grpc::GenericStub stub(*MakeChannel({cluster.address(), ""}));
-  grpc::ClientContext context;
-  PrepareCall(&context, "", seconds(10));
-  std::string request_bytes;
-  if (!service.empty()) {
-    request_bytes = std::string("\x0a", 1) + static_cast<char>(service.size()) + service;
-  }
-  grpc::Slice slice(request_bytes);
-  grpc::ByteBuffer request(&slice, 1), response;
-  std::mutex mu;
-  std::condition_variable cv;
-  bool done = false;
-  grpc::Status status;
-  stub.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,
-                 [&](grpc::Status s) {
-                   std::lock_guard<std::mutex> lock(mu);
-                   status = s;
-                   done = true;
-                   cv.notify_one();
-                 });
-  std::unique_lock<std::mutex> lock(mu);
-  cv.wait(lock, [&] { return done; });
-  std::vector<grpc::Slice> slices;
-  reply->clear();
-  if (status.ok() && response.Dump(&slices).ok()) {
-    for (const grpc::Slice& s : slices) {
-      reply->append(reinterpret_cast<const char*>(s.begin()), s.size());
-    }
-  }
-  return status;
 }
 
 grpc::Status Upload(ServiceCluster& cluster, const std::vector<pdsm::v1::AssetChunk>& chunks) {

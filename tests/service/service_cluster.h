@@ -12,9 +12,11 @@
 
 #include <algorithm>
 #include <chrono>
+#include <condition_variable>
 #include <cstdlib>
 #include <fstream>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -22,6 +24,7 @@
 #include <vector>
 
 #include <google/protobuf/util/json_util.h>
+#include <grpcpp/generic/generic_stub.h>
 #include <gtest/gtest.h>
 
 #include "pdsm/v1/jobs.grpc.pb.h"
@@ -285,6 +288,42 @@ inline std::string WriteServiceScene(const TempDir& dir, int resolution, int sam
                       R"(, "tileSize": )" + std::to_string(tile_size) + R"(, "epsilon": 0.01}
 })");
   return path;
+}
+
+// grpc.health.v1.Health/Check for `service` over a generic stub (the health proto is not in
+// our schema): HealthCheckRequest.service is field 1; the reply's status SERVING is 08 01.
+inline grpc::Status HealthCheck(ServiceCluster& cluster, const std::string& service,
+                                std::string* reply) {
+  grpc::GenericStub stub(*MakeChannel({cluster.address(), ""}));
+  grpc::ClientContext context;
+  PrepareCall(&context, "", std::chrono::seconds(10));
+  std::string request_bytes;
+  if (!service.empty()) {
+    request_bytes = std::string("\x0a", 1) + static_cast<char>(service.size()) + service;
+  }
+  grpc::Slice slice(request_bytes);
+  grpc::ByteBuffer request(&slice, 1), response;
+  std::mutex mu;
+  std::condition_variable cv;
+  bool done = false;
+  grpc::Status status;
+  stub.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,
+                 [&](grpc::Status s) {
+                   std::lock_guard<std::mutex> lock(mu);
+                   status = s;
+                   done = true;
+                   cv.notify_one();
+                 });
+  std::unique_lock<std::mutex> lock(mu);
+  cv.wait(lock, [&] { return done; });
+  std::vector<grpc::Slice> slices;
+  reply->clear();
+  if (status.ok() && response.Dump(&slices).ok()) {
+    for (const grpc::Slice& s : slices) {
+      reply->append(reinterpret_cast<const char*>(s.begin()), s.size());
+    }
+  }
+  return status;
 }
 
 // The local bake of a scene, as bytes: what every distributed bake must equal.

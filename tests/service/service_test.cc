@@ -2,11 +2,8 @@
 // Every bake is compared byte for byte with `pdsm bake` of the same scene.
 #include <algorithm>
 #include <atomic>
-#include <condition_variable>
-#include <mutex>
 #include <thread>
 
-#include <grpcpp/generic/generic_stub.h>
 #include <gtest/gtest.h>
 
 #include "core/pdsm/pdsm_file.h"
@@ -393,31 +390,9 @@ TEST(Service, AnswersTheStandardHealthCheckWithoutAToken) {
   options.worker_token = "worker-secret";
   ServiceCluster cluster(options);
   ASSERT_TRUE(cluster.StartCoordinator());
-  grpc::GenericStub stub(*MakeChannel({cluster.address(), ""}));
-  grpc::ClientContext context;
-  PrepareCall(&context, "", seconds(10));
-  grpc::Slice empty(std::string{});
-  grpc::ByteBuffer request(&empty, 1), response;  // an initialized, empty message
-  std::mutex mu;
-  std::condition_variable cv;
-  bool done = false;
-  grpc::Status status;
-  stub.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,
-                 [&](grpc::Status s) {
-                   std::lock_guard<std::mutex> lock(mu);
-                   status = s;
-                   done = true;
-                   cv.notify_one();
-                 });
-  std::unique_lock<std::mutex> lock(mu);
-  cv.wait(lock, [&] { return done; });
-  ASSERT_TRUE(status.ok()) << status.error_message();
-  std::vector<grpc::Slice> slices;
-  ASSERT_TRUE(response.Dump(&slices).ok());
   std::string bytes;
-  for (const grpc::Slice& slice : slices) {
-    bytes.append(reinterpret_cast<const char*>(slice.begin()), slice.size());
-  }
+  const grpc::Status status = HealthCheck(cluster, "", &bytes);
+  ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_EQ(bytes, std::string("\x08\x01", 2));  // status: SERVING
 }
 
