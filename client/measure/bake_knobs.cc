@@ -43,10 +43,11 @@ BakeKnobs KnobsFromScene(const Scene& scene, const std::string& sampling_name) {
 absl::StatusOr<std::string> SceneSamplingName(const std::string& scene_path) {
   absl::StatusOr<pdsm::v1::Scene> message = ParseSceneFile(scene_path);
   if (!message.ok()) return message.status();
-  const pdsm::v1::Sampling sampling = message->bake().sampling() == pdsm::v1::SAMPLING_DEFAULT
-                                          ? pdsm::v1::STRATIFIED
-                                          : message->bake().sampling();
-  return pdsm::v1::Sampling_Name(sampling);
+  // The loader's effective value: an unset pattern is the default it applies (SOBOL).
+  absl::StatusOr<pdsm::v1::BakeParams> effective =
+      EffectiveBakeParams(message->bake(), message->light().has_sun(), scene_path);
+  if (!effective.ok()) return effective.status();
+  return pdsm::v1::Sampling_Name(effective->sampling());
 }
 
 absl::StatusOr<std::pair<int, int>> ParseResolution(const std::string& text,

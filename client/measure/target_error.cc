@@ -198,15 +198,13 @@ absl::StatusOr<TargetErrorResult> BakeToTargetError(const TargetErrorOptions& op
   const auto start = std::chrono::steady_clock::now();
   absl::StatusOr<Scene> scene = LoadSceneFile(options.scene_path);
   if (!scene.ok()) return scene.status();
-  // The pattern is a knob too: where neither --sampling nor the scene file names one, the
-  // measured best is used (Sobol; docs/accuracy.md, "Sampling patterns").
-  absl::StatusOr<pdsm::v1::Scene> message = ParseSceneFile(options.scene_path);
-  if (!message.ok()) return message.status();
+  // The pattern is a knob too: --sampling, else the scene's (whose default is the measured
+  // best, Sobol; docs/accuracy.md, "Sampling patterns").
   std::string sampling = options.sampling;
   if (sampling.empty()) {
-    sampling = message->bake().sampling() == pdsm::v1::SAMPLING_DEFAULT
-                   ? "sobol"
-                   : absl::AsciiStrToLower(pdsm::v1::Sampling_Name(message->bake().sampling()));
+    absl::StatusOr<std::string> scene_sampling = SceneSamplingName(options.scene_path);
+    if (!scene_sampling.ok()) return scene_sampling.status();
+    sampling = absl::AsciiStrToLower(*scene_sampling);
   }
   BakeKnobs base = KnobsFromScene(*scene, sampling);
   absl::StatusOr<AccuracyProbe> probe = AccuracyProbe::Create(

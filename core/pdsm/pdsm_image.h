@@ -40,7 +40,7 @@ struct PdsmHeader {
   // / shadow-map texel pitch) because a PDSM ray's lookups can land that far apart.
   double depth_bias = 0;
   double slope_bias = 0;
-  SamplingPattern sampling = SamplingPattern::kStratified;
+  SamplingPattern sampling = SamplingPattern::kSobol;
   uint64_t seed = 0;
   int tile_size = 0;  // PDSM pixels per tile side, also the EXR tile size
   // Adaptive sampling (docs/algorithms.md); 0 when off. `samples` is then the per-tile maximum

@@ -72,7 +72,7 @@ struct BakeSettings {
   double slope_bias = 1.0;
   int tile_size = 64;
   uint64_t seed = 1;
-  SamplingPattern sampling = SamplingPattern::kStratified;
+  SamplingPattern sampling = SamplingPattern::kSobol;  // the measured best (docs/accuracy.md)
   CompressionMetric compression_metric = CompressionMetric::kVertical;
   std::optional<FrustumOverride> frustum;
   // Adaptive sampling: 0 is off (every tile uses `samples`); > 0 lets a tile stop once its

@@ -133,15 +133,15 @@ absl::Status BuildScalars(const FieldChecker& checks, const pdsm::v1::BakeParams
 absl::Status BuildEnums(const FieldChecker& checks, const pdsm::v1::BakeParams& bake,
                         BakeSettings* out) {
   switch (bake.sampling()) {
-    case pdsm::v1::SAMPLING_DEFAULT:
+    case pdsm::v1::SAMPLING_DEFAULT:  // the measured best (docs/accuracy.md)
+    case pdsm::v1::SOBOL:
+      out->sampling = SamplingPattern::kSobol;
+      break;
     case pdsm::v1::STRATIFIED:
       out->sampling = SamplingPattern::kStratified;
       break;
     case pdsm::v1::UNIFORM:
       out->sampling = SamplingPattern::kUniform;
-      break;
-    case pdsm::v1::SOBOL:
-      out->sampling = SamplingPattern::kSobol;
       break;
     case pdsm::v1::HALTON:
       out->sampling = SamplingPattern::kHalton;
@@ -190,9 +190,7 @@ absl::Status BuildAdaptive(const FieldChecker& checks, const pdsm::v1::BakeParam
   }
   out->adaptive_tolerance = tolerance;
   if (!out->adaptive()) return absl::OkStatus();
-  if (bake.sampling() == pdsm::v1::SAMPLING_DEFAULT) {
-    out->sampling = SamplingPattern::kSobol;  // the default pattern of adaptive bakes
-  } else if (!IsProgressive(out->sampling)) {
+  if (!IsProgressive(out->sampling)) {
     return checks.Error(
         "bake.sampling",
         "STRATIFIED cannot be used with bake.adaptiveTolerance: a tile uses the first "

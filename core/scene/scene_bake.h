@@ -13,9 +13,9 @@ namespace pdsm::internal {
 
 // The settings `bake` asks for, unset fields at their defaults (scene.h). `shape` is the
 // scene's light: a sun's orthographic frustum may start behind its plane. An adaptive bake
-// (adaptiveTolerance > 0) defaults to SOBOL sampling, refuses STRATIFIED, and has its minimum
-// sample count capped at `samples`. Errors (from `checks`, fields under "bake."): a count or
-// size out of its [1, max] range (scene.h's kMax*), a value outside its interval, an unknown
+// (adaptiveTolerance > 0) refuses STRATIFIED sampling (SOBOL is every bake's default) and has its
+// minimum sample count capped at `samples`. Errors (from `checks`, fields under "bake."): a count
+// or size out of its [1, max] range (scene.h's kMax*), a value outside its interval, an unknown
 // enum value, a malformed frustum.
 absl::StatusOr<BakeSettings> BuildBake(const FieldChecker& checks, const pdsm::v1::BakeParams& bake,
                                        LightShape shape);

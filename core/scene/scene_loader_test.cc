@@ -395,7 +395,7 @@ TEST_F(SceneLoaderTest, DefaultsAreFilled) {
   EXPECT_EQ(scene->bake.slope_bias, defaults.slope_bias);
   EXPECT_EQ(scene->bake.tile_size, defaults.tile_size);
   EXPECT_EQ(scene->bake.seed, defaults.seed);
-  EXPECT_EQ(scene->bake.sampling, SamplingPattern::kStratified);
+  EXPECT_EQ(scene->bake.sampling, SamplingPattern::kSobol);
   EXPECT_EQ(scene->bake.compression_metric, CompressionMetric::kVertical);
   EXPECT_FALSE(scene->bake.frustum.has_value());
   EXPECT_EQ(scene->meshes[0].role, MeshRole::kCasterAndReceiver);
@@ -460,6 +460,10 @@ TEST_F(SceneLoaderTest, SamplingPatternsAndAdaptiveAreRead) {
   scene = Load(SceneJson(kSquare, kRect, R"({"adaptiveTolerance": 0})"));
   ASSERT_TRUE(scene.ok()) << scene.status();
   EXPECT_FALSE(scene->bake.adaptive());
+  EXPECT_EQ(scene->bake.sampling, SamplingPattern::kSobol);
+  // STRATIFIED stays available to fixed-count bakes.
+  scene = Load(SceneJson(kSquare, kRect, R"({"sampling": "STRATIFIED"})"));
+  ASSERT_TRUE(scene.ok()) << scene.status();
   EXPECT_EQ(scene->bake.sampling, SamplingPattern::kStratified);
 }
 
