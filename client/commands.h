@@ -10,6 +10,7 @@ namespace pdsm {
 void RegisterBakeCommand(CLI::App& app, int* exit_code);
 void RegisterQueryCommand(CLI::App& app, int* exit_code);
 void RegisterInfoCommand(CLI::App& app, int* exit_code);
+void RegisterExportImageCommand(CLI::App& app, int* exit_code);
 // Accuracy: the ground truth and the speed/accuracy sweep.
 void RegisterReferenceCommand(CLI::App& app, int* exit_code);
 void RegisterSweepCommand(CLI::App& app, int* exit_code);

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   pdsm::RegisterBakeCommand(app, &exit_code);
   pdsm::RegisterQueryCommand(app, &exit_code);
   pdsm::RegisterInfoCommand(app, &exit_code);
+  pdsm::RegisterExportImageCommand(app, &exit_code);
   pdsm::RegisterReferenceCommand(app, &exit_code);
   pdsm::RegisterSweepCommand(app, &exit_code);
   pdsm::RegisterSubmitCommand(app, &exit_code);

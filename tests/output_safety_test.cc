@@ -73,7 +73,9 @@ TEST(OutputSafety, BakeRefusesAnOutputThatIsNotARegularFileOrANewPath) {
         RunCommand("timeout 120 " + kPdsm + " bake " + scene + " -o " + target, dir);
     ExpectRefused(r, "-o", target);
   }
-  if (fs::exists("/dev/full")) EXPECT_TRUE(fs::is_character_file("/dev/full"));
+  if (fs::exists("/dev/full")) {
+    EXPECT_TRUE(fs::is_character_file("/dev/full"));
+  }
   EXPECT_TRUE(fs::is_directory(dir.File("folder")));
   EXPECT_TRUE(fs::is_fifo(dir.File("fifo")));
   EXPECT_TRUE(fs::is_symlink(dir.File("link.exr")));

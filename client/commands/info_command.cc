@@ -129,15 +129,15 @@ int RunInfo(const InfoFlags& flags) {
         "\"depthRange\": [%.17g, %.17g], \"lightCenter\": %s, \"lightNormal\": %s, "
         "\"samples\": %d, \"shadowMapResolution\": %d, \"epsilon\": %.17g, "
         "\"depthBias\": %.17g, \"slopeBias\": %.17g, \"tileSize\": %d, "
-        "\"sampling\": \"%s\", \"seed\": \"%d\"%s, "
+        "\"sampling\": \"%s\", \"seed\": \"%llu\"%s, "
         "\"vertices\": %zu, \"maxVerticesPerPixel\": %zu, \"emptyPixels\": %zu%s%s}\n",
         h.format_version, JsonString(h.scene_name).c_str(),
         JsonString(LightShapeName(h.light_shape)).c_str(), projection.c_str(), g.width, g.height,
         g.s_min, g.s_max, g.t_min, g.t_max, g.z_near, g.z_far, v3_json(g.frame.center).c_str(),
         v3_json(g.frame.n).c_str(), h.samples, h.shadow_map_resolution, h.epsilon, h.depth_bias,
-        h.slope_bias, h.tile_size, SamplingName(h.sampling), h.seed, LightSizeJson(h).c_str(),
-        pdsm->vertices.size(), max_vertices, empty_pixels, adaptive_json.c_str(),
-        validity_json.c_str());
+        h.slope_bias, h.tile_size, SamplingName(h.sampling),
+        static_cast<unsigned long long>(h.seed), LightSizeJson(h).c_str(), pdsm->vertices.size(),
+        max_vertices, empty_pixels, adaptive_json.c_str(), validity_json.c_str());
     return kExitOk;
   }
   std::printf("%s: PDSM format %d, scene \"%s\"\n", flags.pdsm_path.c_str(), h.format_version,
@@ -149,10 +149,10 @@ int RunInfo(const InfoFlags& flags) {
               projection.c_str(), g.width, g.height, g.s_min, g.s_max, g.t_min, g.t_max);
   std::printf("  depths      [%.6g, %.6g]\n", g.z_near, g.z_far);
   std::printf(
-      "  bake        %d samples (%s, seed %d), shadow maps %d, epsilon %.6g, "
+      "  bake        %d samples (%s, seed %llu), shadow maps %d, epsilon %.6g, "
       "bias %.6g + slope %.6g, tiles %d\n",
-      h.samples, SamplingName(h.sampling), h.seed, h.shadow_map_resolution, h.epsilon, h.depth_bias,
-      h.slope_bias, h.tile_size);
+      h.samples, SamplingName(h.sampling), static_cast<unsigned long long>(h.seed),
+      h.shadow_map_resolution, h.epsilon, h.depth_bias, h.slope_bias, h.tile_size);
   if (h.adaptive()) {
     std::printf(
         "  adaptive    tolerance %.6g, first batch %d; samples per tile min %d, mean %.1f, "

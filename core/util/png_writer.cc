@@ -15,13 +15,14 @@ void AppendToString(png_structp png, png_bytep data, png_size_t size) {
 
 void NoFlush(png_structp) {}
 
-}  // namespace
-
-absl::StatusOr<std::string> EncodeRgbPng(int width, int height, const std::vector<uint8_t>& rgb) {
-  if (width <= 0 || height <= 0 || rgb.size() != static_cast<size_t>(width) * height * 3) {
-    return absl::InvalidArgumentError(absl::StrCat("PNG: ", width, "x", height, " RGB pixels need ",
-                                                   static_cast<size_t>(width) * height * 3,
-                                                   " bytes, got ", rgb.size()));
+// `channels` bytes a pixel: 2 gray + alpha, 3 RGB.
+absl::StatusOr<std::string> EncodePng(int width, int height, int channels, const char* what,
+                                      const std::vector<uint8_t>& pixels) {
+  const size_t row_bytes = static_cast<size_t>(width) * channels;
+  if (width <= 0 || height <= 0 || pixels.size() != row_bytes * height) {
+    return absl::InvalidArgumentError(absl::StrCat("PNG: ", width, "x", height, " ", what,
+                                                   " pixels need ", row_bytes * height,
+                                                   " bytes, got ", pixels.size()));
   }
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
@@ -35,24 +36,45 @@ absl::StatusOr<std::string> EncodeRgbPng(int width, int height, const std::vecto
     return absl::InternalError("libpng: cannot encode the image");
   }
   png_set_write_fn(png, &bytes, &AppendToString, &NoFlush);
-  png_set_IHDR(png, info, width, height, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+  png_set_IHDR(png, info, width, height, 8,
+               channels == 2 ? PNG_COLOR_TYPE_GRAY_ALPHA : PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_write_info(png, info);
   for (int y = 0; y < height; ++y) {
-    png_write_row(png, const_cast<png_bytep>(rgb.data() + static_cast<size_t>(y) * width * 3));
+    png_write_row(png, const_cast<png_bytep>(pixels.data() + static_cast<size_t>(y) * row_bytes));
   }
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
   return bytes;
 }
 
-absl::Status WriteRgbPng(const std::string& path, int width, int height,
-                         const std::vector<uint8_t>& rgb, FileSystem* fs) {
-  absl::StatusOr<std::string> bytes = EncodeRgbPng(width, height, rgb);
+absl::Status WriteEncoded(const std::string& path, const absl::StatusOr<std::string>& bytes,
+                          FileSystem* fs) {
   if (!bytes.ok()) {
     return absl::Status(bytes.status().code(), absl::StrCat(path, ": ", bytes.status().message()));
   }
   return WriteFileAtomically(path, *bytes, fs);
+}
+
+}  // namespace
+
+absl::StatusOr<std::string> EncodeRgbPng(int width, int height, const std::vector<uint8_t>& rgb) {
+  return EncodePng(width, height, 3, "RGB", rgb);
+}
+
+absl::StatusOr<std::string> EncodeGrayAlphaPng(int width, int height,
+                                               const std::vector<uint8_t>& gray_alpha) {
+  return EncodePng(width, height, 2, "gray+alpha", gray_alpha);
+}
+
+absl::Status WriteGrayAlphaPng(const std::string& path, int width, int height,
+                               const std::vector<uint8_t>& gray_alpha, FileSystem* fs) {
+  return WriteEncoded(path, EncodeGrayAlphaPng(width, height, gray_alpha), fs);
+}
+
+absl::Status WriteRgbPng(const std::string& path, int width, int height,
+                         const std::vector<uint8_t>& rgb, FileSystem* fs) {
+  return WriteEncoded(path, EncodeRgbPng(width, height, rgb), fs);
 }
 
 }  // namespace pdsm

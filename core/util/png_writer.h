@@ -1,4 +1,4 @@
-// Writing 8-bit RGB PNG images (previews, plots, screenshots), via libpng.
+// Writing 8-bit PNG images (previews, plots, screenshots, exports), via libpng.
 #ifndef PDSM_CORE_UTIL_PNG_WRITER_H_
 #define PDSM_CORE_UTIL_PNG_WRITER_H_
 
@@ -16,11 +16,17 @@ namespace pdsm {
 // INVALID_ARGUMENT when it does not; INTERNAL when libpng fails.
 absl::StatusOr<std::string> EncodeRgbPng(int width, int height, const std::vector<uint8_t>& rgb);
 
+// The same for gray + alpha pixels: width * height * 2 bytes (gray, then alpha: 0 transparent).
+absl::StatusOr<std::string> EncodeGrayAlphaPng(int width, int height,
+                                               const std::vector<uint8_t>& gray_alpha);
+
 // Encodes, then writes `path` through WriteFileAtomically (core/util/atomic_file.h): on any
 // failure `path` is left as it was and no temporary file remains. `fs` null means
 // FileSystem::Default().
 absl::Status WriteRgbPng(const std::string& path, int width, int height,
                          const std::vector<uint8_t>& rgb, FileSystem* fs = nullptr);
+absl::Status WriteGrayAlphaPng(const std::string& path, int width, int height,
+                               const std::vector<uint8_t>& gray_alpha, FileSystem* fs = nullptr);
 
 }  // namespace pdsm
 

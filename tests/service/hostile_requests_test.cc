@@ -174,7 +174,7 @@ TEST(HostileRequests, TileIndicesOutsideTheJobAreInvalidAndHealthIsPerService) {
   EXPECT_EQ(FetchTile(cluster, "0123456789abcdef", 0).error_code(), grpc::StatusCode::NOT_FOUND);
 
   std::string reply;
-  for (const std::string& service : {"", "pdsm.v1.PdsmJobs", "pdsm.v1.PdsmWorkers"}) {
+  for (const std::string service : {"", "pdsm.v1.PdsmJobs", "pdsm.v1.PdsmWorkers"}) {
     const grpc::Status s = HealthCheck(cluster, service, &reply);
     ASSERT_TRUE(s.ok()) << service << ": " << s.error_message();
     EXPECT_EQ(reply, std::string("\x08\x01", 2)) << service << ": not SERVING";
