@@ -18,6 +18,7 @@
 #include "absl/strings/str_cat.h"
 #include "core/pdsm/attenuation_function.h"
 #include "core/pdsm/exr_output_stream.h"
+#include "core/reference/embree_handles.h"
 #include "core/util/atomic_file.h"
 #include "core/util/png_writer.h"
 
@@ -46,13 +47,6 @@ float EvaluateAt(const PdsmImage& pdsm, int x, int y, double z) {
   if (z < pdsm.header.geometry.z_valid_min) return kNaN;
   return static_cast<float>(EvaluateAttenuation(pdsm.Function(x, y), z));
 }
-
-struct DeviceDeleter {
-  void operator()(RTCDeviceTy* d) const { rtcReleaseDevice(d); }
-};
-struct SceneDeleter {
-  void operator()(RTCSceneTy* s) const { rtcReleaseScene(s); }
-};
 
 // Receiver triangles in light space (the file's frame), in double, less `origin`.
 struct Receivers {
@@ -88,9 +82,8 @@ absl::StatusOr<Receivers> GatherReceivers(const Scene& scene, const PdsmGeometry
   return out;
 }
 
-absl::StatusOr<std::unique_ptr<RTCSceneTy, SceneDeleter>> BuildScene(RTCDevice device,
-                                                                     const Receivers& receivers) {
-  std::unique_ptr<RTCSceneTy, SceneDeleter> scene(rtcNewScene(device));
+absl::StatusOr<EmbreeScene> BuildScene(RTCDevice device, const Receivers& receivers) {
+  EmbreeScene scene(rtcNewScene(device));
   rtcSetSceneFlags(scene.get(), RTC_SCENE_FLAG_ROBUST);
   const size_t triangles = receivers.vertices.size() / 3;
   RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -127,8 +120,6 @@ double DepthOnTriangle(const Receivers& r, unsigned prim, const glm::dvec3& orig
   if (denominator == 0.0) return std::numeric_limits<double>::quiet_NaN();
   return glm::dot(normal, a - origin) / denominator;
 }
-
-std::string Lower(const std::string& s) { return absl::AsciiStrToLower(s); }
 
 absl::Status WriteExr(const AttenuationImage& image, const std::string& what,
                       const std::string& path, FileSystem* fs) {
@@ -191,10 +182,10 @@ absl::StatusOr<AttenuationImage> AttenuationOnPlane(const PdsmImage& pdsm, doubl
   }
   const PdsmGeometry& g = pdsm.header.geometry;
   AttenuationImage image = EmptyImage(g);
+  // A perspective ray has no point at or behind the light plane.
+  if (g.projection == Projection::kPerspective && !(z > 0)) return image;
   for (int y = 0; y < g.height; ++y) {
     for (int x = 0; x < g.width; ++x) {
-      // A perspective ray has no point at or behind the light plane.
-      if (g.projection == Projection::kPerspective && !(z > 0)) continue;
       const size_t p = ImageIndex(g, x, y);
       image.attenuation[p] = EvaluateAt(pdsm, x, y, z);
       image.depth[p] = static_cast<float>(z);
@@ -209,10 +200,9 @@ absl::StatusOr<AttenuationImage> AttenuationOnReceivers(const PdsmImage& pdsm, c
   absl::StatusOr<Receivers> receivers = GatherReceivers(scene, g);
   if (!receivers.ok()) return receivers.status();
   if (receivers->vertices.empty()) return image;
-  std::unique_ptr<RTCDeviceTy, DeviceDeleter> device(rtcNewDevice(nullptr));
+  EmbreeDevice device(rtcNewDevice(nullptr));
   if (device == nullptr) return absl::InternalError("embree: cannot create a device");
-  absl::StatusOr<std::unique_ptr<RTCSceneTy, SceneDeleter>> rtc_scene =
-      BuildScene(device.get(), *receivers);
+  absl::StatusOr<EmbreeScene> rtc_scene = BuildScene(device.get(), *receivers);
   if (!rtc_scene.ok()) return rtc_scene.status();
   const bool ortho = g.projection == Projection::kOrthographic;
   // Orthographic rays start a unit before the nearest receiver; perspective ones at the light.
@@ -252,7 +242,8 @@ absl::StatusOr<AttenuationImage> AttenuationOnReceivers(const PdsmImage& pdsm, c
 
 absl::Status WriteAttenuationImage(const AttenuationImage& image, const std::string& what,
                                    const std::string& path, FileSystem* fs) {
-  const std::string extension = Lower(std::filesystem::path(path).extension().string());
+  const std::string extension =
+      absl::AsciiStrToLower(std::filesystem::path(path).extension().string());
   if (extension == ".exr") return WriteExr(image, what, path, fs);
   if (extension == ".png") return WritePng(image, path, fs);
   return absl::InvalidArgumentError(

@@ -10,6 +10,7 @@
 #include <embree3/rtcore.h>
 
 #include "absl/strings/str_format.h"
+#include "core/reference/embree_handles.h"
 #include "core/sampling/hash_rng.h"
 #include "core/sampling/light_samples.h"
 #include "core/util/work_queue.h"
@@ -24,13 +25,6 @@ constexpr double kCoplanarMargin = 1e-9;
 // many of them away from the point, past where rounding alone could put a hit.
 constexpr double kRoundingsOffset = 16.0;
 constexpr int kMaxReferenceSamples = 1 << 20;
-
-struct DeviceDeleter {
-  void operator()(RTCDeviceTy* d) const { rtcReleaseDevice(d); }
-};
-struct SceneDeleter {
-  void operator()(RTCSceneTy* s) const { rtcReleaseScene(s); }
-};
 
 // Casters in rebased light space, in double (for the filter) and float (for Embree).
 struct Casters {
@@ -173,11 +167,11 @@ absl::StatusOr<std::vector<double>> EmbreeAttenuation(const Scene& scene,
   }
   absl::StatusOr<Casters> casters = GatherCasters(scene);
   if (!casters.ok()) return casters.status();
-  std::unique_ptr<RTCDeviceTy, DeviceDeleter> device(rtcNewDevice(nullptr));
+  EmbreeDevice device(rtcNewDevice(nullptr));
   if (device == nullptr) return absl::InternalError("embree: cannot create a device");
   absl::StatusOr<RTCScene> built = BuildScene(device.get(), *casters);
   if (!built.ok()) return built.status();
-  std::unique_ptr<RTCSceneTy, SceneDeleter> rtc_scene(*built);
+  EmbreeScene rtc_scene(*built);
 
   const bool sun = scene.light.shape == LightShape::kSun;
   std::vector<double> result(points_world.size(), std::numeric_limits<double>::quiet_NaN());
