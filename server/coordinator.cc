@@ -331,6 +331,7 @@ pdsm::v1::Stats Coordinator::GetStats() {
   stats.set_tasks_accepted(s.scheduler.results_accepted);
   stats.set_results_dropped(s.scheduler.results_dropped);
   stats.set_leases_expired(s.scheduler.leases_expired);
+  stats.set_workers_incompatible(s.scheduler.workers_incompatible);
   stats.set_uptime_seconds(static_cast<double>(SteadyNowMs() - started_ms_) / 1000.0);
   return stats;
 }
@@ -397,10 +398,25 @@ absl::StatusOr<bool> Coordinator::ReportResult(
 }
 
 void Coordinator::ReportFailure(const std::string& worker_id, uint64_t lease_id,
-                                const std::string& reason, bool handed_back) {
+                                const std::string& reason, bool handed_back, bool incompatible) {
+  if (incompatible) {
+    const std::optional<TaskLease> lease = engine_.FindLease(lease_id);
+    if (engine_.ReportIncompatible(worker_id, lease_id)) {
+      spdlog::warn(
+          "job {}: worker {} plans it differently ({}); it gets no more of this job's tasks "
+          "(not a failure: the job waits for a worker of this coordinator's build)",
+          lease ? lease->job_id : "?", worker_id, reason);
+    }
+    return;
+  }
   spdlog::warn("lease {}: worker {} {}: {}", lease_id, worker_id,
                handed_back ? "handed the task back" : "failed", reason);
   engine_.ReportFailure(worker_id, lease_id, absl::UnknownError(reason), handed_back);
+}
+
+void Coordinator::SignOff(const std::string& worker_id) {
+  engine_.SignOff(worker_id);
+  spdlog::info("worker {}: signed off", worker_id);
 }
 
 absl::StatusOr<pdsm::v1::GetJobSceneResponse> Coordinator::JobScene(const std::string& job_id) {

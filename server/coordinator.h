@@ -99,8 +99,12 @@ class Coordinator {
   absl::StatusOr<bool> ReportResult(
       const std::string& worker_id, uint64_t lease_id,
       const google::protobuf::RepeatedPtrField<pdsm::v1::TileEventsData>& tiles);
+  // `incompatible`: the worker plans the job differently (BakeEngine::ReportIncompatible);
+  // logged once per (job, worker).
   void ReportFailure(const std::string& worker_id, uint64_t lease_id, const std::string& reason,
-                     bool handed_back);
+                     bool handed_back, bool incompatible);
+  // The worker is leaving: no longer counted active.
+  void SignOff(const std::string& worker_id);
   // FAILED_PRECONDITION when the job is not running.
   absl::StatusOr<pdsm::v1::GetJobSceneResponse> JobScene(const std::string& job_id);
 

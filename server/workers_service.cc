@@ -108,8 +108,19 @@ grpc::ServerUnaryReactor* WorkersService::ReportFailure(
   if (absl::Status s = CheckWorkerId(request->worker_id()); !s.ok()) return Answer(context, s);
   // Escaped here, once: the reason goes into logs and into the job's error, one line each.
   coordinator_->ReportFailure(request->worker_id(), request->lease_id(),
-                              Printable(request->reason(), kMaxReasonBytes),
-                              request->handed_back());
+                              Printable(request->reason(), kMaxReasonBytes), request->handed_back(),
+                              request->incompatible());
+  return Answer(context, grpc::Status::OK);
+}
+
+grpc::ServerUnaryReactor* WorkersService::SignOff(grpc::CallbackServerContext* context,
+                                                  const pdsm::v1::SignOffRequest* request,
+                                                  pdsm::v1::SignOffResponse* response) {
+  if (grpc::Status s = auth_->Check(context, Audience::kWorker); !s.ok()) {
+    return Answer(context, s);
+  }
+  if (absl::Status s = CheckWorkerId(request->worker_id()); !s.ok()) return Answer(context, s);
+  coordinator_->SignOff(request->worker_id());
   return Answer(context, grpc::Status::OK);
 }
 

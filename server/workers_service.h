@@ -26,6 +26,9 @@ class WorkersService final : public pdsm::v1::PdsmWorkers::CallbackService {
   grpc::ServerUnaryReactor* ReportFailure(grpc::CallbackServerContext* context,
                                           const pdsm::v1::ReportFailureRequest* request,
                                           pdsm::v1::ReportFailureResponse* response) override;
+  grpc::ServerUnaryReactor* SignOff(grpc::CallbackServerContext* context,
+                                    const pdsm::v1::SignOffRequest* request,
+                                    pdsm::v1::SignOffResponse* response) override;
   grpc::ServerUnaryReactor* GetJobScene(grpc::CallbackServerContext* context,
                                         const pdsm::v1::GetJobSceneRequest* request,
                                         pdsm::v1::GetJobSceneResponse* response) override;

@@ -61,16 +61,26 @@ absl::StatusOr<bool> CoordinatorClient::ReportResult(uint64_t lease_id,
 }
 
 absl::Status CoordinatorClient::ReportFailure(uint64_t lease_id, const std::string& reason,
-                                              bool handed_back) {
+                                              TaskFailure kind) {
   grpc::ClientContext context;
   PrepareCall(&context, token_, kShortCall);
   pdsm::v1::ReportFailureRequest request;
   request.set_worker_id(worker_id_);
   request.set_lease_id(lease_id);
   request.set_reason(reason);
-  request.set_handed_back(handed_back);
+  request.set_handed_back(kind == TaskFailure::kHandedBack);
+  request.set_incompatible(kind == TaskFailure::kIncompatible);
   pdsm::v1::ReportFailureResponse response;
   return FromGrpcStatus(stub_->ReportFailure(&context, request, &response));
+}
+
+absl::Status CoordinatorClient::SignOff() {
+  grpc::ClientContext context;
+  PrepareCall(&context, token_, kShortCall);
+  pdsm::v1::SignOffRequest request;
+  request.set_worker_id(worker_id_);
+  pdsm::v1::SignOffResponse response;
+  return FromGrpcStatus(stub_->SignOff(&context, request, &response));
 }
 
 absl::StatusOr<pdsm::v1::GetJobSceneResponse> CoordinatorClient::JobScene(

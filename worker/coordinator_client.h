@@ -19,6 +19,14 @@
 
 namespace pdsm {
 
+// Why a worker gives a task back (ReportFailureRequest): only kFailed counts against the task
+// and the worker.
+enum class TaskFailure {
+  kFailed,        // it could not be done here
+  kHandedBack,    // the worker is stopping; the task is undone, not failed
+  kIncompatible,  // this build plans the job differently (plan fingerprint)
+};
+
 class CoordinatorClient {
  public:
   CoordinatorClient(std::shared_ptr<grpc::Channel> channel, std::string token,
@@ -33,7 +41,9 @@ class CoordinatorClient {
   // `events`: one per tile of the task, in its order.
   absl::StatusOr<bool> ReportResult(uint64_t lease_id, const std::vector<TileEvents>& events,
                                     double seconds);
-  absl::Status ReportFailure(uint64_t lease_id, const std::string& reason, bool handed_back);
+  absl::Status ReportFailure(uint64_t lease_id, const std::string& reason, TaskFailure kind);
+  // The worker is leaving (after handing back its tasks).
+  absl::Status SignOff();
   absl::StatusOr<pdsm::v1::GetJobSceneResponse> JobScene(const std::string& job_id);
   absl::StatusOr<std::string> FetchAsset(const std::string& sha256);
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <random>
 #include <thread>
 #include <vector>
 
@@ -11,6 +12,7 @@
 #include "core/assets/mesh_asset.h"
 #include "core/bake/plan_fingerprint.h"
 #include "core/scene/scene_loader.h"
+#include "core/util/backoff.h"
 #include "core/util/work_queue.h"
 #include "gl/platform/osmesa_context.h"
 #include "worker/bake_task.h"
@@ -19,22 +21,49 @@ namespace pdsm {
 namespace {
 
 constexpr size_t kCachedJobs = 4;
-constexpr auto kMaxBackoff = std::chrono::milliseconds(2000);
+// Retries of a failed lease call: from 100 ms, doubling, to 5 s (core/util/backoff.h).
+constexpr auto kFirstBackoff = std::chrono::milliseconds(100);
+constexpr auto kMaxBackoff = std::chrono::milliseconds(5000);
 
 double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// Sleeps up to `duration`, waking early when `stop` is set.
-void SleepUnlessStopped(std::chrono::milliseconds duration, const std::atomic<bool>& stop) {
+// Sleeps up to `duration`, waking early once `stopping()` is true.
+template <typename Stopping>
+void SleepUnless(std::chrono::milliseconds duration, const Stopping& stopping) {
   const auto end = std::chrono::steady_clock::now() + duration;
-  while (!stop && std::chrono::steady_clock::now() < end) {
+  while (!stopping() && std::chrono::steady_clock::now() < end) {
     std::this_thread::sleep_for(
         std::min<std::chrono::milliseconds>(duration, std::chrono::milliseconds(50)));
   }
 }
 
+// What to do about a permanent error, for the one line the worker exits with.
+std::string Remedy(const absl::Status& status) {
+  if (absl::IsUnimplemented(status)) {
+    return "the coordinator does not speak this worker's API: run the same pdsm release on both";
+  }
+  return "check --token-file: it must hold the coordinator's worker token "
+         "(its --worker-token-file)";
+}
+
 }  // namespace
+
+bool RemoteWorker::StopIfPermanent(const absl::Status& status) {
+  if (!absl::IsUnauthenticated(status) && !absl::IsPermissionDenied(status) &&
+      !absl::IsUnimplemented(status)) {
+    return false;
+  }
+  absl::MutexLock lock(&fatal_mu_);
+  if (fatal_.ok()) {
+    fatal_ = absl::Status(status.code(), absl::StrCat("the coordinator refused this worker (",
+                                                      absl::StatusCodeToString(status.code()), ": ",
+                                                      status.message(), "): ", Remedy(status)));
+  }
+  fatal_stop_ = true;
+  return true;
+}
 
 absl::StatusOr<std::unique_ptr<RemoteWorker>> RemoteWorker::Create(
     CoordinatorClient* client, const RemoteWorkerOptions& options) {
@@ -52,6 +81,13 @@ absl::Status RemoteWorker::Run(const std::atomic<bool>& stop) {
   queue.Post([&] { KeepLeases(stop); });
   for (int t = 0; t < threads; ++t) queue.Post([&] { ThreadLoop(stop); });
   queue.Wait();
+  absl::MutexLock lock(&fatal_mu_);
+  if (!fatal_.ok()) return fatal_;
+  // Leave the active workers now rather than when the coordinator stops hearing from us; an
+  // older coordinator without the call answers UNIMPLEMENTED, which changes nothing.
+  if (absl::Status s = client_->SignOff(); !s.ok()) {
+    spdlog::debug("sign-off: {}", std::string(s.message()));
+  }
   return absl::OkStatus();
 }
 
@@ -92,16 +128,9 @@ absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::Lo
   absl::StatusOr<BakePlan> plan = PlanBake(*loaded);
   if (!plan.ok()) return plan.status();
   context->plan = *std::move(plan);
-  context->fingerprint = PlanFingerprint(context->plan);
+  // Compared with each task's (ThreadLoop): a mismatch makes the job incompatible here.
+  context->fingerprint = PlanFingerprint(context->plan) + options_.test_fingerprint_salt;
   context->groups = std::make_unique<GroupCache>(context->plan);
-  if (context->fingerprint != scene->plan_fingerprint()) {
-    return absl::FailedPreconditionError(absl::StrCat(
-        "job ", job_id,
-        ": this worker plans the bake differently from the coordinator "
-        "(fingerprint ",
-        context->fingerprint.substr(0, 12), " vs ", scene->plan_fingerprint().substr(0, 12),
-        "): run the same pdsm build on both"));
-  }
   spdlog::info("job {}: planned, {} tiles, {} samples", job_id, context->plan.tiles.size(),
                context->plan.samples.size());
   return std::shared_ptr<const JobContext>(std::move(context));
@@ -110,7 +139,7 @@ absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::Lo
 // ---- Leases ----------------------------------------------------------------------------
 
 void RemoteWorker::KeepLeases(const std::atomic<bool>& stop) {
-  while (!stop) {
+  while (!Stopping(stop)) {
     int64_t lease_ms;
     std::vector<std::pair<uint64_t, std::shared_ptr<RunningLease>>> current;
     {
@@ -121,6 +150,7 @@ void RemoteWorker::KeepLeases(const std::atomic<bool>& stop) {
     for (auto& [id, lease] : current) {
       if (lease->lost) continue;
       absl::StatusOr<int64_t> extended = client_->Extend(id);
+      if (!extended.ok() && StopIfPermanent(extended.status())) return;
       // UNAVAILABLE: the coordinator may be restarting; keep working and try again.
       if (!extended.ok() && !absl::IsUnavailable(extended.status()) &&
           !absl::IsDeadlineExceeded(extended.status())) {
@@ -130,7 +160,8 @@ void RemoteWorker::KeepLeases(const std::atomic<bool>& stop) {
       }
     }
     // Three extensions per lease period: one lost call still leaves a margin.
-    SleepUnlessStopped(std::chrono::milliseconds(std::max<int64_t>(50, lease_ms / 3)), stop);
+    SleepUnless(std::chrono::milliseconds(std::max<int64_t>(50, lease_ms / 3)),
+                [&] { return Stopping(stop); });
   }
 }
 
@@ -140,28 +171,29 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
   std::string runner_job;
   std::shared_ptr<const JobContext> context;
   std::unique_ptr<TaskRunner> runner;
-  std::chrono::milliseconds backoff(100);
-  while (!stop) {
+  const auto stopping = [&] { return Stopping(stop); };
+  Backoff backoff(kFirstBackoff, kMaxBackoff, std::random_device{}());
+  while (!stopping()) {
     absl::StatusOr<pdsm::v1::LeaseTaskResponse> response = client_->Lease();
     if (!response.ok()) {
+      if (StopIfPermanent(response.status())) return;
+      const std::chrono::milliseconds wait = backoff.Next();
       spdlog::warn("lease: {} (retrying in {} ms)", std::string(response.status().message()),
-                   backoff.count());
-      SleepUnlessStopped(backoff, stop);
-      backoff =
-          std::min(backoff * 2, std::chrono::duration_cast<std::chrono::milliseconds>(kMaxBackoff));
+                   wait.count());
+      SleepUnless(wait, stopping);
       continue;
     }
-    backoff = std::chrono::milliseconds(100);
+    backoff.Reset();
     if (!response->has_task()) {
-      SleepUnlessStopped(std::chrono::milliseconds(response->retry_after_ms()), stop);
+      SleepUnless(std::chrono::milliseconds(response->retry_after_ms()), stopping);
       continue;
     }
     const pdsm::v1::Task& task = response->task();
     const auto start = std::chrono::steady_clock::now();
-    const auto fail = [&](const absl::Status& s, bool handed_back) {
+    const auto fail = [&](const absl::Status& s, TaskFailure kind) {
       spdlog::warn("job {} tile group {}: {}", task.job_id(), task.group_index(),
                    std::string(s.message()));
-      (void)client_->ReportFailure(task.lease_id(), std::string(s.message()), handed_back);
+      (void)client_->ReportFailure(task.lease_id(), std::string(s.message()), kind);
     };
 
     auto lease = std::make_shared<RunningLease>();
@@ -177,28 +209,35 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
 
     if (runner_job != task.job_id()) {
       runner.reset();
+      runner_job.clear();
       absl::StatusOr<std::shared_ptr<const JobContext>> loaded = Context(task.job_id());
       if (!loaded.ok()) {
         forget_lease();
-        fail(loaded.status(), false);
-        runner_job.clear();
+        fail(loaded.status(), TaskFailure::kFailed);
         continue;
       }
       context = *loaded;
+    }
+    // Before a runner (an OSMesa context) is made for it: another build's job is not ours.
+    if (context->fingerprint != task.plan_fingerprint()) {
+      forget_lease();
+      fail(absl::FailedPreconditionError(
+               absl::StrCat("this worker's build plans job ", task.job_id(),
+                            " differently (fingerprint ", context->fingerprint.substr(0, 12),
+                            " vs the coordinator's ", task.plan_fingerprint().substr(0, 12), ")")),
+           TaskFailure::kIncompatible);
+      continue;
+    }
+    if (runner == nullptr) {
       absl::StatusOr<std::unique_ptr<TaskRunner>> created =
           TaskRunner::Create(context->plan, context->groups.get());
       if (!created.ok()) {
         forget_lease();
-        fail(created.status(), false);
+        fail(created.status(), TaskFailure::kFailed);
         continue;
       }
       runner = *std::move(created);
       runner_job = task.job_id();
-    }
-    if (context->fingerprint != task.plan_fingerprint()) {
-      forget_lease();
-      fail(absl::FailedPreconditionError("the task does not match this worker's plan"), false);
-      continue;
     }
 
     // The runner checks the group and its tiles against the plan (INVALID_ARGUMENT).
@@ -208,15 +247,17 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
         std::vector<int>(task.tile_indices().begin(), task.tile_indices().end()),
         task.sample_begin(), task.sample_end()};
     absl::StatusOr<std::vector<TileEvents>> events =
-        runner->Run(bake_task, &stats, [&] { return stop.load() || lease->lost.load(); });
+        runner->Run(bake_task, &stats, [&] { return stopping() || lease->lost.load(); });
     forget_lease();
     if (lease->lost) continue;  // the coordinator has moved on; nothing to report
     if (!events.ok()) {
-      fail(events.status(), /*handed_back=*/absl::IsCancelled(events.status()));
+      fail(events.status(),
+           absl::IsCancelled(events.status()) ? TaskFailure::kHandedBack : TaskFailure::kFailed);
       continue;
     }
     absl::StatusOr<bool> accepted =
         client_->ReportResult(task.lease_id(), *events, SecondsSince(start));
+    if (!accepted.ok() && StopIfPermanent(accepted.status())) return;
     if (!accepted.ok()) {
       spdlog::warn("job {} tile group {}: result not delivered: {}", task.job_id(),
                    task.group_index(), std::string(accepted.status().message()));

@@ -29,6 +29,7 @@ struct Flags {
   std::string cache_dir;
   std::string log_level = "info";
   int threads = 0;
+  std::string test_fingerprint_salt;  // hidden; tests only (RemoteWorkerOptions)
 };
 
 // Unique per process, readable in the coordinator's logs: host, pid, random suffix.
@@ -73,6 +74,7 @@ int Run(const Flags& flags, const sigset_t& signals) {
   options.threads =
       flags.threads > 0 ? flags.threads : std::max(1u, std::thread::hardware_concurrency());
   options.cache_dir = flags.cache_dir.empty() ? DefaultCacheDir() : flags.cache_dir;
+  options.test_fingerprint_salt = flags.test_fingerprint_salt;
   absl::StatusOr<std::unique_ptr<RemoteWorker>> worker = RemoteWorker::Create(&client, options);
   if (!worker.ok()) {
     spdlog::error("{}", std::string(worker.status().message()));
@@ -81,18 +83,23 @@ int Run(const Flags& flags, const sigset_t& signals) {
   spdlog::info("worker {}: {} threads, coordinator {}, cache {}", client.worker_id(),
                options.threads, flags.coordinator, options.cache_dir);
 
-  std::atomic<bool> stop{false};
+  std::atomic<bool> stop{false}, returned{false};
   std::thread signal_thread([&] {
     int signal = 0;
     sigwait(&signals, &signal);
+    if (returned) return;  // our own wake-up below
     spdlog::info("signal {}: handing back running tasks and stopping", signal);
     stop = true;
   });
   absl::Status status = (*worker)->Run(stop);
+  returned = true;
+  if (!stop) kill(getpid(), SIGTERM);  // wakes the signal thread's sigwait (blocked elsewhere)
   signal_thread.join();
   if (!status.ok()) {
+    // A wrong token or an incompatible coordinator: exit at once, as a misconfigured
+    // process (Slurm marks the task failed, Kubernetes shows CrashLoopBackOff).
     spdlog::error("{}", std::string(status.message()));
-    return 1;
+    return 2;
   }
   spdlog::info("stopped");
   return 0;
@@ -120,6 +127,9 @@ int main(int argc, char** argv) {
   app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}))
       ->capture_default_str();
+  // Hidden (no group): a test makes this worker plan every job "differently", as a worker of
+  // another build would, to exercise rolling upgrades.
+  app.add_option("--test-only-fingerprint-salt", flags.test_fingerprint_salt)->group("");
   app.set_version_flag("--version", pdsm::VersionLine("pdsm-worker"));
   try {
     app.parse(argc, argv);

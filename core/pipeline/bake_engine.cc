@@ -408,6 +408,18 @@ void BakeEngine::ReportFailure(const std::string& worker_id, uint64_t lease_id,
   End(job, JobEnd::kFailed, failure ? absl::AbortedError(failure->reason) : status);
 }
 
+bool BakeEngine::ReportIncompatible(const std::string& worker_id, uint64_t lease_id) {
+  absl::MutexLock lock(&mu_);
+  const bool first = scheduler_.Incompatible(worker_id, lease_id, options_.now_ms());
+  changed_.SignalAll();  // the task is pending again
+  return first;
+}
+
+void BakeEngine::SignOff(const std::string& worker_id) {
+  absl::MutexLock lock(&mu_);
+  scheduler_.SignOff(worker_id);
+}
+
 void BakeEngine::Tick() {
   std::vector<std::pair<JobPtr, std::string>> failed;
   {

@@ -154,6 +154,14 @@ class BakeEngine {
   void ReportFailure(const std::string& worker_id, uint64_t lease_id, const absl::Status& status,
                      bool handed_back);
 
+  // The worker plans the lease's job differently from this coordinator (Scheduler::
+  // Incompatible): the task is requeued, counted against nobody, and the worker gets no more
+  // of the job. True the first time for this (job, worker).
+  bool ReportIncompatible(const std::string& worker_id, uint64_t lease_id);
+
+  // The worker is leaving: no longer active (Scheduler::SignOff).
+  void SignOff(const std::string& worker_id);
+
   // Expires overdue leases and fails jobs no active worker can run (Scheduler::Tick).
   void Tick();
 

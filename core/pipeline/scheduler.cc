@@ -49,7 +49,7 @@ std::optional<TaskLease> Scheduler::Lease(const std::string& worker_id, int64_t 
   const std::set<JobKey>& walk = tiles_open_ < options_.max_open_tiles ? order_ : ready_;
   for (const JobKey& key : walk) {
     Job& job = jobs_.at(key.job_id);
-    if (Excluded(job, worker_id)) continue;
+    if (Excluded(job, worker_id) || job.incompatible_workers.contains(worker_id)) continue;
     if (std::optional<TaskLease> lease = TryLease(job, worker_id, now_ms)) return lease;
   }
   return std::nullopt;
@@ -232,6 +232,23 @@ std::optional<JobFailure> Scheduler::Fail(const std::string& worker_id, uint64_t
   return FailTask(it, reason, handed_back);
 }
 
+bool Scheduler::Incompatible(const std::string& worker_id, uint64_t lease_id, int64_t now_ms) {
+  Touch(worker_id, now_ms);
+  const LeaseMap::iterator it = FindCurrent(worker_id, lease_id);
+  if (it == leases_.end()) return false;
+  const LeaseInfo lease = TakeLease(it);
+  Job& job = jobs_.at(lease.job_id);
+  Requeue(job, lease.task);
+  return job.incompatible_workers.insert(worker_id).second;
+}
+
+void Scheduler::SignOff(const std::string& worker_id) {
+  const auto it = worker_seen_ms_.find(worker_id);
+  if (it == worker_seen_ms_.end()) return;
+  workers_by_seen_.erase({it->second, worker_id});
+  worker_seen_ms_.erase(it);
+}
+
 std::vector<JobFailure> Scheduler::Tick(int64_t now_ms) {
   std::vector<JobFailure> failures;
   // A failing job takes its other leases out of deadlines_, so always restart at the front.
@@ -306,6 +323,7 @@ SchedulerStats Scheduler::Stats(int64_t now_ms) const {
   SchedulerStats stats;
   for (const auto& [job_id, job] : jobs_) {
     stats.tasks_pending += static_cast<int>(job.tasks_left - job.leases.size());
+    stats.workers_incompatible += static_cast<int>(job.incompatible_workers.size());
   }
   stats.tasks_leased = static_cast<int>(leases_.size());
   stats.tiles_open = tiles_open_;
@@ -407,9 +425,15 @@ std::optional<JobFailure> Scheduler::CheckStuck(const Job& job) const {
   if (job.tasks_left == 0) return std::nullopt;
   // Only workers that failed in this job can be unable to run it; if some active worker has
   // not, it can, and with ForgetInactiveWorkers() just run workers_by_seen_ is the active set.
-  const size_t active = workers_by_seen_.size();
+  // Incompatible workers count neither way: with only them active the job waits for a
+  // compatible one (a rolling upgrade under way), it does not fail.
+  size_t active = 0;
+  for (const auto& [seen_ms, worker_id] : workers_by_seen_) {
+    active += job.incompatible_workers.contains(worker_id) ? 0 : 1;
+  }
   if (active == 0 || active > job.worker_failures.size()) return std::nullopt;
   for (const auto& [seen_ms, worker_id] : workers_by_seen_) {
+    if (job.incompatible_workers.contains(worker_id)) continue;
     if (!Excluded(job, worker_id) && !FailedAllRemaining(job, worker_id)) return std::nullopt;
   }
   return JobFailure{

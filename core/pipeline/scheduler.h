@@ -86,6 +86,7 @@ struct SchedulerStats {
   int64_t leases_expired = 0;
   int64_t results_dropped = 0;
   int64_t results_accepted = 0;
+  int workers_incompatible = 0;  // (job, worker) pairs of jobs in progress (Incompatible())
 };
 
 class Scheduler {
@@ -97,6 +98,7 @@ class Scheduler {
 
   // The next task for `worker_id`, or nullopt when none may be issued now. Records the worker
   // as seen. Never gives a worker a task of a job it is excluded from, nor a task it failed.
+  // Nor a task of a job it is incompatible with (Incompatible()).
   std::optional<TaskLease> Lease(const std::string& worker_id, int64_t now_ms);
 
   // New deadline. FAILED_PRECONDITION when the lease is not current or not this worker's.
@@ -115,6 +117,19 @@ class Scheduler {
   // failed on max_task_failures distinct workers (the job is then removed).
   std::optional<JobFailure> Fail(const std::string& worker_id, uint64_t lease_id,
                                  const std::string& reason, bool handed_back, int64_t now_ms);
+
+  // The worker's build plans the lease's job differently (a plan-fingerprint mismatch: a
+  // rolling upgrade, another libm): not a failure of anyone. The task goes back to the queue
+  // and the worker gets no more of that job's tasks; the job waits for a compatible worker
+  // however long that takes (it never fails for it: Tick() counts incompatible workers as
+  // able). True when this marked the pair for the first time (the service logs it once);
+  // false for a lease that is not current or not this worker's.
+  bool Incompatible(const std::string& worker_id, uint64_t lease_id, int64_t now_ms);
+
+  // The worker is leaving (it handed back its tasks first): it stops counting as active at
+  // once instead of worker_active_ms after its last call. Its current leases, if any, stay
+  // until they expire.
+  void SignOff(const std::string& worker_id);
 
   // Re-queues tasks whose lease has expired (a failure of their holder: a dead or stalled
   // worker) and fails jobs that can no longer progress: a task failed on too many workers, or
@@ -190,6 +205,7 @@ class Scheduler {
     int64_t tasks_left = 0;              // not yet accepted, open or not
     int groups_left = 0;                 // not yet assembled
     std::map<std::string, int> worker_failures;
+    std::set<std::string> incompatible_workers;  // plan their own way: get none of its tasks
     std::string last_failure;
   };
   struct LeaseInfo {

@@ -458,6 +458,75 @@ TEST(SchedulerTest, HandedBackIsNotAFailure) {
   EXPECT_EQ(scheduler.Complete("a", lease.lease_id, 11).kind, ResultOutcome::kStageComplete);
 }
 
+// A rolling upgrade: a worker of another build plans the job differently. Its reports are
+// no failures (however many, on however many tasks), it gets none of the job's tasks again
+// but still gets other jobs', the job waits while only incompatible workers are about, and a
+// compatible worker finishes it.
+TEST(SchedulerTest, IncompatibleWorkerNeverFailsTheJobAndGetsNoMoreOfIt) {
+  SchedulerOptions options = SmallOptions();
+  options.max_task_failures = 1;  // a single real failure would end the job
+  options.max_worker_failures_per_job = 1;
+  Scheduler scheduler(options);
+  scheduler.AddJob(MakeJob("old", {0, 1}, 1, 1, /*priority=*/1, 0));
+  scheduler.AddJob(MakeJob("other", {0}, 1, 1, /*priority=*/0, 1));
+  const TaskLease first = MustLease(scheduler, "new-build", 0);
+  const TaskLease second = MustLease(scheduler, "new-build", 0);  // another thread's
+  ASSERT_EQ(first.job_id, "old");
+  ASSERT_EQ(second.job_id, "old");
+  EXPECT_TRUE(scheduler.Incompatible("new-build", first.lease_id, 1));
+  EXPECT_FALSE(scheduler.Incompatible("new-build", second.lease_id, 1));  // marked already
+  EXPECT_FALSE(scheduler.Incompatible("new-build", second.lease_id, 1));  // not current now
+  EXPECT_EQ(scheduler.Stats(1).workers_incompatible, 1);
+  EXPECT_EQ(scheduler.Stats(1).tasks_leased, 0);
+  // Only the other job's task for it.
+  const TaskLease other = MustLease(scheduler, "new-build", 2);
+  EXPECT_EQ(other.job_id, "other");
+  EXPECT_EQ(scheduler.Complete("new-build", other.lease_id, 3).kind, ResultOutcome::kStageComplete);
+  EXPECT_FALSE(scheduler.Lease("new-build", 4));
+  // Only the incompatible worker is active for a long while: "old" waits.
+  for (int64_t t = 1000; t <= 100'000; t += 1000) {
+    EXPECT_FALSE(scheduler.Lease("new-build", t));
+    ASSERT_TRUE(scheduler.Tick(t).empty()) << t;
+  }
+  ASSERT_TRUE(scheduler.HasJob("old"));
+  // A compatible worker arrives and does both tasks.
+  for (int i = 0; i < 2; ++i) {
+    const TaskLease lease = MustLease(scheduler, "old-build", 100'000);
+    EXPECT_EQ(lease.job_id, "old");
+    scheduler.Complete("old-build", lease.lease_id, 100'001);
+    scheduler.GroupAssembled("old", lease.group_index);
+  }
+  EXPECT_TRUE(scheduler.JobComplete("old"));
+}
+
+// Incompatible workers do not keep a job alive that every compatible worker has failed.
+TEST(SchedulerTest, IncompatibleWorkersDoNotHideAStuckJob) {
+  SchedulerOptions options = SmallOptions();
+  options.max_task_failures = 3;
+  Scheduler scheduler(options);
+  scheduler.AddJob(MakeJob("j", {0}));
+  const TaskLease incompatible = MustLease(scheduler, "new-build", 0);
+  EXPECT_TRUE(scheduler.Incompatible("new-build", incompatible.lease_id, 0));
+  const TaskLease failed = MustLease(scheduler, "a", 0);
+  EXPECT_FALSE(scheduler.Fail("a", failed.lease_id, "bad input", false, 0));
+  const std::vector<JobFailure> failures = scheduler.Tick(10);
+  ASSERT_EQ(failures.size(), 1u);
+  EXPECT_THAT(failures[0].reason, HasSubstr("bad input"));
+}
+
+TEST(SchedulerTest, SignedOffWorkerIsNoLongerActive) {
+  Scheduler scheduler(SmallOptions());
+  scheduler.AddJob(MakeJob("j", {0, 1}));
+  const TaskLease lease = MustLease(scheduler, "a", 0);
+  MustLease(scheduler, "b", 0);
+  EXPECT_EQ(scheduler.Stats(0).workers_active, 2);
+  EXPECT_FALSE(scheduler.Fail("a", lease.lease_id, "stopping", /*handed_back=*/true, 1));
+  scheduler.SignOff("a");
+  scheduler.SignOff("never-seen");  // nothing to forget
+  EXPECT_EQ(scheduler.Stats(1).workers_active, 1);
+  EXPECT_EQ(scheduler.Stats(1).tasks_pending, 1);  // its task is back in the queue
+}
+
 TEST(SchedulerTest, RemoveJobMakesLeasesStaleAndFreesSlots) {
   SchedulerOptions options = SmallOptions();
   options.max_open_tiles = 1;

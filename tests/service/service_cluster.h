@@ -163,8 +163,10 @@ class ServiceCluster {
 
   ChildProcess& coordinator() { return *coordinator_; }
 
-  // Starts a worker; returns its index.
-  size_t AddWorker(int threads = 1) {
+  // Starts a worker; returns its index. `extra`: more flags; `token_file`: instead of the
+  // cluster's worker token.
+  size_t AddWorker(int threads = 1, const std::vector<std::string>& extra = {},
+                   std::optional<std::string> token_file = std::nullopt) {
     std::vector<std::string> argv = {PDSM_WORKER,
                                      "--coordinator",
                                      address_,
@@ -172,10 +174,13 @@ class ServiceCluster {
                                      std::to_string(threads),
                                      "--cache-dir",
                                      dir_.File("cache" + std::to_string(workers_.size()))};
-    if (!options_.worker_token.empty()) {
+    if (token_file) {
+      argv.insert(argv.end(), {"--token-file", *token_file});
+    } else if (!options_.worker_token.empty()) {
       argv.insert(argv.end(), {"--token-file", dir_.File("worker_token")});
     }
     if (options_.tls) argv.insert(argv.end(), {"--tls-ca", tls_ca()});
+    argv.insert(argv.end(), extra.begin(), extra.end());
     workers_.push_back(std::make_unique<ChildProcess>(
         argv, dir_.File("worker" + std::to_string(workers_.size()) + ".log")));
     return workers_.size() - 1;

@@ -191,12 +191,77 @@ TEST(Service, TerminatedWorkerHandsBackItsTaskAndExitsZero) {
   const int status = cluster.worker(leaving).Wait(std::chrono::seconds(20));
   ASSERT_TRUE(WIFEXITED(status)) << status;
   EXPECT_EQ(WEXITSTATUS(status), 0);
+  // It signed off: no longer active at once (not 30 s after its last call).
+  EXPECT_EQ(cluster.Stats().workers_active(), 0);
+  EXPECT_NE(cluster.Log("coordinator.log").find("signed off"), std::string::npos);
   cluster.AddWorker();
   const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
   ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error();
   EXPECT_EQ(cluster.Stats().leases_expired(), 0);
   EXPECT_NE(cluster.Log("coordinator.log").find("handed the task back"), std::string::npos);
   EXPECT_TRUE(FetchBytes(cluster, job_id) == expected);
+}
+
+// A rolling upgrade: a worker of another build (its plan fingerprints salted) reports the
+// job incompatible instead of failing it. With one failure allowed per task the job would
+// die at the first counted failure; it waits instead, the coordinator says so once, and a
+// worker of the coordinator's build finishes it with the local bake's bytes. The other
+// build's worker keeps running (it may be fine for other jobs).
+TEST(Service, WorkerOfAnotherBuildNeverFailsAJob) {
+  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "16", "--max-task-failures", "1"}));
+  ASSERT_TRUE(cluster.StartCoordinator());
+  const std::string scene = WriteServiceScene(cluster.dir(), 128, 128, 32, 512);
+  const std::string expected = LocalBakeBytes(cluster.dir(), scene);
+  const size_t other_build =
+      cluster.AddWorker(/*threads=*/2, {"--test-only-fingerprint-salt", "-another-build"});
+  const std::string job_id = cluster.Submit(scene);
+  const auto deadline = std::chrono::steady_clock::now() + seconds(60);
+  while (cluster.Stats().workers_incompatible() == 0 &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_EQ(cluster.Stats().workers_incompatible(), 1) << cluster.Log("coordinator.log");
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // both threads asked again
+  pdsm::v1::Job waiting;
+  ASSERT_TRUE(cluster.GetJob(job_id, &waiting).ok());
+  EXPECT_FALSE(Ended(waiting)) << waiting.error();
+  EXPECT_EQ(cluster.Stats().tasks_accepted(), 0);
+  const std::string log = cluster.Log("coordinator.log");
+  const size_t first = log.find("plans it differently");
+  ASSERT_NE(first, std::string::npos) << log;
+  EXPECT_EQ(log.find("plans it differently", first + 1), std::string::npos) << "logged twice";
+  EXPECT_EQ(log.find("failed:"), std::string::npos) << log;
+
+  cluster.AddWorker();
+  const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
+  ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error();
+  EXPECT_TRUE(FetchBytes(cluster, job_id) == expected);
+  EXPECT_TRUE(cluster.worker(other_build).running());
+  EXPECT_EQ(cluster.worker(other_build).Wait(std::chrono::milliseconds(0)), -1);
+  EXPECT_EQ(cluster.Stats().workers_incompatible(), 0);  // the job is no longer in progress
+}
+
+// A worker with a wrong token exits within seconds, with one line saying what to fix, and a
+// non-zero status (so Slurm marks the task failed and Kubernetes shows a crash loop) instead
+// of retrying forever.
+TEST(Service, WorkerWithAWrongTokenExitsAtOnceSayingWhatToFix) {
+  ClusterOptions options;
+  options.client_token = "client-secret";
+  options.worker_token = "worker-secret";
+  ServiceCluster cluster(options);
+  ASSERT_TRUE(cluster.StartCoordinator());
+  WriteText(cluster.dir().File("wrong_token"), "not-the-worker-secret\n");
+  const size_t worker = cluster.AddWorker(1, {}, cluster.dir().File("wrong_token"));
+  const auto start = std::chrono::steady_clock::now();
+  const int status = cluster.worker(worker).Wait(std::chrono::seconds(20));
+  ASSERT_NE(status, -1) << "still running: " << cluster.Log("worker0.log");
+  EXPECT_LT(std::chrono::steady_clock::now() - start, seconds(10));
+  ASSERT_TRUE(WIFEXITED(status)) << status;
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  const std::string log = cluster.Log("worker0.log");
+  EXPECT_NE(log.find("UNAUTHENTICATED"), std::string::npos) << log;
+  EXPECT_NE(log.find("check --token-file"), std::string::npos) << log;
+  EXPECT_EQ(log.find("retrying"), std::string::npos) << log;
 }
 
 TEST(Service, CoordinatorKilledMidJobResumesWithoutRecomputingFinishedTiles) {
