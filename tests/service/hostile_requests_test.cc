@@ -187,7 +187,7 @@ TEST(HostileRequests, TileIndicesOutsideTheJobAreInvalidAndHealthIsPerService) {
 // impossible events (a count no batch has, a negative depth, NaN seconds) is refused, its
 // lease stays open, and once it expires an honest worker bakes the same bytes as `pdsm bake`.
 TEST(HostileRequests, ForgedResultsAreRefusedAndTheBakeStaysExact) {
-  ServiceCluster cluster(CoordinatorArgs({"--lease-seconds", "2"}));
+  ServiceCluster cluster(CoordinatorArgs({"--lease-seconds", LeaseSeconds(2)}));
   ASSERT_TRUE(cluster.StartCoordinator());
   const std::string scene = WriteServiceScene(cluster.dir(), 64, 16, 32);
   const std::string expected = LocalBakeBytes(cluster.dir(), scene);

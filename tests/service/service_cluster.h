@@ -87,6 +87,18 @@ class ChildProcess {
   int status_ = 0;
 };
 
+// $PDSM_TEST_TIME_SCALE (an integer, 1 when unset): the sanitizer jobs run instrumented
+// processes several times slower (scripts/sanitize.sh), so waits and lease lengths stretch by
+// it. Without it a 1 s lease under ASan on a busy machine expires while its worker is alive
+// and extending, and a job fails for a reason the test is not about.
+inline int TestTimeScale() {
+  const char* scale = std::getenv("PDSM_TEST_TIME_SCALE");
+  return scale != nullptr ? std::max(1, std::atoi(scale)) : 1;
+}
+
+// The coordinator's --lease-seconds value for a lease of `seconds` at scale 1.
+inline std::string LeaseSeconds(int seconds) { return std::to_string(seconds * TestTimeScale()); }
+
 struct ClusterOptions {
   std::string client_token;  // empty: no token files
   std::string worker_token;
@@ -227,13 +239,10 @@ class ServiceCluster {
     });
   }
 
-  // `timeout` is multiplied by $PDSM_TEST_TIME_SCALE (an integer, 1 when unset): the
-  // sanitizer jobs run instrumented workers several times slower (scripts/sanitize.sh).
+  // `timeout` is multiplied by TestTimeScale().
   template <typename Predicate>
   pdsm::v1::Job WaitUntil(const std::string& job_id, std::chrono::seconds timeout, Predicate done) {
-    const char* scale = std::getenv("PDSM_TEST_TIME_SCALE");
-    const int factor = scale != nullptr ? std::max(1, std::atoi(scale)) : 1;
-    const auto end = std::chrono::steady_clock::now() + timeout * factor;
+    const auto end = std::chrono::steady_clock::now() + timeout * TestTimeScale();
     pdsm::v1::Job job;
     while (std::chrono::steady_clock::now() < end) {
       if (GetJob(job_id, &job).ok() && done(job)) break;

@@ -130,7 +130,8 @@ TEST(Service, AdaptiveJobMatchesTheLocalBakeByteForByte) {
 }
 
 TEST(Service, KilledWorkersDoNotChangeTheBytes) {
-  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "8", "--lease-seconds", "1"}));
+  ServiceCluster cluster(
+      CoordinatorArgs({"--samples-per-task", "8", "--lease-seconds", LeaseSeconds(1)}));
   ASSERT_TRUE(cluster.StartCoordinator());
   const std::string scene = WriteServiceScene(cluster.dir(), 128, 128, 32, 1024);
   const std::string expected = LocalBakeBytes(cluster.dir(), scene);
@@ -155,7 +156,8 @@ TEST(Service, KilledWorkersDoNotChangeTheBytes) {
 }
 
 TEST(Service, StalledWorkerLosesItsLeaseAndItsLateResultChangesNothing) {
-  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "32", "--lease-seconds", "1"}));
+  ServiceCluster cluster(
+      CoordinatorArgs({"--samples-per-task", "32", "--lease-seconds", LeaseSeconds(1)}));
   ASSERT_TRUE(cluster.StartCoordinator());
   const std::string scene = WriteServiceScene(cluster.dir(), 128, 128, 64, 1024);
   const std::string expected = LocalBakeBytes(cluster.dir(), scene);
@@ -166,7 +168,8 @@ TEST(Service, StalledWorkerLosesItsLeaseAndItsLateResultChangesNothing) {
   });
   cluster.worker(stalled).Signal(SIGSTOP);
   cluster.AddWorker();
-  std::this_thread::sleep_for(std::chrono::milliseconds(2500));  // past the 1 s lease
+  // Past the lease (1 s at scale 1).
+  std::this_thread::sleep_for(std::chrono::milliseconds(2500) * TestTimeScale());
   cluster.worker(stalled).Signal(SIGCONT);
   const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
   ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error();
@@ -265,7 +268,8 @@ TEST(Service, WorkerWithAWrongTokenExitsAtOnceSayingWhatToFix) {
 }
 
 TEST(Service, CoordinatorKilledMidJobResumesWithoutRecomputingFinishedTiles) {
-  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "32", "--lease-seconds", "2"}));
+  ServiceCluster cluster(
+      CoordinatorArgs({"--samples-per-task", "32", "--lease-seconds", LeaseSeconds(2)}));
   ASSERT_TRUE(cluster.StartCoordinator());
   const std::string scene = WriteServiceScene(cluster.dir(), 128, 256, 16, 1024);
   const std::string expected = LocalBakeBytes(cluster.dir(), scene);
@@ -292,7 +296,8 @@ TEST(Service, CoordinatorKilledMidJobResumesWithoutRecomputingFinishedTiles) {
 // A restarted coordinator reopens an adaptive job's unfinished tiles at their pilot; the
 // decisions come out the same, and so do the bytes.
 TEST(Service, CoordinatorKilledMidAdaptiveJobGivesTheSameBytes) {
-  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "16", "--lease-seconds", "2"}));
+  ServiceCluster cluster(
+      CoordinatorArgs({"--samples-per-task", "16", "--lease-seconds", LeaseSeconds(2)}));
   ASSERT_TRUE(cluster.StartCoordinator());
   const std::string scene =
       MakeAdaptive(WriteServiceScene(cluster.dir(), 128, 256, 16, 1024), 0.02, 16);
@@ -312,7 +317,8 @@ TEST(Service, CoordinatorKilledMidAdaptiveJobGivesTheSameBytes) {
 }
 
 TEST(Service, CancelStopsTheJobAndFreesTheWorkers) {
-  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "64", "--lease-seconds", "1"}));
+  ServiceCluster cluster(
+      CoordinatorArgs({"--samples-per-task", "64", "--lease-seconds", LeaseSeconds(1)}));
   ASSERT_TRUE(cluster.StartCoordinator());
   cluster.AddWorker();
   const std::string big = WriteServiceScene(cluster.dir(), 512, 1024, 32, 2048);
