@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "core/bake/plan_fingerprint.h"
 #include "core/pdsm/pdsm_image.h"
 #include "core/util/version.h"
 #include "tests/test_support.h"
@@ -318,9 +319,20 @@ TEST(Cli, EveryBinaryPrintsItsVersion) {
     EXPECT_EQ(r.out, VersionLine(name) + "\n") << name;
   }
   EXPECT_EQ(VersionLine("pdsm"), std::string("pdsm ") + std::string(ProjectVersion()) +
-                                     " (PDSM file format " + std::to_string(kPdsmFormatVersion) +
-                                     ")");
+                                     " (commit " + std::string(GitCommit()) +
+                                     "; PDSM file format 1-" + std::to_string(kPdsmFormatVersion) +
+                                     "; plan fingerprint schema " +
+                                     std::to_string(kPlanFingerprintSchema) + ")");
   EXPECT_FALSE(ProjectVersion().empty());
+  // In a checkout, the commit is the one built (CMake re-reads it when HEAD moves).
+  const std::string source = PDSM_SOURCE_DIR;
+  if (std::filesystem::exists(source + "/.git")) {
+    CommandResult head = RunCommand("git -C " + source + " rev-parse --short=12 HEAD", dir);
+    ASSERT_EQ(head.exit_code, 0) << head.err;
+    EXPECT_EQ(std::string(GitCommit()) + "\n", head.out);
+  } else {
+    EXPECT_EQ(GitCommit(), "unknown");
+  }
 }
 
 }  // namespace

@@ -48,6 +48,7 @@ void AddHeader(const PdsmHeader& h, Feeder* f) {
 
 std::string PlanFingerprint(const BakePlan& plan) {
   Feeder f;
+  f.Add(kPlanFingerprintSchema);
   AddHeader(plan.header, &f);
   for (const glm::dvec2& s : plan.samples) f.Add(s.x), f.Add(s.y);
   f.Add(plan.lattice.s_origin), f.Add(plan.lattice.t_origin);

@@ -11,6 +11,11 @@
 
 namespace pdsm {
 
+// Which numbers the fingerprint covers, and how they are fed; hashed first, so builds of
+// different schemas never agree by accident. Bump it when PlanFingerprint changes what it
+// feeds (--version prints it).
+inline constexpr int kPlanFingerprintSchema = 1;
+
 // Lowercase hex, 64 characters.
 std::string PlanFingerprint(const BakePlan& plan);
 
