@@ -26,6 +26,8 @@ packages=(
   xvfb xauth gnuplot-nox
   # tests/deploy/check_manifests.py: parses the deployment manifests
   python3 python3-yaml
+  # the services' Prometheus /metrics endpoint (metrics/metrics_http_server.h)
+  libcpp-httplib-dev
 )
 
 export DEBIAN_FRONTEND=noninteractive

@@ -317,6 +317,32 @@ absl::StatusOr<std::vector<double>> Coordinator::Query(
   return query_cache_.Query(job_id, *path, points_world);
 }
 
+CoordinatorMetrics Coordinator::Metrics() {
+  CoordinatorMetrics m;
+  m.engine = engine_.Stats();
+  absl::StatusOr<std::map<pdsm::v1::JobState, JobStore::StateTotals>> totals =
+      store_->TotalsByState();
+  if (totals.ok()) {
+    m.jobs = *std::move(totals);
+  } else {
+    spdlog::warn("metrics: {}", std::string(totals.status().message()));
+  }
+  m.task_seconds = task_seconds_.Read();
+  std::vector<std::string> ids;
+  {
+    absl::MutexLock lock(&mu_);
+    for (const auto& [job_id, job] : active_) ids.push_back(job_id);
+  }
+  for (const std::string& job_id : ids) {
+    if (const std::optional<JobProgress> p = engine_.Progress(job_id); p && p->samples_total > 0) {
+      m.job_progress.emplace_back(
+          job_id, static_cast<double>(p->samples_done) / static_cast<double>(p->samples_total));
+    }
+  }
+  m.uptime_seconds = static_cast<double>(SteadyNowMs() - started_ms_) / 1000.0;
+  return m;
+}
+
 pdsm::v1::Stats Coordinator::GetStats() {
   const EngineStats s = engine_.Stats();
   pdsm::v1::Stats stats;
@@ -366,7 +392,7 @@ absl::StatusOr<int64_t> Coordinator::ExtendLease(const std::string& worker_id, u
 
 absl::StatusOr<bool> Coordinator::ReportResult(
     const std::string& worker_id, uint64_t lease_id,
-    const google::protobuf::RepeatedPtrField<pdsm::v1::TileEventsData>& tiles) {
+    const google::protobuf::RepeatedPtrField<pdsm::v1::TileEventsData>& tiles, double seconds) {
   const std::optional<TaskLease> lease = engine_.FindLease(lease_id);
   const std::shared_ptr<const BakePlan> plan = lease ? engine_.Plan(lease->job_id) : nullptr;
   if (!plan) {
@@ -390,6 +416,7 @@ absl::StatusOr<bool> Coordinator::ReportResult(
     events.push_back(*std::move(decoded));
   }
   const bool accepted = engine_.Report(worker_id, lease_id, std::move(events));
+  if (accepted) task_seconds_.Observe(seconds);
   if (!accepted) {
     spdlog::debug("job {} tile group {}: dropped a late or duplicate result from {}", lease->job_id,
                   lease->group_index, worker_id);

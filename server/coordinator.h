@@ -34,9 +34,11 @@
 #include "core/pipeline/bake_engine.h"
 #include "core/util/file_system.h"
 #include "core/util/work_queue.h"
+#include "metrics/histogram.h"
 #include "pdsm/v1/jobs.pb.h"
 #include "pdsm/v1/workers.pb.h"
 #include "server/coordinator_assets.h"
+#include "server/coordinator_metrics.h"
 #include "server/job_admission.h"
 #include "server/job_store.h"
 #include "server/query_cache.h"
@@ -88,6 +90,8 @@ class Coordinator {
   absl::StatusOr<std::vector<double>> Query(const std::string& job_id,
                                             const std::vector<glm::dvec3>& points_world);
   pdsm::v1::Stats GetStats();
+  // Everything /metrics shows (server/coordinator_metrics.h). Thread-safe.
+  CoordinatorMetrics Metrics();
 
   // ---- Worker API ----
   std::optional<pdsm::v1::Task> LeaseTask(const std::string& worker_id);
@@ -96,9 +100,10 @@ class Coordinator {
   // `tiles`: one per tile of the task, in its order. False when the result was dropped (late,
   // duplicate, job gone). INVALID_ARGUMENT when there are not as many as the task's tiles or
   // one does not fit its tile.
+  // `seconds`: the worker's time on the task (finite, >= 0), for the task-seconds metric.
   absl::StatusOr<bool> ReportResult(
       const std::string& worker_id, uint64_t lease_id,
-      const google::protobuf::RepeatedPtrField<pdsm::v1::TileEventsData>& tiles);
+      const google::protobuf::RepeatedPtrField<pdsm::v1::TileEventsData>& tiles, double seconds);
   // `incompatible`: the worker plans the job differently (BakeEngine::ReportIncompatible);
   // logged once per (job, worker).
   void ReportFailure(const std::string& worker_id, uint64_t lease_id, const std::string& reason,
@@ -128,6 +133,7 @@ class Coordinator {
   const int64_t started_ms_;
 
   BakeEngine engine_;
+  Histogram task_seconds_{SecondsBuckets()};  // of accepted results
   mutable absl::Mutex mu_;
   std::map<std::string, std::shared_ptr<StoredJob>> active_ ABSL_GUARDED_BY(mu_);
   absl::Notification stopping_;

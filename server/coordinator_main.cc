@@ -15,9 +15,11 @@
 #include "absl/strings/str_cat.h"
 #include "core/util/atomic_file.h"
 #include "core/util/version.h"
+#include "metrics/metrics_http_server.h"
 #include "rpc/grpc_support.h"
 #include "server/caller_auth.h"
 #include "server/coordinator.h"
+#include "server/coordinator_metrics.h"
 #include "server/jobs_service.h"
 #include "server/workers_service.h"
 
@@ -30,6 +32,7 @@ struct Flags {
   std::string client_token_file, worker_token_file;
   std::string tls_cert, tls_key;
   std::string ready_file;
+  std::string metrics_listen;  // empty: no /metrics
   std::string log_level = "info";
   double lease_seconds = 30;
   int max_message_bytes = kDefaultMaxMessageBytes;
@@ -100,6 +103,19 @@ int Run(Flags& flags, const sigset_t& signals) {
     spdlog::error("{}", std::string(coordinator.status().message()));
     return 1;
   }
+  std::unique_ptr<MetricsHttpServer> metrics;
+  if (!flags.metrics_listen.empty()) {
+    Coordinator* c = coordinator->get();
+    absl::StatusOr<std::unique_ptr<MetricsHttpServer>> started = MetricsHttpServer::Start(
+        flags.metrics_listen, [c] { return RenderCoordinatorMetrics(c->Metrics()); });
+    if (!started.ok()) {
+      spdlog::error("{}", std::string(started.status().message()));
+      return 2;
+    }
+    metrics = *std::move(started);
+    spdlog::info("metrics on http://{}/metrics (no token: keep this port private)",
+                 metrics->address());
+  }
   CallerAuth auth(*client_token, *worker_token);
   JobsService jobs(coordinator->get(), &auth);
   WorkersService workers(coordinator->get(), &auth);
@@ -133,8 +149,10 @@ int Run(Flags& flags, const sigset_t& signals) {
   if (!flags.ready_file.empty()) {
     // Atomically, so a reader never sees half an address. A service whose readiness cannot be
     // announced is of no use to whoever waits for it: stop.
-    if (absl::Status s = WriteFileAtomically(flags.ready_file, absl::StrCat(address, "\n"));
-        !s.ok()) {
+    // Line 1: the gRPC address; line 2, with --metrics-listen: "metrics HOST:PORT".
+    const std::string ready = absl::StrCat(
+        address, "\n", metrics ? absl::StrCat("metrics ", metrics->address(), "\n") : "");
+    if (absl::Status s = WriteFileAtomically(flags.ready_file, ready); !s.ok()) {
       spdlog::error("--ready-file: {}", std::string(s.message()));
       exit_code = 1;
     }
@@ -148,6 +166,7 @@ int Run(Flags& flags, const sigset_t& signals) {
   jobs.Shutdown();
   server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(5));
   server->Wait();
+  metrics.reset();  // its scrapes read the coordinator
   coordinator->reset();
   spdlog::info("stopped");
   return exit_code;
@@ -176,6 +195,9 @@ int main(int argc, char** argv) {
   app.add_option("--tls-cert", flags.tls_cert, "PEM certificate chain: serve TLS");
   app.add_option("--tls-key", flags.tls_key, "PEM private key of --tls-cert");
   app.add_option("--ready-file", flags.ready_file, "Write the listening address here once serving");
+  app.add_option("--metrics-listen", flags.metrics_listen,
+                 "host:port for Prometheus metrics over HTTP (GET /metrics; no token: keep it "
+                 "private)");
   app.add_option("--samples-per-task", o.samples_per_task,
                  "Light samples per task (0: the job's samples / 8, within [1, 64])")
       ->check(CLI::Range(0, 65536))

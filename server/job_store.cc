@@ -391,6 +391,26 @@ absl::StatusOr<std::vector<JobRecord>> JobStore::ListJobs(int limit) {
   return ReadJobs(*stmt, /*with_scene=*/false);
 }
 
+absl::StatusOr<std::map<pdsm::v1::JobState, JobStore::StateTotals>> JobStore::TotalsByState() {
+  absl::MutexLock lock(&mu_);
+  absl::StatusOr<Statement> stmt = Statement::Prepare(
+      db_, db_path_,
+      "SELECT state, COUNT(*), COALESCE(SUM(pdsm_bytes), 0) FROM jobs GROUP BY state");
+  if (!stmt.ok()) return stmt.status();
+  std::map<pdsm::v1::JobState, StateTotals> totals;
+  while (true) {
+    absl::StatusOr<bool> row = stmt->Step();
+    if (!row.ok()) return row.status();
+    if (!*row) break;
+    const int64_t state = stmt->Int64(0);
+    if (!pdsm::v1::JobState_IsValid(static_cast<int>(state))) continue;
+    StateTotals& t = totals[static_cast<pdsm::v1::JobState>(state)];
+    t.jobs = stmt->Int64(1);
+    t.pdsm_bytes = stmt->Int64(2);
+  }
+  return totals;
+}
+
 absl::StatusOr<std::vector<JobRecord>> JobStore::UnfinishedJobs() {
   absl::MutexLock lock(&mu_);
   absl::StatusOr<Statement> stmt =

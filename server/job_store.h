@@ -7,6 +7,7 @@
 #define PDSM_SERVER_JOB_STORE_H_
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -71,6 +72,14 @@ class JobStore {
   // At most `limit` jobs (all when limit <= 0), newest first (sequence descending), with
   // `scene` left empty.
   absl::StatusOr<std::vector<JobRecord>> ListJobs(int limit);
+
+  // Per state: how many jobs, and the bytes of their PDSMs (non-zero for SUCCEEDED only). For
+  // metrics: one aggregate query, no rows read into memory.
+  struct StateTotals {
+    int64_t jobs = 0;
+    int64_t pdsm_bytes = 0;
+  };
+  absl::StatusOr<std::map<pdsm::v1::JobState, StateTotals>> TotalsByState();
 
   // The jobs to resume: QUEUED or RUNNING, in submission order (sequence ascending), scenes
   // included.

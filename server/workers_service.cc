@@ -92,8 +92,8 @@ grpc::ServerUnaryReactor* WorkersService::ReportResult(grpc::CallbackServerConte
         context,
         ToGrpcStatus(absl::InvalidArgumentError("seconds: must be finite and not negative")));
   }
-  absl::StatusOr<bool> accepted =
-      coordinator_->ReportResult(request->worker_id(), request->lease_id(), request->tiles());
+  absl::StatusOr<bool> accepted = coordinator_->ReportResult(
+      request->worker_id(), request->lease_id(), request->tiles(), request->seconds());
   if (!accepted.ok()) return Answer(context, accepted.status());
   response->set_accepted(*accepted);
   return Answer(context, grpc::Status::OK);

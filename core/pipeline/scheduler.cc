@@ -150,6 +150,7 @@ bool Scheduler::AddStage(const std::string& job_id, int group_index,
 
 TaskLease Scheduler::Issue(Job& job, TaskRef task, const std::string& worker_id, int64_t now_ms) {
   const uint64_t lease_id = next_lease_id_++;
+  ++leases_issued_;
   const int64_t deadline_ms = now_ms + options_.lease_ms;
   job.pending.erase(task);
   UpdateReady(job);
@@ -229,6 +230,7 @@ std::optional<JobFailure> Scheduler::Fail(const std::string& worker_id, uint64_t
   Touch(worker_id, now_ms);
   const LeaseMap::iterator it = FindCurrent(worker_id, lease_id);
   if (it == leases_.end()) return std::nullopt;  // stale: the task is already elsewhere
+  ++(handed_back ? tasks_handed_back_ : tasks_failed_);
   return FailTask(it, reason, handed_back);
 }
 
@@ -236,6 +238,7 @@ bool Scheduler::Incompatible(const std::string& worker_id, uint64_t lease_id, in
   Touch(worker_id, now_ms);
   const LeaseMap::iterator it = FindCurrent(worker_id, lease_id);
   if (it == leases_.end()) return false;
+  ++tasks_incompatible_;
   const LeaseInfo lease = TakeLease(it);
   Job& job = jobs_.at(lease.job_id);
   Requeue(job, lease.task);
@@ -337,6 +340,10 @@ SchedulerStats Scheduler::Stats(int64_t now_ms) const {
   stats.leases_expired = leases_expired_;
   stats.results_dropped = results_dropped_;
   stats.results_accepted = results_accepted_;
+  stats.leases_issued = leases_issued_;
+  stats.tasks_failed = tasks_failed_;
+  stats.tasks_handed_back = tasks_handed_back_;
+  stats.tasks_incompatible = tasks_incompatible_;
   return stats;
 }
 

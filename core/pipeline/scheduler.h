@@ -87,6 +87,11 @@ struct SchedulerStats {
   int64_t results_dropped = 0;
   int64_t results_accepted = 0;
   int workers_incompatible = 0;  // (job, worker) pairs of jobs in progress (Incompatible())
+  // Since the scheduler started (counters, for metrics):
+  int64_t leases_issued = 0;
+  int64_t tasks_failed = 0;        // reported failures (Fail, not handed back)
+  int64_t tasks_handed_back = 0;   // Fail with handed_back
+  int64_t tasks_incompatible = 0;  // current leases reported by Incompatible()
 };
 
 class Scheduler {
@@ -252,6 +257,10 @@ class Scheduler {
   int64_t leases_expired_ = 0;
   int64_t results_dropped_ = 0;
   int64_t results_accepted_ = 0;
+  int64_t leases_issued_ = 0;
+  int64_t tasks_failed_ = 0;
+  int64_t tasks_handed_back_ = 0;
+  int64_t tasks_incompatible_ = 0;
 };
 
 }  // namespace pdsm
