@@ -191,6 +191,9 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
     const pdsm::v1::Task& task = response->task();
     const auto start = std::chrono::steady_clock::now();
     const auto fail = [&](const absl::Status& s, TaskFailure kind) {
+      ++(kind == TaskFailure::kFailed       ? metrics_.tasks_failed
+         : kind == TaskFailure::kHandedBack ? metrics_.tasks_handed_back
+                                            : metrics_.tasks_incompatible);
       spdlog::warn("job {} tile group {}: {}", task.job_id(), task.group_index(),
                    std::string(s.message()));
       (void)client_->ReportFailure(task.lease_id(), std::string(s.message()), kind);
@@ -246,10 +249,15 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
         task.group_index(),
         std::vector<int>(task.tile_indices().begin(), task.tile_indices().end()),
         task.sample_begin(), task.sample_end()};
+    ++metrics_.tasks_running;
     absl::StatusOr<std::vector<TileEvents>> events =
         runner->Run(bake_task, &stats, [&] { return stopping() || lease->lost.load(); });
+    --metrics_.tasks_running;
     forget_lease();
-    if (lease->lost) continue;  // the coordinator has moved on; nothing to report
+    if (lease->lost) {  // the coordinator has moved on; nothing to report
+      ++metrics_.leases_lost;
+      continue;
+    }
     if (!events.ok()) {
       fail(events.status(),
            absl::IsCancelled(events.status()) ? TaskFailure::kHandedBack : TaskFailure::kFailed);
@@ -258,6 +266,15 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
     absl::StatusOr<bool> accepted =
         client_->ReportResult(task.lease_id(), *events, SecondsSince(start));
     if (!accepted.ok() && StopIfPermanent(accepted.status())) return;
+    if (accepted.ok()) {
+      ++(*accepted ? metrics_.results_accepted : metrics_.results_dropped);
+      metrics_.events += stats.events;
+      metrics_.task_seconds.Observe(SecondsSince(start));
+      metrics_.shadow_map_seconds.Observe(stats.shadow_map_seconds);
+      metrics_.scan_seconds.Observe(stats.scan_seconds);
+    } else {
+      ++metrics_.results_undelivered;
+    }
     if (!accepted.ok()) {
       spdlog::warn("job {} tile group {}: result not delivered: {}", task.job_id(),
                    task.group_index(), std::string(accepted.status().message()));

@@ -18,6 +18,7 @@
 #include "core/bake/bake_plan.h"
 #include "worker/coordinator_client.h"
 #include "worker/group_cache.h"
+#include "worker/worker_metrics.h"
 
 namespace pdsm {
 
@@ -44,6 +45,9 @@ class RemoteWorker {
   // A job whose plan this build computes differently is reported incompatible (not a
   // failure) and the worker goes on with other jobs.
   absl::Status Run(const std::atomic<bool>& stop);
+
+  // Its tasks so far (for /metrics); safe to read while Run runs.
+  const WorkerMetrics& metrics() const { return metrics_; }
 
  private:
   struct JobContext {
@@ -76,6 +80,7 @@ class RemoteWorker {
   absl::Mutex jobs_mu_;  // held while a job's context loads: one download per job
   std::map<std::string, std::shared_ptr<const JobContext>> jobs_ ABSL_GUARDED_BY(jobs_mu_);
 
+  WorkerMetrics metrics_;
   std::atomic<bool> fatal_stop_{false};
   absl::Mutex fatal_mu_;
   absl::Status fatal_ ABSL_GUARDED_BY(fatal_mu_);

@@ -15,9 +15,11 @@
 
 #include "absl/strings/str_format.h"
 #include "core/util/version.h"
+#include "metrics/metrics_http_server.h"
 #include "rpc/grpc_support.h"
 #include "worker/coordinator_client.h"
 #include "worker/remote_worker.h"
+#include "worker/worker_metrics.h"
 
 namespace pdsm {
 namespace {
@@ -30,6 +32,7 @@ struct Flags {
   std::string log_level = "info";
   int threads = 0;
   std::string test_fingerprint_salt;  // hidden; tests only (RemoteWorkerOptions)
+  std::string metrics_listen;         // empty: no /metrics
 };
 
 // Unique per process, readable in the coordinator's logs: host, pid, random suffix.
@@ -80,6 +83,20 @@ int Run(const Flags& flags, const sigset_t& signals) {
     spdlog::error("{}", std::string(worker.status().message()));
     return 1;
   }
+  std::unique_ptr<MetricsHttpServer> metrics;
+  if (!flags.metrics_listen.empty()) {
+    const RemoteWorker* w = worker->get();
+    const int threads = options.threads;
+    absl::StatusOr<std::unique_ptr<MetricsHttpServer>> started = MetricsHttpServer::Start(
+        flags.metrics_listen, [w, threads] { return RenderWorkerMetrics(w->metrics(), threads); });
+    if (!started.ok()) {
+      spdlog::error("{}", std::string(started.status().message()));
+      return 2;
+    }
+    metrics = *std::move(started);
+    spdlog::info("metrics on http://{}/metrics (no token: keep this port private)",
+                 metrics->address());
+  }
   spdlog::info("worker {}: {} threads, coordinator {}, cache {}", client.worker_id(),
                options.threads, flags.coordinator, options.cache_dir);
 
@@ -124,6 +141,9 @@ int main(int argc, char** argv) {
   app.add_option("--threads", flags.threads, "Task threads (0: one per core)")
       ->check(CLI::Range(0, 1024));
   app.add_option("--cache-dir", flags.cache_dir, "Where mesh assets are cached by hash");
+  app.add_option("--metrics-listen", flags.metrics_listen,
+                 "host:port for Prometheus metrics over HTTP (GET /metrics; no token: keep it "
+                 "private)");
   app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}))
       ->capture_default_str();

@@ -108,5 +108,50 @@ TEST_F(CoordinatorMetrics, ValuesMoveDuringABakeAndNeedNoToken) {
   EXPECT_EQ(text.find(job.scene_name()), std::string::npos);
 }
 
+// pdsm-worker --metrics-listen: its own tasks and where their time goes.
+TEST_F(CoordinatorMetrics, WorkerCountsItsTasksAndTheirTime) {
+  const size_t worker = cluster_->AddWorker(1, {"--metrics-listen", "127.0.0.1:0"});
+  // Its log names the address once it serves.
+  std::string address;
+  const auto deadline = std::chrono::steady_clock::now() + seconds(30);
+  while (address.empty() && std::chrono::steady_clock::now() < deadline) {
+    const std::string log = cluster_->Log("worker0.log");
+    const size_t at = log.find("metrics on http://");
+    if (at != std::string::npos) {
+      const size_t begin = at + std::string("metrics on http://").size();
+      address = log.substr(begin, log.find("/metrics", begin) - begin);
+    } else {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  }
+  ASSERT_FALSE(address.empty()) << cluster_->Log("worker0.log");
+  httplib::Client worker_metrics("http://" + address);
+  const auto scrape = [&] {
+    httplib::Result r = worker_metrics.Get("/metrics");
+    EXPECT_TRUE(r) << httplib::to_string(r.error());
+    return r ? r->body : std::string();
+  };
+  std::string text = scrape();
+  EXPECT_EQ(Value(text, "pdsm_worker_threads"), 1);
+  EXPECT_EQ(Value(text, "pdsm_worker_results_total{outcome=\"accepted\"}"), 0);
+
+  const std::string scene = WriteServiceScene(cluster_->dir(), 128, 128, 32, 512);
+  const pdsm::v1::Job job = cluster_->WaitForEnd(cluster_->Submit(scene));
+  ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error();
+  text = scrape();
+  const double accepted = Value(text, "pdsm_worker_results_total{outcome=\"accepted\"}");
+  EXPECT_GT(accepted, 0);
+  // The coordinator counted the same results (one worker).
+  EXPECT_EQ(Value(Scrape(), "pdsm_results_total{outcome=\"accepted\"}"), accepted);
+  EXPECT_EQ(Value(text, "pdsm_worker_task_seconds_count"), accepted);
+  EXPECT_EQ(Value(text, "pdsm_worker_shadow_map_seconds_count"), accepted);
+  EXPECT_GT(Value(text, "pdsm_worker_shadow_map_seconds_sum"), 0);
+  EXPECT_GT(Value(text, "pdsm_worker_scan_seconds_sum"), 0);
+  EXPECT_GT(Value(text, "pdsm_worker_events_total"), 0);
+  EXPECT_EQ(Value(text, "pdsm_worker_tasks_running"), 0);
+  EXPECT_EQ(Value(text, "pdsm_worker_task_returns_total{kind=\"failed\"}"), 0);
+  EXPECT_TRUE(cluster_->worker(worker).running());
+}
+
 }  // namespace
 }  // namespace pdsm::testing
