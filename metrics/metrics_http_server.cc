@@ -7,6 +7,8 @@
 #include <chrono>
 #include <memory>
 
+#include <spdlog/spdlog.h>
+
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 
@@ -81,6 +83,7 @@ absl::StatusOr<std::unique_ptr<MetricsHttpServer>> MetricsHttpServer::Start(
   if (*ended) {
     return absl::UnavailableError(absl::StrCat("--metrics-listen ", address, ": cannot serve"));
   }
+  spdlog::info("metrics on http://{}/metrics (no token: keep this port private)", server->address_);
   return server;
 }
 

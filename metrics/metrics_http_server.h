@@ -22,7 +22,8 @@ class MetricsHttpServer {
  public:
   // Listens on `address` ("host:port", "[v6]:port"; port 0 picks one) and serves from a thread
   // of its own. `render` runs on that thread for each scrape: it must be thread-safe against
-  // the service. INVALID_ARGUMENT for a malformed address, UNAVAILABLE when it cannot bind.
+  // the service. Logs "metrics on http://HOST:PORT/metrics" (the bound address) once it
+  // serves. INVALID_ARGUMENT for a malformed address, UNAVAILABLE when it cannot bind.
   static absl::StatusOr<std::unique_ptr<MetricsHttpServer>> Start(
       const std::string& address, std::function<std::string()> render);
   ~MetricsHttpServer();  // stops serving and joins the thread

@@ -113,8 +113,6 @@ int Run(Flags& flags, const sigset_t& signals) {
       return 2;
     }
     metrics = *std::move(started);
-    spdlog::info("metrics on http://{}/metrics (no token: keep this port private)",
-                 metrics->address());
   }
   CallerAuth auth(*client_token, *worker_token);
   JobsService jobs(coordinator->get(), &auth);

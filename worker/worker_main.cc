@@ -94,8 +94,6 @@ int Run(const Flags& flags, const sigset_t& signals) {
       return 2;
     }
     metrics = *std::move(started);
-    spdlog::info("metrics on http://{}/metrics (no token: keep this port private)",
-                 metrics->address());
   }
   spdlog::info("worker {}: {} threads, coordinator {}, cache {}", client.worker_id(),
                options.threads, flags.coordinator, options.cache_dir);
