@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
-# Generates the two bearer tokens pdsm uses, as one-line files in deploy/secrets/:
-#   client_token  for `pdsm submit/status/fetch/...` (the job API)
-#   worker_token  for pdsm-worker (the worker API)
-# docker-compose.yml mounts them as compose secrets; the Kubernetes Secret can be made from
-# the same files (docs/deploy.md). Existing tokens are kept unless --force is given.
+# Generates the three bearer tokens pdsm uses, as one-line files in deploy/secrets/:
+#   client_token   for `pdsm submit/status/fetch/...` (the job API)
+#   worker_token   for pdsm-worker (the worker API)
+#   monitor_token  read-only: `pdsm status/list/watch/stats`, dashboards, health checks
+# docker-compose.yml mounts them as compose secrets; `bash deploy/make_secrets.sh
+# deploy/k8s/secrets` writes the files the Kubernetes kustomization turns into its Secret
+# (docs/deploy.md). Existing tokens are kept unless --force is given, so running it again
+# after an upgrade only adds the ones that are missing.
 #
 #   bash deploy/make_secrets.sh [--force] [DIR]     (DIR defaults to deploy/secrets)
 set -euo pipefail
@@ -22,7 +25,7 @@ mkdir -p "$dir"
 # run as uid 10001, not as you.
 chmod 0700 "$dir"
 
-for name in client_token worker_token; do
+for name in client_token worker_token monitor_token; do
   file=$dir/$name
   if [[ -s $file && $force == 0 ]]; then
     echo "kept      $file"

@@ -28,17 +28,34 @@ absl::string_view BearerToken(const grpc::CallbackServerContext* context) {
 
 grpc::Status CallerAuth::Check(const grpc::CallbackServerContext* context,
                                Audience audience) const {
-  const std::string& wanted = audience == Audience::kClient ? client_token_ : worker_token_;
-  const std::string& other = audience == Audience::kClient ? worker_token_ : client_token_;
-  if (wanted.empty()) return grpc::Status::OK;
+  const bool open = audience == Audience::kWorker ? tokens_.worker.empty() : tokens_.client.empty();
+  if (open) return grpc::Status::OK;
   const absl::string_view token = BearerToken(context);
-  if (SameSecret(token, wanted)) return grpc::Status::OK;
-  if (SameSecret(token, other)) {
-    return grpc::Status(grpc::StatusCode::PERMISSION_DENIED,
-                        audience == Audience::kClient
-                            ? "a worker token may not call the job API"
-                            : "a client token may not call the worker API");
+  const bool is_client = SameSecret(token, tokens_.client);
+  const bool is_monitor = SameSecret(token, tokens_.monitor);
+  const bool is_worker = SameSecret(token, tokens_.worker);
+  switch (audience) {
+    case Audience::kClient:
+      if (is_client) return grpc::Status::OK;
+      break;
+    case Audience::kMonitor:
+      if (is_client || is_monitor) return grpc::Status::OK;
+      break;
+    case Audience::kWorker:
+      if (is_worker) return grpc::Status::OK;
+      break;
   }
+  const auto denied = [](const char* why) {
+    return grpc::Status(grpc::StatusCode::PERMISSION_DENIED, why);
+  };
+  if (is_worker) return denied("a worker token may not call the job API");
+  if (is_monitor) {
+    return denied(audience == Audience::kWorker
+                      ? "a monitoring token may not call the worker API"
+                      : "a monitoring token may only read job state and stats (GetJob, "
+                        "ListJobs, WatchJob, GetStats)");
+  }
+  if (is_client) return denied("a client token may not call the worker API");
   return grpc::Status(
       grpc::StatusCode::UNAUTHENTICATED,
       token.empty() ? "missing \"authorization: Bearer <token>\"" : "invalid token");

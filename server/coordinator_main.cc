@@ -8,12 +8,12 @@
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
-#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
 #include "absl/strings/str_cat.h"
 #include "core/util/atomic_file.h"
+#include "core/util/process_log.h"
 #include "core/util/version.h"
 #include "metrics/metrics_http_server.h"
 #include "rpc/grpc_support.h"
@@ -29,11 +29,12 @@ namespace {
 struct Flags {
   std::string listen = "0.0.0.0:50051";
   std::string data_dir;
-  std::string client_token_file, worker_token_file;
+  std::string client_token_file, worker_token_file, monitor_token_file;
   std::string tls_cert, tls_key;
   std::string ready_file;
   std::string metrics_listen;  // empty: no /metrics
   std::string log_level = "info";
+  std::string log_format = "text";  // --log-format: kLogFormatNames
   double lease_seconds = 30;
   int max_message_bytes = kDefaultMaxMessageBytes;
   CoordinatorOptions options;
@@ -79,16 +80,20 @@ void WaitForStopSignal(const sigset_t& signals) {
 
 int Run(Flags& flags, const sigset_t& signals) {
   // One named logger per process: every line says which component wrote it.
-  spdlog::set_default_logger(spdlog::stderr_color_mt("coordinator"));
-  spdlog::set_level(spdlog::level::from_str(flags.log_level));
+  SetUpProcessLog("coordinator", flags.log_level, flags.log_format);
   flags.options.lease_ms = static_cast<int64_t>(flags.lease_seconds * 1000);
   absl::StatusOr<std::string> client_token =
       OptionalToken("--client-token-file", flags.client_token_file);
   absl::StatusOr<std::string> worker_token =
       OptionalToken("--worker-token-file", flags.worker_token_file);
+  // The monitoring token is the one secret whose absence is normal: no warning for it.
+  absl::StatusOr<std::string> monitor_token =
+      flags.monitor_token_file.empty()
+          ? std::string()
+          : ReadTokenFile("--monitor-token-file", flags.monitor_token_file);
   absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> credentials = Credentials(flags);
-  for (const absl::Status& s :
-       {client_token.status(), worker_token.status(), credentials.status()}) {
+  for (const absl::Status& s : {client_token.status(), worker_token.status(),
+                                monitor_token.status(), credentials.status()}) {
     if (!s.ok()) {
       spdlog::error("{}", std::string(s.message()));
       return 2;
@@ -97,6 +102,19 @@ int Run(Flags& flags, const sigset_t& signals) {
   if (!client_token->empty() && *client_token == *worker_token) {
     spdlog::error("--client-token-file and --worker-token-file must hold different secrets");
     return 2;
+  }
+  if (!monitor_token->empty()) {
+    if (client_token->empty()) {
+      spdlog::error(
+          "--monitor-token-file needs --client-token-file: without a client token the whole job "
+          "API is open, so a read-only token would restrict nothing");
+      return 2;
+    }
+    if (*monitor_token == *client_token || *monitor_token == *worker_token) {
+      spdlog::error(
+          "--monitor-token-file must hold a secret of its own, not the client's or the worker's");
+      return 2;
+    }
   }
   absl::StatusOr<std::unique_ptr<Coordinator>> coordinator = Coordinator::Start(flags.options);
   if (!coordinator.ok()) {
@@ -114,7 +132,7 @@ int Run(Flags& flags, const sigset_t& signals) {
     }
     metrics = *std::move(started);
   }
-  CallerAuth auth(*client_token, *worker_token);
+  CallerAuth auth({.client = *client_token, .monitor = *monitor_token, .worker = *worker_token});
   JobsService jobs(coordinator->get(), &auth);
   WorkersService workers(coordinator->get(), &auth);
 
@@ -190,6 +208,9 @@ int main(int argc, char** argv) {
                  "Secret the job API requires (Bearer token)");
   app.add_option("--worker-token-file", flags.worker_token_file,
                  "Secret the worker API requires (Bearer token)");
+  app.add_option("--monitor-token-file", flags.monitor_token_file,
+                 "Secret that may only read job state and stats (GetJob, ListJobs, WatchJob, "
+                 "GetStats: pdsm status, list, watch, stats); needs --client-token-file");
   app.add_option("--tls-cert", flags.tls_cert, "PEM certificate chain: serve TLS");
   app.add_option("--tls-key", flags.tls_key, "PEM private key of --tls-cert");
   app.add_option("--ready-file", flags.ready_file, "Write the listening address here once serving");
@@ -242,6 +263,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}))
+      ->capture_default_str();
+  app.add_option("--log-format", flags.log_format,
+                 "text, or json: one object per line (time, level, component, message)")
+      ->check(CLI::IsMember(std::vector<std::string>(std::begin(pdsm::kLogFormatNames),
+                                                     std::end(pdsm::kLogFormatNames))))
       ->capture_default_str();
   app.set_version_flag("--version", pdsm::VersionLine("pdsm-coordinator"));
   try {

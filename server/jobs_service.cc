@@ -201,7 +201,7 @@ grpc::ServerUnaryReactor* JobsService::SubmitBake(grpc::CallbackServerContext* c
 grpc::ServerUnaryReactor* JobsService::GetJob(grpc::CallbackServerContext* context,
                                               const pdsm::v1::GetJobRequest* request,
                                               pdsm::v1::Job* response) {
-  if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
+  if (grpc::Status s = auth_->Check(context, Audience::kMonitor); !s.ok()) {
     return Answer(context, s);
   }
   if (absl::Status s = CheckJobId(request->job_id()); !s.ok()) return Answer(context, s);
@@ -214,7 +214,7 @@ grpc::ServerUnaryReactor* JobsService::GetJob(grpc::CallbackServerContext* conte
 grpc::ServerUnaryReactor* JobsService::ListJobs(grpc::CallbackServerContext* context,
                                                 const pdsm::v1::ListJobsRequest* request,
                                                 pdsm::v1::ListJobsResponse* response) {
-  if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
+  if (grpc::Status s = auth_->Check(context, Audience::kMonitor); !s.ok()) {
     return Answer(context, s);
   }
   if (request->limit() < 0 || request->limit() > 10'000) {
@@ -228,7 +228,7 @@ grpc::ServerUnaryReactor* JobsService::ListJobs(grpc::CallbackServerContext* con
 
 grpc::ServerWriteReactor<pdsm::v1::Job>* JobsService::WatchJob(
     grpc::CallbackServerContext* context, const pdsm::v1::GetJobRequest* request) {
-  if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
+  if (grpc::Status s = auth_->Check(context, Audience::kMonitor); !s.ok()) {
     return new RefusedStream<grpc::ServerWriteReactor<pdsm::v1::Job>>(s);
   }
   if (absl::Status s = CheckJobId(request->job_id()); !s.ok()) {
@@ -320,7 +320,7 @@ grpc::ServerUnaryReactor* JobsService::QueryAttenuation(
 grpc::ServerUnaryReactor* JobsService::GetStats(grpc::CallbackServerContext* context,
                                                 const pdsm::v1::GetStatsRequest* request,
                                                 pdsm::v1::Stats* response) {
-  if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
+  if (grpc::Status s = auth_->Check(context, Audience::kMonitor); !s.ok()) {
     return Answer(context, s);
   }
   *response = coordinator_->GetStats();

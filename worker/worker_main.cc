@@ -9,11 +9,11 @@
 #include <random>
 #include <thread>
 
-#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
 #include "absl/strings/str_format.h"
+#include "core/util/process_log.h"
 #include "core/util/version.h"
 #include "metrics/metrics_http_server.h"
 #include "rpc/grpc_support.h"
@@ -30,6 +30,7 @@ struct Flags {
   std::string tls_ca;
   std::string cache_dir;
   std::string log_level = "info";
+  std::string log_format = "text";  // --log-format: kLogFormatNames
   int threads = 0;
   std::string test_fingerprint_salt;  // hidden; tests only (RemoteWorkerOptions)
   std::string metrics_listen;         // empty: no /metrics
@@ -55,8 +56,7 @@ std::string DefaultCacheDir() {
 
 int Run(const Flags& flags, const sigset_t& signals) {
   // One named logger per process: every line says which component wrote it.
-  spdlog::set_default_logger(spdlog::stderr_color_mt("worker"));
-  spdlog::set_level(spdlog::level::from_str(flags.log_level));
+  SetUpProcessLog("worker", flags.log_level, flags.log_format);
   std::string token;
   if (!flags.token_file.empty()) {
     absl::StatusOr<std::string> read = ReadTokenFile("--token-file", flags.token_file);
@@ -144,6 +144,11 @@ int main(int argc, char** argv) {
                  "private)");
   app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}))
+      ->capture_default_str();
+  app.add_option("--log-format", flags.log_format,
+                 "text, or json: one object per line (time, level, component, message)")
+      ->check(CLI::IsMember(std::vector<std::string>(std::begin(pdsm::kLogFormatNames),
+                                                     std::end(pdsm::kLogFormatNames))))
       ->capture_default_str();
   // Hidden (no group): a test makes this worker plan every job "differently", as a worker of
   // another build would, to exercise rolling upgrades.

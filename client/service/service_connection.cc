@@ -12,7 +12,10 @@ void AddServiceFlags(CLI::App* command, ServiceFlags* flags, bool required) {
   command->add_option("--server", flags->server, "Coordinator address host:port")
       ->envname("PDSM_SERVER")
       ->required(required);
-  command->add_option("--token-file", flags->token_file, "File holding the client token")
+  command
+      ->add_option("--token-file", flags->token_file,
+                   "File holding the client token (status, list, watch and stats also take the "
+                   "coordinator's monitoring token)")
       ->envname("PDSM_TOKEN_FILE");
   command->add_option("--tls-ca", flags->tls_ca, "PEM roots to trust: connect with TLS");
 }

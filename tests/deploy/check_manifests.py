@@ -13,6 +13,15 @@ Checks:
     metadata.name; kustomization.yaml lists existing files and every manifest; workloads'
     selectors match their pod labels; volume mounts, Secrets, Services, probe ports and the
     HPA target refer to things that exist.
+  * Kubernetes policy (issue #13's defects): no Secret among the resources (an apply would
+    blank the real one); Secrets come from a secretGenerator whose files lie in a git-ignored
+    folder and hold every key the pods mount; images are pinned (no `latest`, no bare name),
+    the coordinator and worker tags are equal in the manifests and in `images:` and equal the
+    project's VERSION; every pod sets automountServiceAccountToken: false; every emptyDir has
+    a sizeLimit and every container mounting one requests and limits ephemeral-storage of at
+    least their sum; listen addresses are not IPv4-only; a Deployment an HPA scales sets no
+    replicas; the HPA scales on a metric besides CPU; the workers have a PodDisruptionBudget
+    and topology spread; a NetworkPolicy selects each workload's pods.
   * Dockerfile.dockerignore exists, excludes deploy/secrets/ and no COPY source.
   * the Dockerfile splits into instructions that are all valid keywords; it starts with
     ARG/FROM; stage names are unique; FROM <stage> and COPY --from=<stage> refer to earlier
@@ -38,6 +47,17 @@ try:
 except ImportError:  # pragma: no cover - environment problem, not a manifest problem
     print("check_manifests: PyYAML is missing (apt-get install python3-yaml)", file=sys.stderr)
     sys.exit(1)
+
+
+def parse_quantity(text):
+    """A Kubernetes quantity ("10Gi", "512M", "1") in bytes (units as in resource.Quantity)."""
+    m = re.fullmatch(r"([0-9.]+)([KMGTPE]i?|k|m)?", str(text).strip())
+    if not m:
+        return 0
+    scale = {None: 1, "m": 1e-3, "k": 1e3, "K": 1e3, "M": 1e6, "G": 1e9, "T": 1e12, "P": 1e15,
+             "E": 1e18, "Ki": 2**10, "Mi": 2**20, "Gi": 2**30, "Ti": 2**40, "Pi": 2**50,
+             "Ei": 2**60}[m.group(2)]
+    return float(m.group(1)) * scale
 
 
 class Checker:
@@ -392,11 +412,148 @@ class Checker:
                 if "namespace" in doc["metadata"]:
                     self.problems.append(f"{where}: sets metadata.namespace (manifests must be namespace-agnostic)")
                 objects.append((file, doc))
+        generated_secrets = {}
         if kustomization is None:
             self.problem(k8s_dir, "no kustomization.yaml")
         else:
             self.check_kustomization(*kustomization, files)
-        self.check_k8s_references(objects)
+            generated_secrets = self.check_secret_generator(*kustomization)
+        self.check_k8s_references(objects, generated_secrets)
+        self.check_k8s_policy(objects, kustomization, generated_secrets)
+
+    def check_secret_generator(self, file, doc):
+        """{secret name: set of keys} of the kustomization's secretGenerator, after checking
+        that each file lies in a folder whose .gitignore ignores everything."""
+        generated = {}
+        base = os.path.dirname(file)
+        for generator in doc.get("secretGenerator") or []:
+            name = generator.get("name")
+            keys = set()
+            for entry in generator.get("files") or []:
+                key, _, source = str(entry).partition("=")
+                if not source:
+                    key, source = os.path.basename(key), key
+                keys.add(key)
+                folder = os.path.dirname(os.path.normpath(os.path.join(base, source)))
+                if not self.ignores_everything(os.path.join(folder, ".gitignore")):
+                    self.problem(file, f"secretGenerator {name!r}: {source} is not in a folder whose "
+                                       ".gitignore ignores everything (tokens could be committed)")
+            if generator.get("literals") or generator.get("envs"):
+                self.problem(file, f"secretGenerator {name!r}: literals/envs would keep secrets in "
+                                   "the repository; use files:")
+            generated[name] = keys
+        return generated
+
+    @staticmethod
+    def ignores_everything(gitignore):
+        try:
+            with open(gitignore, encoding="utf-8") as f:
+                lines = [l.strip() for l in f if l.strip() and not l.startswith("#")]
+        except OSError:
+            return False
+        return "*" in lines
+
+    def project_version(self):
+        try:
+            with open(os.path.join(self.repo, "CMakeLists.txt"), encoding="utf-8") as f:
+                m = re.search(r"project\(\s*pdsm\s+VERSION\s+([0-9.]+)", f.read())
+        except OSError:
+            return None
+        return m.group(1) if m else None
+
+    def check_k8s_policy(self, objects, kustomization, generated_secrets):
+        by_kind = {}
+        for file, doc in objects:
+            by_kind.setdefault(doc["kind"], {})[doc["metadata"]["name"]] = (file, doc)
+        for name, (file, _) in by_kind.get("Secret", {}).items():
+            self.problems.append(f"{self.rel(file)} Secret {name}: a Secret among the resources "
+                                 "overwrites the real one on every apply; use secretGenerator "
+                                 "or an out-of-band Secret")
+        version = self.project_version()
+        tags = {}  # image name -> set of tags seen (manifests and kustomization images:)
+        if kustomization is not None:
+            for image in kustomization[1].get("images") or []:
+                tag = str(image.get("newTag", ""))
+                if not tag or tag == "latest":
+                    self.problem(kustomization[0], f"images: {image.get('name')!r} needs a pinned newTag")
+                tags.setdefault(image.get("name"), set()).add(tag)
+        scaled = {((doc.get("spec") or {}).get("scaleTargetRef") or {}).get("name")
+                  for _, doc in by_kind.get("HorizontalPodAutoscaler", {}).values()}
+        policies = [doc for _, doc in by_kind.get("NetworkPolicy", {}).values()]
+        budgets = [doc for _, doc in by_kind.get("PodDisruptionBudget", {}).values()]
+
+        def selects(selector, labels):
+            match = (selector or {}).get("matchLabels") or {}
+            return bool(match) and all(labels.get(k) == v for k, v in match.items())
+
+        for kind in ("Deployment", "StatefulSet"):
+            for name, (file, doc) in by_kind.get(kind, {}).items():
+                where = f"{self.rel(file)} {kind} {name}"
+                spec = doc.get("spec") or {}
+                template = spec.get("template") or {}
+                labels = (template.get("metadata") or {}).get("labels") or {}
+                pod = template.get("spec") or {}
+                if pod.get("automountServiceAccountToken") is not False:
+                    self.problems.append(f"{where}: set automountServiceAccountToken: false "
+                                         "(pdsm never calls the Kubernetes API)")
+                if name in scaled and "replicas" in spec:
+                    self.problems.append(f"{where}: sets replicas although an HPA scales it "
+                                         "(every apply would reset the HPA's count)")
+                if not any(selects(p.get("spec", {}).get("podSelector"), labels) for p in policies):
+                    self.problems.append(f"{where}: no NetworkPolicy selects its pods")
+                if labels.get("app.kubernetes.io/component") == "worker":
+                    if not any(selects((b.get("spec") or {}).get("selector"), labels) for b in budgets):
+                        self.problems.append(f"{where}: no PodDisruptionBudget selects its pods")
+                    if not pod.get("topologySpreadConstraints"):
+                        self.problems.append(f"{where}: no topologySpreadConstraints")
+                empty_dirs = {}
+                for volume in pod.get("volumes") or []:
+                    if "emptyDir" in volume:
+                        limit = (volume.get("emptyDir") or {}).get("sizeLimit")
+                        if not limit:
+                            self.problems.append(f"{where}: emptyDir {volume.get('name')!r} has no sizeLimit")
+                        empty_dirs[volume.get("name")] = parse_quantity(limit or "0")
+                    secret = volume.get("secret") or {}
+                    wanted = {i.get("key") for i in secret.get("items") or []}
+                    have = generated_secrets.get(secret.get("secretName"))
+                    if have is not None and not wanted <= have:
+                        self.problems.append(f"{where}: volume {volume.get('name')!r} wants keys "
+                                             f"{sorted(wanted - have)} the secretGenerator lacks")
+                for container in pod.get("containers") or []:
+                    cwhere = f"{where} container {container.get('name')!r}"
+                    image = str(container.get("image", ""))
+                    image_name, _, tag = image.rpartition(":") if ":" in image.split("/")[-1] else (image, "", "")
+                    if not tag or tag == "latest":
+                        self.problems.append(f"{cwhere}: image {image!r} is not pinned to a release tag")
+                    tags.setdefault(image_name.split("/")[-1], set()).add(tag)
+                    args = [str(a) for a in container.get("args") or []]
+                    for flag, value in zip(args, args[1:]):
+                        if flag.endswith("listen") and value.startswith("0.0.0.0"):
+                            self.problems.append(f"{cwhere}: {flag} {value} is IPv4 only; use [::]")
+                    mounted = sum(empty_dirs.get(m.get("name"), 0)
+                                  for m in container.get("volumeMounts") or [])
+                    resources = container.get("resources") or {}
+                    for side in ("requests", "limits"):
+                        amount = (resources.get(side) or {}).get("ephemeral-storage")
+                        if mounted and amount is None:
+                            self.problems.append(f"{cwhere}: mounts emptyDirs but has no "
+                                                 f"resources.{side}.ephemeral-storage")
+                        elif mounted and parse_quantity(amount) < mounted:
+                            self.problems.append(f"{cwhere}: resources.{side}.ephemeral-storage "
+                                                 f"{amount} is below its emptyDirs' sizeLimits")
+        pdsm_tags = {tuple(sorted(tags.get(n, set()))) for n in ("pdsm-coordinator", "pdsm-worker")}
+        all_tags = set().union(*(tags.get(n, set()) for n in ("pdsm-coordinator", "pdsm-worker")))
+        if len(all_tags) > 1 or len(pdsm_tags) > 1:
+            self.problems.append(f"k8s: coordinator and worker images must carry one release tag, "
+                                 f"found {sorted(all_tags)}")
+        if version and all_tags and all_tags != {version}:
+            self.problems.append(f"k8s: image tags {sorted(all_tags)} differ from the project "
+                                 f"VERSION {version} (CMakeLists.txt)")
+        for name, (file, doc) in by_kind.get("HorizontalPodAutoscaler", {}).items():
+            metrics = (doc.get("spec") or {}).get("metrics") or []
+            if not any(m.get("type") in ("External", "Pods", "Object") for m in metrics):
+                self.problems.append(f"{self.rel(file)} HorizontalPodAutoscaler {name}: scales on "
+                                     "CPU only; add the queue-depth metric")
 
     def check_kustomization(self, file, doc, files):
         listed = doc.get("resources") or []
@@ -412,7 +569,7 @@ class Checker:
             if manifest != os.path.normpath(file) and manifest not in listed_paths:
                 self.problem(file, f"{os.path.basename(manifest)} is not listed under resources")
 
-    def check_k8s_references(self, objects):
+    def check_k8s_references(self, objects, generated_secrets):
         by_kind = {}
         for file, doc in objects:
             by_kind.setdefault(doc["kind"], {})[doc["metadata"]["name"]] = (file, doc)
@@ -435,7 +592,8 @@ class Checker:
                 volumes |= {(t.get("metadata") or {}).get("name") for t in spec.get("volumeClaimTemplates") or []}
                 for volume in pod.get("volumes") or []:
                     secret = (volume.get("secret") or {}).get("secretName")
-                    if secret and secret not in by_kind.get("Secret", {}):
+                    if secret and secret not in by_kind.get("Secret", {}) \
+                            and secret not in generated_secrets:
                         self.problems.append(f"{where}: volume {volume.get('name')!r} uses Secret "
                                              f"{secret!r}, which no manifest defines")
                 containers = pod.get("containers") or []

@@ -102,6 +102,7 @@ inline std::string LeaseSeconds(int seconds) { return std::to_string(seconds * T
 struct ClusterOptions {
   std::string client_token;  // empty: no token files
   std::string worker_token;
+  std::string monitor_token;                  // empty: none (needs client_token)
   std::vector<std::string> coordinator_args;  // extra flags
   bool tls = false;  // serve TLS with a fresh self-signed certificate for 127.0.0.1
 };
@@ -119,6 +120,9 @@ class ServiceCluster {
     if (!options_.client_token.empty()) {
       WriteText(dir_.File("client_token"), options_.client_token + "\n");
       WriteText(dir_.File("worker_token"), options_.worker_token + "\n");
+    }
+    if (!options_.monitor_token.empty()) {
+      WriteText(dir_.File("monitor_token"), options_.monitor_token + "\n");
     }
     if (options_.tls) {
       CommandResult r = RunCommand(
@@ -151,6 +155,9 @@ class ServiceCluster {
     if (!options_.client_token.empty()) {
       argv.insert(argv.end(), {"--client-token-file", dir_.File("client_token"),
                                "--worker-token-file", dir_.File("worker_token")});
+    }
+    if (!options_.monitor_token.empty()) {
+      argv.insert(argv.end(), {"--monitor-token-file", dir_.File("monitor_token")});
     }
     if (options_.tls) {
       argv.insert(argv.end(),

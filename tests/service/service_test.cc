@@ -2,8 +2,11 @@
 // Every bake is compared byte for byte with `pdsm bake` of the same scene.
 #include <algorithm>
 #include <atomic>
+#include <sstream>
 #include <thread>
 
+#include <google/protobuf/struct.pb.h>
+#include <google/protobuf/util/json_util.h>
 #include <gtest/gtest.h>
 
 #include "core/pdsm/pdsm_file.h"
@@ -267,6 +270,46 @@ TEST(Service, WorkerWithAWrongTokenExitsAtOnceSayingWhatToFix) {
   EXPECT_EQ(log.find("retrying"), std::string::npos) << log;
 }
 
+// --log-format json: every line either process writes is one JSON object with the four
+// documented fields, whatever the message holds (here a refused token, quoted text and all).
+TEST(Service, JsonLogsAreOneParsableObjectPerLine) {
+  ClusterOptions options = CoordinatorArgs({"--log-format", "json"});
+  options.client_token = "client-secret";
+  options.worker_token = "worker-secret";
+  ServiceCluster cluster(options);
+  ASSERT_TRUE(cluster.StartCoordinator());
+  WriteText(cluster.dir().File("wrong_token"), "not-the-worker-secret\n");
+  const size_t worker =
+      cluster.AddWorker(1, {"--log-format", "json"}, cluster.dir().File("wrong_token"));
+  ASSERT_NE(cluster.worker(worker).Wait(std::chrono::seconds(20)), -1);
+  cluster.coordinator().Signal(SIGTERM);  // its shutdown lines too
+  ASSERT_NE(cluster.coordinator().Wait(std::chrono::seconds(20)), -1);
+  for (const std::string name : {"coordinator.log", "worker0.log"}) {
+    const std::string log = cluster.Log(name);
+    std::istringstream lines(log);
+    int parsed = 0;
+    std::string last_message;
+    for (std::string line; std::getline(lines, line);) {
+      google::protobuf::Struct object;
+      ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(line, &object).ok())
+          << name << ": " << line;
+      const auto& fields = object.fields();
+      for (const char* key : {"time", "level", "component", "message"}) {
+        ASSERT_TRUE(fields.contains(key)) << name << ": " << line;
+      }
+      EXPECT_EQ(fields.at("component").string_value(),
+                name == "worker0.log" ? "worker" : "coordinator");
+      EXPECT_EQ(fields.at("time").string_value().back(), 'Z') << line;  // UTC
+      last_message = fields.at("message").string_value();
+      ++parsed;
+    }
+    EXPECT_GT(parsed, 0) << name;
+    if (name == "worker0.log") {
+      EXPECT_NE(last_message.find("UNAUTHENTICATED"), std::string::npos) << log;
+    }
+  }
+}
+
 TEST(Service, CoordinatorKilledMidJobResumesWithoutRecomputingFinishedTiles) {
   ServiceCluster cluster(
       CoordinatorArgs({"--samples-per-task", "32", "--lease-seconds", LeaseSeconds(2)}));
@@ -427,6 +470,109 @@ TEST(Service, BadCallersAndBadJobsGetTheRightStatusAndDisturbNothing) {
   job = cluster.WaitForEnd(good);
   ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error();
   EXPECT_TRUE(FetchBytes(cluster, good) == expected);
+}
+
+// The monitoring token follows the farm (job state, lists, watches, stats) and can do nothing
+// else: no submit, cancel, fetch, query or tile read, and nothing on the worker API.
+TEST(Service, MonitoringTokenReadsJobStateAndNothingElse) {
+  ClusterOptions options;
+  options.client_token = "client-secret";
+  options.worker_token = "worker-secret";
+  options.monitor_token = "monitor-secret";
+  ServiceCluster cluster(options);
+  ASSERT_TRUE(cluster.StartCoordinator());
+  const std::string scene = WriteServiceScene(cluster.dir(), 64, 16, 32);
+  const std::string job_id = cluster.Submit(scene);  // no worker: it stays queued
+  ASSERT_FALSE(job_id.empty());
+  const std::string monitor = "monitor-secret";
+  const auto call = [&]() {
+    auto context = std::make_unique<grpc::ClientContext>();
+    PrepareCall(context.get(), monitor, seconds(10));
+    return context;
+  };
+  auto jobs = cluster.JobsStub();
+  pdsm::v1::GetJobRequest by_id;
+  by_id.set_job_id(job_id);
+
+  // Allowed: the read-only state calls.
+  pdsm::v1::Job job;
+  ASSERT_TRUE(cluster.GetJob(job_id, &job, monitor).ok());
+  EXPECT_EQ(job.state(), pdsm::v1::QUEUED);
+  pdsm::v1::ListJobsResponse listed;
+  EXPECT_TRUE(jobs->ListJobs(call().get(), {}, &listed).ok());
+  EXPECT_EQ(listed.jobs_size(), 1);
+  pdsm::v1::Stats stats;
+  EXPECT_TRUE(jobs->GetStats(call().get(), {}, &stats).ok());
+  EXPECT_EQ(stats.jobs_queued(), 1);
+  {
+    auto context = call();
+    auto watch = jobs->WatchJob(context.get(), by_id);
+    pdsm::v1::Job first;
+    EXPECT_TRUE(watch->Read(&first));
+    EXPECT_EQ(first.job_id(), job_id);
+    context->TryCancel();
+    watch->Finish();
+  }
+
+  // Refused: everything that changes a job or reads its contents, and the worker API.
+  const auto denied = [](const grpc::Status& s) {
+    return s.error_code() == grpc::StatusCode::PERMISSION_DENIED &&
+           s.error_message().find("monitoring token") != std::string::npos;
+  };
+  pdsm::v1::SubmitBakeRequest submit;
+  submit.set_idempotency_key("from-a-monitor");
+  EXPECT_TRUE(denied(jobs->SubmitBake(call().get(), submit, &job)));
+  EXPECT_TRUE(denied(jobs->CancelJob(call().get(), by_id, &job)));
+  pdsm::v1::FinishedTiles tiles;
+  EXPECT_TRUE(denied(jobs->ListFinishedTiles(call().get(), by_id, &tiles)));
+  pdsm::v1::QueryAttenuationRequest query;
+  query.set_job_id(job_id);
+  pdsm::v1::QueryAttenuationResponse answer;
+  EXPECT_TRUE(denied(jobs->QueryAttenuation(call().get(), query, &answer)));
+  {
+    auto context = call();
+    auto fetch = jobs->FetchPdsm(context.get(), by_id);
+    pdsm::v1::PdsmChunk chunk;
+    EXPECT_FALSE(fetch->Read(&chunk));
+    EXPECT_TRUE(denied(fetch->Finish()));
+  }
+  pdsm::v1::LeaseTaskRequest lease;
+  lease.set_worker_id("monitor");
+  pdsm::v1::LeaseTaskResponse leased;
+  EXPECT_TRUE(denied(cluster.WorkersStub()->LeaseTask(call().get(), lease, &leased)));
+
+  // The CLI: `pdsm status` works with the monitoring token, `pdsm cancel` says why it cannot.
+  CommandResult status =
+      RunCommand(std::string(PDSM_CLI) + " status " + job_id + " --server " + cluster.address() +
+                     " --token-file " + cluster.dir().File("monitor_token"),
+                 cluster.dir());
+  EXPECT_EQ(status.exit_code, 0) << status.err;
+  EXPECT_NE(status.out.find("QUEUED"), std::string::npos) << status.out;
+  CommandResult cancel =
+      RunCommand(std::string(PDSM_CLI) + " cancel " + job_id + " --server " + cluster.address() +
+                     " --token-file " + cluster.dir().File("monitor_token"),
+                 cluster.dir());
+  EXPECT_NE(cancel.exit_code, 0);
+  EXPECT_NE(cancel.err.find("monitoring token"), std::string::npos) << cancel.err;
+  ASSERT_TRUE(cluster.GetJob(job_id, &job).ok());
+  EXPECT_EQ(job.state(), pdsm::v1::QUEUED);
+}
+
+// A monitoring token needs a client token (else it restricts nothing) and a secret of its own.
+TEST(Service, CoordinatorRefusesAMonitoringTokenThatWouldRestrictNothing) {
+  TempDir dir;
+  WriteText(dir.File("a"), "secret-a\n");
+  WriteText(dir.File("b"), "secret-b\n");
+  const std::string base = std::string(PDSM_COORDINATOR) + " --listen 127.0.0.1:0 --data-dir " +
+                           dir.File("data") + " --monitor-token-file " + dir.File("a");
+  CommandResult alone = RunCommand(base, dir);
+  EXPECT_EQ(alone.exit_code, 2);
+  EXPECT_NE(alone.err.find("needs --client-token-file"), std::string::npos) << alone.err;
+  CommandResult same = RunCommand(
+      base + " --client-token-file " + dir.File("b") + " --worker-token-file " + dir.File("a"),
+      dir);
+  EXPECT_EQ(same.exit_code, 2);
+  EXPECT_NE(same.err.find("a secret of its own"), std::string::npos) << same.err;
 }
 
 TEST(Service, TlsCarriesTheWholeBakeAndPlaintextClientsAreRefused) {
