@@ -28,6 +28,9 @@ packages=(
   python3 python3-yaml
   # the services' Prometheus /metrics endpoint (metrics/metrics_http_server.h)
   libcpp-httplib-dev
+  # the Slurm farm test (tests/deploy/slurm_farm_test.sh) starts its own munged, slurmctld
+  # and slurmd on loopback; nothing of the packages' own configuration is used
+  slurm-wlm munge
 )
 
 export DEBIAN_FRONTEND=noninteractive

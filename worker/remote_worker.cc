@@ -194,8 +194,13 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
       ++(kind == TaskFailure::kFailed       ? metrics_.tasks_failed
          : kind == TaskFailure::kHandedBack ? metrics_.tasks_handed_back
                                             : metrics_.tasks_incompatible);
-      spdlog::warn("job {} tile group {}: {}", task.job_id(), task.group_index(),
-                   std::string(s.message()));
+      if (kind == TaskFailure::kHandedBack) {  // stopping, not a fault: no warning
+        spdlog::info("job {} tile group {}: handed back to the coordinator", task.job_id(),
+                     task.group_index());
+      } else {
+        spdlog::warn("job {} tile group {}: {}", task.job_id(), task.group_index(),
+                     std::string(s.message()));
+      }
       (void)client_->ReportFailure(task.lease_id(), std::string(s.message()), kind);
     };
 
