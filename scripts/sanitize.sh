@@ -42,7 +42,7 @@ for phase in "${phases[@]}"; do
     asan)
       configure build-asan address,undefined -DPDSM_FUZZ=ON
       cmake --build build-asan -j "$jobs"
-      (cd build-asan && ctest --output-on-failure -j "$jobs" --timeout 1800 -LE static)
+      (cd build-asan && ctest --output-on-failure -j "$jobs" --timeout 1800 -LE 'static|container')
       ;;
     tsan)
       configure build-tsan thread
