@@ -425,7 +425,8 @@ absl::StatusOr<bool> Coordinator::ReportResult(
 }
 
 void Coordinator::ReportFailure(const std::string& worker_id, uint64_t lease_id,
-                                const std::string& reason, bool handed_back, bool incompatible) {
+                                const absl::Status& failure, bool handed_back, bool incompatible) {
+  const std::string reason(failure.message());
   if (incompatible) {
     const std::optional<TaskLease> lease = engine_.FindLease(lease_id);
     if (engine_.ReportIncompatible(worker_id, lease_id)) {
@@ -438,7 +439,7 @@ void Coordinator::ReportFailure(const std::string& worker_id, uint64_t lease_id,
   }
   spdlog::warn("lease {}: worker {} {}: {}", lease_id, worker_id,
                handed_back ? "handed the task back" : "failed", reason);
-  engine_.ReportFailure(worker_id, lease_id, absl::UnknownError(reason), handed_back);
+  engine_.ReportFailure(worker_id, lease_id, failure, handed_back);
 }
 
 void Coordinator::SignOff(const std::string& worker_id) {

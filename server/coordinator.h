@@ -106,7 +106,8 @@ class Coordinator {
       const google::protobuf::RepeatedPtrField<pdsm::v1::TileEventsData>& tiles, double seconds);
   // `incompatible`: the worker plans the job differently (BakeEngine::ReportIncompatible);
   // logged once per (job, worker).
-  void ReportFailure(const std::string& worker_id, uint64_t lease_id, const std::string& reason,
+  // `failure`: the worker's reason (message) and code (counted by code in the metrics).
+  void ReportFailure(const std::string& worker_id, uint64_t lease_id, const absl::Status& failure,
                      bool handed_back, bool incompatible);
   // The worker is leaving: no longer counted active.
   void SignOff(const std::string& worker_id);

@@ -55,6 +55,16 @@ std::string RenderCoordinatorMetrics(const CoordinatorMetrics& m) {
              {{"kind", "handed_back"}});
   out.Sample("pdsm_task_returns_total", static_cast<double>(s.tasks_incompatible),
              {{"kind", "incompatible"}});
+  // Every code, zeros included, so that rate() and alerts see a series from the start.
+  out.Family("pdsm_task_failures_total", "counter",
+             "Failed tasks (kind=\"failed\" above) by the status code the worker reported.");
+  for (int code = 1; code <= 16; ++code) {
+    const auto c = static_cast<absl::StatusCode>(code);
+    const auto it = s.tasks_failed_by_code.find(c);
+    out.Sample("pdsm_task_failures_total",
+               it == s.tasks_failed_by_code.end() ? 0.0 : static_cast<double>(it->second),
+               {{"code", absl::AsciiStrToLower(absl::StatusCodeToString(c))}});
+  }
   out.Gauge("pdsm_tasks_per_second", "Accepted task results per second, over the last minute.",
             m.engine.tasks_per_second);
   out.Gauge("pdsm_events_per_second",

@@ -14,6 +14,16 @@ namespace {
 // promptly, long enough that idle workers cost the coordinator little.
 constexpr int64_t kIdleRetryMs = 250;
 
+// ReportFailureRequest.code: an absl/gRPC code name; anything else (empty: an older worker)
+// is UNKNOWN. A failure is never OK.
+absl::StatusCode FailureCode(const std::string& name) {
+  for (int code = 1; code <= 16; ++code) {
+    const auto c = static_cast<absl::StatusCode>(code);
+    if (absl::StatusCodeToString(c) == name) return c;
+  }
+  return absl::StatusCode::kUnknown;
+}
+
 // FetchAsset: the blob in chunks.
 class AssetReactor final : public grpc::ServerWriteReactor<pdsm::v1::AssetData> {
  public:
@@ -107,9 +117,10 @@ grpc::ServerUnaryReactor* WorkersService::ReportFailure(
   }
   if (absl::Status s = CheckWorkerId(request->worker_id()); !s.ok()) return Answer(context, s);
   // Escaped here, once: the reason goes into logs and into the job's error, one line each.
-  coordinator_->ReportFailure(request->worker_id(), request->lease_id(),
-                              Printable(request->reason(), kMaxReasonBytes), request->handed_back(),
-                              request->incompatible());
+  coordinator_->ReportFailure(
+      request->worker_id(), request->lease_id(),
+      absl::Status(FailureCode(request->code()), Printable(request->reason(), kMaxReasonBytes)),
+      request->handed_back(), request->incompatible());
   return Answer(context, grpc::Status::OK);
 }
 

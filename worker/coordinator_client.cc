@@ -60,14 +60,15 @@ absl::StatusOr<bool> CoordinatorClient::ReportResult(uint64_t lease_id,
   return response.accepted();
 }
 
-absl::Status CoordinatorClient::ReportFailure(uint64_t lease_id, const std::string& reason,
+absl::Status CoordinatorClient::ReportFailure(uint64_t lease_id, const absl::Status& failure,
                                               TaskFailure kind) {
   grpc::ClientContext context;
   PrepareCall(&context, token_, kShortCall);
   pdsm::v1::ReportFailureRequest request;
   request.set_worker_id(worker_id_);
   request.set_lease_id(lease_id);
-  request.set_reason(reason);
+  request.set_reason(std::string(failure.message()));
+  request.set_code(absl::StatusCodeToString(failure.code()));
   request.set_handed_back(kind == TaskFailure::kHandedBack);
   request.set_incompatible(kind == TaskFailure::kIncompatible);
   pdsm::v1::ReportFailureResponse response;

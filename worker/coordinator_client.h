@@ -41,7 +41,8 @@ class CoordinatorClient {
   // `events`: one per tile of the task, in its order.
   absl::StatusOr<bool> ReportResult(uint64_t lease_id, const std::vector<TileEvents>& events,
                                     double seconds);
-  absl::Status ReportFailure(uint64_t lease_id, const std::string& reason, TaskFailure kind);
+  // `failure`: its message is the reason, its code is reported for the coordinator's counts.
+  absl::Status ReportFailure(uint64_t lease_id, const absl::Status& failure, TaskFailure kind);
   // The worker is leaving (after handing back its tasks).
   absl::Status SignOff();
   absl::StatusOr<pdsm::v1::GetJobSceneResponse> JobScene(const std::string& job_id);

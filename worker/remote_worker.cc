@@ -201,7 +201,7 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
         spdlog::warn("job {} tile group {}: {}", task.job_id(), task.group_index(),
                      std::string(s.message()));
       }
-      (void)client_->ReportFailure(task.lease_id(), std::string(s.message()), kind);
+      (void)client_->ReportFailure(task.lease_id(), s, kind);
     };
 
     auto lease = std::make_shared<RunningLease>();

@@ -219,7 +219,7 @@ bool BakeEngine::Report(const std::string& worker_id, uint64_t lease_id,
       failure = scheduler_.Fail(worker_id, lease_id,
                                 absl::StrCat("the result holds ", events.size(),
                                              " tiles' events for a task of ", lease->tiles.size()),
-                                /*handed_back=*/false, now);
+                                /*handed_back=*/false, now, absl::StatusCode::kInvalidArgument);
       if (failure) job = FindJob(failure->job_id);
     }
     if (!failure) {
@@ -398,8 +398,8 @@ void BakeEngine::ReportFailure(const std::string& worker_id, uint64_t lease_id,
       scheduler_.Fail(worker_id, lease_id, std::string(status.message()), /*handed_back=*/true,
                       now);
     } else {
-      failure =
-          scheduler_.Fail(worker_id, lease_id, std::string(status.message()), handed_back, now);
+      failure = scheduler_.Fail(worker_id, lease_id, std::string(status.message()), handed_back,
+                                now, status.code());
       if (failure) job = FindJob(failure->job_id);
     }
     changed_.SignalAll();

@@ -226,11 +226,12 @@ ResultOutcome Scheduler::Complete(const std::string& worker_id, uint64_t lease_i
 
 std::optional<JobFailure> Scheduler::Fail(const std::string& worker_id, uint64_t lease_id,
                                           const std::string& reason, bool handed_back,
-                                          int64_t now_ms) {
+                                          int64_t now_ms, absl::StatusCode code) {
   Touch(worker_id, now_ms);
   const LeaseMap::iterator it = FindCurrent(worker_id, lease_id);
   if (it == leases_.end()) return std::nullopt;  // stale: the task is already elsewhere
   ++(handed_back ? tasks_handed_back_ : tasks_failed_);
+  if (!handed_back) ++tasks_failed_by_code_[code];
   return FailTask(it, reason, handed_back);
 }
 
@@ -342,6 +343,7 @@ SchedulerStats Scheduler::Stats(int64_t now_ms) const {
   stats.results_accepted = results_accepted_;
   stats.leases_issued = leases_issued_;
   stats.tasks_failed = tasks_failed_;
+  stats.tasks_failed_by_code = tasks_failed_by_code_;
   stats.tasks_handed_back = tasks_handed_back_;
   stats.tasks_incompatible = tasks_incompatible_;
   return stats;

@@ -89,8 +89,9 @@ struct SchedulerStats {
   int workers_incompatible = 0;  // (job, worker) pairs of jobs in progress (Incompatible())
   // Since the scheduler started (counters, for metrics):
   int64_t leases_issued = 0;
-  int64_t tasks_failed = 0;        // reported failures (Fail, not handed back)
-  int64_t tasks_handed_back = 0;   // Fail with handed_back
+  int64_t tasks_failed = 0;  // reported failures (Fail, not handed back)
+  std::map<absl::StatusCode, int64_t> tasks_failed_by_code;  // the same, by Fail's code
+  int64_t tasks_handed_back = 0;                             // Fail with handed_back
   int64_t tasks_incompatible = 0;  // current leases reported by Incompatible()
 };
 
@@ -120,8 +121,10 @@ class Scheduler {
   // The worker could not do the task. Unless `handed_back`, it counts against the worker and
   // the task; the task goes back to the queue. Returns the job's failure when the task has now
   // failed on max_task_failures distinct workers (the job is then removed).
+  // `code`: the failure's status code, counted in SchedulerStats::tasks_failed_by_code.
   std::optional<JobFailure> Fail(const std::string& worker_id, uint64_t lease_id,
-                                 const std::string& reason, bool handed_back, int64_t now_ms);
+                                 const std::string& reason, bool handed_back, int64_t now_ms,
+                                 absl::StatusCode code = absl::StatusCode::kUnknown);
 
   // The worker's build plans the lease's job differently (a plan-fingerprint mismatch: a
   // rolling upgrade, another libm): not a failure of anyone. The task goes back to the queue
@@ -259,6 +262,7 @@ class Scheduler {
   int64_t results_accepted_ = 0;
   int64_t leases_issued_ = 0;
   int64_t tasks_failed_ = 0;
+  std::map<absl::StatusCode, int64_t> tasks_failed_by_code_;
   int64_t tasks_handed_back_ = 0;
   int64_t tasks_incompatible_ = 0;
 };

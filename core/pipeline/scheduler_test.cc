@@ -137,6 +137,7 @@ TEST(SchedulerTest, PendingTasksOfOpenTilesGoBeforeANewTile) {
   EXPECT_EQ(third.group_index, 0);
   EXPECT_EQ(third.sample_begin, 0);
   EXPECT_EQ(MustLease(scheduler, "c", 0).group_index, 1);
+  EXPECT_TRUE(scheduler.Stats(0).tasks_failed_by_code.empty());  // a hand-back is no failure
 }
 
 TEST(SchedulerTest, HonoursTheOpenTileBoundOverAllJobs) {
@@ -306,9 +307,15 @@ TEST(SchedulerTest, TaskFailingOnThreeWorkersFailsTheJob) {
     ASSERT_FALSE(failure) << "failed early: " << failure->reason;
     const TaskLease lease = MustLease(scheduler, worker, 0);
     ASSERT_EQ(lease.sample_begin, 0);
-    failure = scheduler.Fail(worker, lease.lease_id, "out of memory on " + worker, false, 0);
+    failure = scheduler.Fail(
+        worker, lease.lease_id, "out of memory on " + worker, false, 0,
+        worker == "c" ? absl::StatusCode::kInternal : absl::StatusCode::kResourceExhausted);
   }
   ASSERT_TRUE(failure);
+  // Counted by the code each worker reported (the coordinator's failures-by-code metric).
+  const std::map<absl::StatusCode, int64_t> by_code = scheduler.Stats(0).tasks_failed_by_code;
+  EXPECT_EQ(by_code, (std::map<absl::StatusCode, int64_t>{{absl::StatusCode::kResourceExhausted, 2},
+                                                          {absl::StatusCode::kInternal, 1}}));
   EXPECT_EQ(failure->job_id, "j");
   EXPECT_THAT(failure->reason, HasSubstr("tile group 7"));
   EXPECT_THAT(failure->reason, HasSubstr("[0, 4)"));

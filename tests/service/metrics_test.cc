@@ -75,6 +75,9 @@ TEST_F(CoordinatorMetrics, ValuesMoveDuringABakeAndNeedNoToken) {
   EXPECT_EQ(Value(text, "pdsm_jobs{state=\"succeeded\"}"), 0);
   EXPECT_EQ(Value(text, "pdsm_workers_active"), 0);
   EXPECT_EQ(Value(text, "pdsm_task_seconds_count"), 0);
+  // Failures by code: every code is there from the start, at zero.
+  EXPECT_EQ(Value(text, "pdsm_task_failures_total{code=\"resource_exhausted\"}"), 0);
+  EXPECT_EQ(Value(text, "pdsm_task_failures_total{code=\"internal\"}"), 0);
 
   // A job and no worker yet: it waits, its tasks are the queue, it is far from done.
   const std::string scene = WriteServiceScene(cluster_->dir(), 128, 128, 32, 512);
