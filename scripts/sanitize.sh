@@ -22,6 +22,26 @@ export LSAN_OPTIONS="suppressions=$root/scripts/sanitizers/lsan.supp:print_suppr
 export PDSM_TEST_TIME_SCALE=6
 export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$root/scripts/sanitizers/tsan.supp"
 
+# TSan reports go to files: a coordinator or worker that a report halts writes it into a
+# test's temporary folder, which the test deletes, so without a log_path the report would be
+# lost and only "connection reset" would remain in the test's output. After the phase every
+# report is printed, and any report fails it.
+reports=$root/build-tsan-reports
+rm -rf "$reports"
+mkdir -p "$reports"
+TSAN_OPTIONS+=":log_path=$reports/tsan"
+print_reports() {  # PHASE; returns 1 if there was any report
+  local found=0
+  for report in "$reports"/*; do
+    [[ -s $report ]] || continue
+    found=1
+    echo "=== $1: sanitizer report $report"
+    cat "$report"
+  done
+  rm -f "$reports"/*
+  [[ $found == 0 ]]
+}
+
 configure() {  # DIR SANITIZE [extra cmake args]
   local dir=$1 sanitize=$2
   shift 2
@@ -47,10 +67,13 @@ for phase in "${phases[@]}"; do
     tsan)
       configure build-tsan thread
       cmake --build build-tsan -j "$jobs" --target pdsm_tsan_absl core_tests server_tests e2e_tests
+      status=0
       (cd build-tsan && LD_PRELOAD=$root/build-tsan/libpdsm_tsan_absl.so \
         ctest --output-on-failure -j "$jobs" --timeout 1800 \
         -R '^(SchedulerTest|BakeEngineTest|WorkQueue|StageRule|Service|HostileRequests|JobStoreTest|StoredJob|AssetStoreTest)' \
-        -E '^Service\.StalledWorkerLosesItsLease')
+        -E '^Service\.StalledWorkerLosesItsLease') || status=$?
+      print_reports tsan || status=1
+      [[ $status == 0 ]] || exit "$status"
       # Excluded above: with a 1 s lease, TSan's slowdown makes that test assemble a tile
       # twice (tile_assemblies 4 of 3): a scheduler question for its owner, not a TSan
       # report (docs/sanitizers.md). It runs in the ordinary suite and under ASan.

@@ -246,13 +246,21 @@ class ServiceCluster {
     });
   }
 
-  // `timeout` is multiplied by TestTimeScale().
+  // `timeout` is multiplied by TestTimeScale(). Fails the test at once, with the coordinator's
+  // log, if the coordinator process ends meanwhile (a crash, or a sanitizer halting it):
+  // waiting out the timeout would only hide why.
   template <typename Predicate>
   pdsm::v1::Job WaitUntil(const std::string& job_id, std::chrono::seconds timeout, Predicate done) {
     const auto end = std::chrono::steady_clock::now() + timeout * TestTimeScale();
     pdsm::v1::Job job;
     while (std::chrono::steady_clock::now() < end) {
       if (GetJob(job_id, &job).ok() && done(job)) break;
+      if (coordinator_ && coordinator_->Wait(std::chrono::milliseconds(0)) != -1) {
+        ADD_FAILURE() << "the coordinator exited (wait status " << coordinator_->Wait({})
+                      << ") while job " << job_id << " was awaited; its log:\n"
+                      << Log("coordinator.log");
+        break;
+      }
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
     return job;

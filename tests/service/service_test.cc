@@ -193,6 +193,13 @@ TEST(Service, TerminatedWorkerHandsBackItsTaskAndExitsZero) {
   const pdsm::v1::Job running = cluster.WaitUntil(
       job_id, seconds(60), [](const auto& j) { return j.samples_done() > 0 || Ended(j); });
   ASSERT_FALSE(Ended(running));
+  // The first result has just been accepted, so the worker may be between tasks: wait until
+  // it holds its next lease, or there would be nothing to hand back (a TSan run hit that).
+  const auto leased_by = std::chrono::steady_clock::now() + seconds(10) * TestTimeScale();
+  while (cluster.Stats().tasks_leased() == 0 && std::chrono::steady_clock::now() < leased_by) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_GT(cluster.Stats().tasks_leased(), 0);
   cluster.worker(leaving).Signal(SIGTERM);
   const int status = cluster.worker(leaving).Wait(std::chrono::seconds(20));
   ASSERT_TRUE(WIFEXITED(status)) << status;
