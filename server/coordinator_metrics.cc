@@ -1,5 +1,6 @@
 #include "server/coordinator_metrics.h"
 
+#include "absl/status/status.h"
 #include "absl/strings/ascii.h"
 #include "core/util/version.h"
 #include "metrics/prometheus_text.h"
