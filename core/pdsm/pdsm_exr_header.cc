@@ -241,6 +241,33 @@ void ReadGeometry(AttributeReader& in, const Imf::Header& exr, PdsmGeometry* g) 
   g->z_near = in.Get<double>(kAttrZNear);
   g->z_far = in.Get<double>(kAttrZFar);
   g->z_valid_min = in.GetOptional<double>(kAttrZValidMin, 0.0);
+  if (!in.status().ok()) return;
+  // What every lookup divides by or compares with: a corrupt value here would turn a query
+  // into NaN pixel coordinates (found by fuzz_pdsm_reader) instead of an error.
+  const auto finite = [](const glm::dvec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+  };
+  const std::pair<const char*, glm::dvec3> vectors[] = {{kAttrLightCenter, g->frame.center},
+                                                        {kAttrLightU, g->frame.u},
+                                                        {kAttrLightV, g->frame.v},
+                                                        {kAttrLightN, g->frame.n}};
+  for (const auto& [name, v] : vectors) {
+    if (!finite(v)) return in.Fail(absl::StrFormat("attribute %s is not finite", name));
+  }
+  const double s_extent = g->s_max - g->s_min;
+  const double t_extent = g->t_max - g->t_min;
+  if (!(std::isfinite(s_extent) && s_extent > 0 && std::isfinite(t_extent) && t_extent > 0)) {
+    return in.Fail(absl::StrFormat("attributes %s/%s: (%g, %g) to (%g, %g) is no window",
+                                   kAttrWindowMin, kAttrWindowMax, g->s_min, g->t_min, g->s_max,
+                                   g->t_max));
+  }
+  if (!(std::isfinite(g->z_near) && std::isfinite(g->z_far) && g->z_near <= g->z_far)) {
+    return in.Fail(absl::StrFormat("attributes %s/%s: %g to %g is no depth range", kAttrZNear,
+                                   kAttrZFar, g->z_near, g->z_far));
+  }
+  if (!std::isfinite(g->z_valid_min)) {
+    return in.Fail(absl::StrFormat("attribute %s is not finite", kAttrZValidMin));
+  }
 }
 
 void ReadBakeSettings(AttributeReader& in, const Imf::Header& exr, PdsmHeader* h) {

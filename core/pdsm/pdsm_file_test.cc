@@ -9,6 +9,7 @@
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfDeepFrameBuffer.h>
 #include <OpenEXR/ImfDeepTiledOutputFile.h>
+#include <OpenEXR/ImfDoubleAttribute.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfIntAttribute.h>
@@ -16,9 +17,12 @@
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfPartType.h>
 #include <OpenEXR/ImfTileDescription.h>
+#include <OpenEXR/ImfVecAttribute.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
+
+#include <limits>
 
 #include <algorithm>
 #include <cstdlib>
@@ -506,6 +510,56 @@ TEST_F(PdsmFileTest, MissingAttributeIsDataLossNamingIt) {
   const absl::Status s = ReadPdsmHeader(path).status();
   EXPECT_EQ(s.code(), absl::StatusCode::kDataLoss) << s;
   EXPECT_THAT(s.message(), HasSubstr("pdsmWindowMax"));
+}
+
+// Geometry a lookup divides by or compares with: a corrupt value is refused, naming the
+// attribute, where it once made queries compute NaN pixel coordinates (fuzz_pdsm_reader).
+TEST_F(PdsmFileTest, GeometryThatIsNoWindowOrNotFiniteIsDataLossNamingIt) {
+  const Imf::Header good = HeaderOf(WriteSample("sample.exr"));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  const auto refused = [&](const std::string& name, auto edit, const char* attribute) {
+    Imf::Header header = good;
+    edit(header);
+    const std::string path = Path(name + ".exr");
+    WriteRawDeepTiled(path, header, {});
+    const absl::Status s = ReadPdsmHeader(path).status();
+    EXPECT_EQ(s.code(), absl::StatusCode::kDataLoss) << name << ": " << s;
+    EXPECT_THAT(s.message(), HasSubstr(attribute)) << name;
+  };
+  const auto v2 = [](Imf::Header& h, const char* name) -> Imath::V2d& {
+    return h.typedAttribute<Imf::V2dAttribute>(name).value();
+  };
+  refused(
+      "empty_window", [&](Imf::Header& h) { v2(h, "pdsmWindowMax").x = v2(h, "pdsmWindowMin").x; },
+      "pdsmWindowMin");
+  refused(
+      "inverted_window", [&](Imf::Header& h) { v2(h, "pdsmWindowMax").y = -1e9; }, "pdsmWindowMax");
+  refused(
+      "nan_window", [&](Imf::Header& h) { v2(h, "pdsmWindowMin").x = nan; }, "pdsmWindowMin");
+  refused(
+      "infinite_window", [&](Imf::Header& h) { v2(h, "pdsmWindowMax").x = inf; }, "pdsmWindowMax");
+  refused(
+      "nan_centre",
+      [&](Imf::Header& h) {
+        h.typedAttribute<Imf::V3dAttribute>("pdsmLightCenter").value().y = nan;
+      },
+      "pdsmLightCenter");
+  refused(
+      "infinite_normal",
+      [&](Imf::Header& h) { h.typedAttribute<Imf::V3dAttribute>("pdsmLightN").value().z = inf; },
+      "pdsmLightN");
+  refused(
+      "nan_far",
+      [&](Imf::Header& h) { h.typedAttribute<Imf::DoubleAttribute>("pdsmZFar").value() = nan; },
+      "pdsmZFar");
+  refused(
+      "far_before_near",
+      [&](Imf::Header& h) {
+        auto& near = h.typedAttribute<Imf::DoubleAttribute>("pdsmZNear").value();
+        h.typedAttribute<Imf::DoubleAttribute>("pdsmZFar").value() = near - 1;
+      },
+      "pdsmZNear");
 }
 
 TEST_F(PdsmFileTest, DecreasingDepthsAreDataLossNamingThePixel) {

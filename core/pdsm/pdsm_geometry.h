@@ -57,8 +57,11 @@ struct PdsmGeometry {
     const glm::dvec3 p_light = frame.LightFromWorld(p_world);
     const auto st = WindowFromLight(p_light);
     if (!st) return std::nullopt;
-    if (st->x < s_min || st->x > s_max || st->y < t_min || st->y > t_max) return std::nullopt;
-    if (p_light.z < z_valid_min) return std::nullopt;
+    // Written so that a NaN (a non-finite query point) is outside too.
+    if (!(st->x >= s_min && st->x <= s_max && st->y >= t_min && st->y <= t_max)) {
+      return std::nullopt;
+    }
+    if (!(p_light.z >= z_valid_min)) return std::nullopt;
     return PdsmPoint{(st->x - s_min) / PixelPitchS(), (st->y - t_min) / PixelPitchT(), p_light.z};
   }
 };
