@@ -62,11 +62,20 @@ absl::StatusOr<std::vector<QueryPoint>> ParsePointsCsv(std::istream& in, const s
 }
 
 void PrintAttenuationLine(const QueryPoint& point, double attenuation) {
-  if (std::isnan(attenuation)) {
-    std::printf("%s,nan\n", point.text.c_str());
-  } else {
-    std::printf("%s,%.6f\n", point.text.c_str(), attenuation);
+  PrintAttenuationLine(point, std::span<const double>(&attenuation, 1));
+}
+
+void PrintAttenuationLine(const QueryPoint& point, std::span<const double> attenuation) {
+  std::string line = point.text;
+  for (double a : attenuation) {
+    if (std::isnan(a)) {
+      line += ",nan";
+    } else {
+      absl::StrAppendFormat(&line, ",%.6f", a);
+    }
   }
+  line += '\n';
+  std::fputs(line.c_str(), stdout);
 }
 
 }  // namespace pdsm

@@ -5,6 +5,7 @@
 #define PDSM_CLIENT_POINTS_CSV_H_
 
 #include <istream>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,8 @@ absl::StatusOr<std::vector<QueryPoint>> ParsePointsCsv(std::istream& in, const s
 // Prints "x,y,z,attenuation" on stdout (6 decimals; "nan" when `attenuation` is NaN): the
 // output line of `pdsm query` and `pdsm reference`.
 void PrintAttenuationLine(const QueryPoint& point, double attenuation);
+// "x,y,z,A_1,...,A_n": one column per light.
+void PrintAttenuationLine(const QueryPoint& point, std::span<const double> attenuation);
 
 }  // namespace pdsm
 

@@ -42,6 +42,12 @@ absl::StatusOr<BakePlan> PlanJobScene(const pdsm::v1::Scene& scene, const std::s
       SceneFromProto(scene, label, /*base_dir=*/"",
                      assets.Resolver(limits ? limits->max_triangles : 0, &asset_triangles));
   if (!loaded.ok()) return loaded.status();
+  if (loaded->LightCount() > 1) {
+    return absl::UnimplementedError(absl::StrFormat(
+        "%s: lights: %d lights; the service bakes one light per job so far: bake the scene "
+        "locally (`pdsm bake`), or submit a scene per light",
+        label, loaded->LightCount()));
+  }
   if (limits != nullptr) {
     int64_t triangles = 0;
     for (const TriangleMesh& m : loaded->meshes) triangles += m.indices.size() / 3;

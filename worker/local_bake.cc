@@ -131,21 +131,16 @@ class StartLine {
   const std::function<void()> go_;
 };
 
-}  // namespace
-
-absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOptions& options) {
+// Bakes one light's plan into `writer` (a file, or one part of a multipart file), with the
+// light-view preview at `preview_path` ("": none). `on_progress` gets this light's progress.
+absl::StatusOr<BakeSummary> BakePlanned(
+    std::shared_ptr<const BakePlan> plan, PdsmWriter* writer, const std::string& preview_path,
+    const LocalBakeOptions& options, const std::function<void(const BakeProgress&)>& on_progress) {
   const auto start = std::chrono::steady_clock::now();
   const auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
-  absl::StatusOr<BakePlan> planned = PlanBake(scene);
-  if (!planned.ok()) return planned.status();
-  const auto plan = std::make_shared<const BakePlan>(*std::move(planned));
-  absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
-      PdsmWriter::Create(options.output_path, plan->header, options.fs);
-  if (!writer.ok()) return writer.status();
-  auto output =
-      std::make_shared<LocalOutput>(*plan, writer->get(), options.preview_path, options.fs);
+  auto output = std::make_shared<LocalOutput>(*plan, writer, preview_path, options.fs);
 
   const int threads = ThreadCount(*plan, options);
   // One GL context per thread: llvmpipe's own helper threads per context would only
@@ -166,11 +161,11 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
 
   absl::Mutex progress_mu;
   const auto report_progress = [&] {
-    if (!options.on_progress) return;
+    if (!on_progress) return;
     const std::optional<JobProgress> p = engine.Progress(kJobId);
     if (!p) return;
     absl::MutexLock lock(&progress_mu);
-    options.on_progress(BakeProgress{p->tasks_done, p->tasks_total, elapsed()});
+    on_progress(BakeProgress{p->tasks_done, p->tasks_total, elapsed()});
   };
   GroupCache groups(*plan);  // each group prepared once, whichever thread needs it first
   std::vector<std::unique_ptr<LocalWorker>> workers;
@@ -215,9 +210,91 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
   summary.assembly = progress.assembly;
   for (const auto& w : workers) summary.tasks_stats.Add(w->stats());
   summary.tasks_stats.tiles_skipped += progress.tiles_without_task;
-  std::error_code ec;
-  summary.file_bytes = std::filesystem::file_size(options.output_path, ec);
+  summary.light_name = plan->header.light_name;
+  summary.width = plan->header.geometry.width;
+  summary.height = plan->header.geometry.height;
+  summary.samples = plan->header.samples;
   return summary;
+}
+
+// The sums over lights of `light` into `total`.
+void AddLight(const BakeSummary& light, BakeSummary* total) {
+  total->tiles += light.tiles;
+  total->tiles_all_lit += light.tiles_all_lit;
+  total->groups += light.groups;
+  total->casters += light.casters;
+  total->tasks += light.tasks;
+  total->tile_samples_total += light.tile_samples_total;
+  total->tasks_stats.Add(light.tasks_stats);
+  total->assembly.Add(light.assembly);
+}
+
+}  // namespace
+
+std::string LightPreviewPath(const std::string& preview_path, const std::string& light_name) {
+  if (preview_path.empty()) return "";
+  std::filesystem::path path(preview_path);
+  const std::string extension = path.extension().string();
+  return path.replace_extension(absl::StrCat(".", light_name, extension)).string();
+}
+
+absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto elapsed = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  BakeSummary total;
+  if (scene.LightCount() == 1) {
+    absl::StatusOr<BakePlan> planned = PlanBake(scene);
+    if (!planned.ok()) return planned.status();
+    const auto plan = std::make_shared<const BakePlan>(*std::move(planned));
+    absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
+        PdsmWriter::Create(options.output_path, plan->header, options.fs);
+    if (!writer.ok()) return writer.status();
+    absl::StatusOr<BakeSummary> light =
+        BakePlanned(plan, writer->get(), options.preview_path, options, options.on_progress);
+    if (!light.ok()) return light.status();
+    total = *std::move(light);
+  } else {
+    // One light after another, each into its part; progress counts every light's tasks so far.
+    int max_width = 1, max_height = 1;
+    for (size_t i = 0; i < scene.LightCount(); ++i) {
+      const BakeSettings bake = LightOf(scene, i).bake;
+      max_width = std::max(max_width, bake.width);
+      max_height = std::max(max_height, bake.height);
+    }
+    absl::StatusOr<std::unique_ptr<PdsmLightsWriter>> writer =
+        PdsmLightsWriter::Create(options.output_path, static_cast<int>(scene.LightCount()),
+                                 max_width, max_height, options.fs);
+    if (!writer.ok()) return writer.status();
+    int64_t tasks_before = 0;
+    for (size_t i = 0; i < scene.LightCount(); ++i) {
+      absl::StatusOr<BakePlan> planned = PlanBake(ForLight(scene, i));
+      if (!planned.ok()) return planned.status();
+      const auto plan = std::make_shared<const BakePlan>(*std::move(planned));
+      absl::StatusOr<PdsmWriter*> part = (*writer)->BeginLight(plan->header);
+      if (!part.ok()) return part.status();
+      std::function<void(const BakeProgress&)> on_progress;
+      if (options.on_progress) {
+        on_progress = [&](const BakeProgress& p) {
+          options.on_progress(
+              BakeProgress{tasks_before + p.tasks_done, tasks_before + p.tasks_total, elapsed()});
+        };
+      }
+      absl::StatusOr<BakeSummary> light =
+          BakePlanned(plan, *part, LightPreviewPath(options.preview_path, plan->header.light_name),
+                      options, on_progress);
+      if (!light.ok()) return light.status();
+      tasks_before += light->tasks;
+      AddLight(*light, &total);
+      total.lights.push_back(*std::move(light));
+    }
+    if (absl::Status s = (*writer)->Finish(); !s.ok()) return s;
+  }
+  total.seconds = elapsed();
+  std::error_code ec;
+  total.file_bytes = std::filesystem::file_size(options.output_path, ec);
+  return total;
 }
 
 }  // namespace pdsm

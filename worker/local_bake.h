@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/pipeline/tile_assembly.h"
@@ -24,8 +25,10 @@ struct BakeProgress {
 };
 
 struct LocalBakeOptions {
-  std::string output_path;   // the .exr; written under a temporary name, renamed at the end
-  std::string preview_path;  // a .png of the receivers' attenuation seen from the light; "" none
+  std::string output_path;  // the .exr; written under a temporary name, renamed at the end
+  // A .png of the receivers' attenuation seen from the light; "" none. A scene of several
+  // lights writes one per light, at LightPreviewPath(preview_path, name).
+  std::string preview_path;
   int threads = 0;           // 0: one per core
   int samples_per_task = 0;  // light samples per task; 0: a default that keeps every thread busy
   // Called from worker threads, serialized, after each task.
@@ -35,6 +38,9 @@ struct LocalBakeOptions {
 
 struct BakeSummary {
   double seconds = 0;
+  // The light's name and PDSM size (one-light bakes and each entry of `lights`).
+  std::string light_name;
+  int width = 0, height = 0, samples = 0;
   int tiles = 0;
   int tiles_all_lit = 0;  // tiles with no vertex at all (no caster can reach their rays)
   int groups = 0;         // tile groups (the unit of rendering)
@@ -44,8 +50,17 @@ struct BakeSummary {
   TaskStats tasks_stats;           // summed over threads (thread-seconds)
   AssemblyStats assembly;
   uint64_t file_bytes = 0;
+  // A bake of several lights: each light's own summary, in scene order (their counts summed
+  // above; no file_bytes). Empty for one light.
+  std::vector<BakeSummary> lights;
 };
 
+// The light-view preview of light `light_name` of several: "out.light.png" gives
+// "out.light.NAME.png". "" for "".
+std::string LightPreviewPath(const std::string& preview_path, const std::string& light_name);
+
+// Bakes every light of `scene`: a one-light scene into a single-part PDSM, several lights one
+// after another into the parts of one multipart file (PdsmLightsWriter), in scene order.
 // Same scene and parameters give the same file bytes whatever `threads` and
 // `samples_per_task`, and the same bytes as the coordinator's bake. The first task that fails
 // fails the bake with its status; on error nothing is left at output_path.

@@ -55,17 +55,22 @@ PreviewPaths PreviewPathsOf(const BakeFlags& flags) {
   return {camera.string(), fs::path(camera).replace_extension(".light.png").string()};
 }
 
-void PrintSummary(const Scene& scene, const BakeFlags& flags, const PreviewPaths& previews,
-                  const BakeSummary& s) {
+void PrintSummary(const Scene& scene, const BakeFlags& flags,
+                  const std::vector<PreviewPaths>& previews, const BakeSummary& s) {
+  // What the file holds: one light's size, or how many lights (each on its own line below).
+  const std::string what = s.lights.empty()
+                               ? absl::StrFormat("%dx%d PDSM, %d samples", scene.bake.width,
+                                                 scene.bake.height, scene.bake.samples)
+                               : absl::StrFormat("%d lights", s.lights.size());
   std::fprintf(
       stderr,
-      "baked \"%s\": %dx%d PDSM, %d samples, %d tiles (%d all lit), %lld tasks\n"
+      "baked \"%s\": %s, %d tiles (%d all lit), %lld tasks\n"
       "  time %.2fs; shadow maps %.2f thread-s (%lld maps, %.1f Mtexels), "
       "scan conversion %.2f thread-s, merge+compress %.3f thread-s\n"
       "  events %lld -> %lld merged -> %lld consolidated -> %lld vertices\n"
       "  scan: %lld ray segments, %.1f Mtexels walked; %lld tiles skipped (no caster)\n",
-      scene.name.c_str(), scene.bake.width, scene.bake.height, scene.bake.samples, s.tiles,
-      s.tiles_all_lit, static_cast<long long>(s.tasks), s.seconds, s.tasks_stats.shadow_map_seconds,
+      scene.name.c_str(), what.c_str(), s.tiles, s.tiles_all_lit, static_cast<long long>(s.tasks),
+      s.seconds, s.tasks_stats.shadow_map_seconds,
       static_cast<long long>(s.tasks_stats.shadow_maps), s.tasks_stats.shadow_map_texels / 1e6,
       s.tasks_stats.scan_seconds, s.assembly.seconds, static_cast<long long>(s.tasks_stats.events),
       static_cast<long long>(s.assembly.merged_events),
@@ -75,44 +80,68 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags, const PreviewPaths
       static_cast<long long>(s.tasks_stats.tiles_skipped));
   // The limit of the design is one map per sample drawing every caster (bench/
   // pdsm-bench-limit): these two ratios say how far the bake is from it, in maps and triangles.
-  const double limit_triangles = static_cast<double>(s.casters) * scene.bake.samples;
+  // Several lights: the sum of each light's limit.
+  double limit_triangles = static_cast<double>(s.casters) * scene.bake.samples;
+  int samples = scene.bake.samples;
+  if (!s.lights.empty()) {
+    limit_triangles = 0;
+    samples = 0;
+    for (const BakeSummary& light : s.lights) {
+      limit_triangles += static_cast<double>(light.casters) * light.samples;
+      samples += light.samples;
+    }
+  }
   std::fprintf(stderr,
                "  shadow maps: %lld for %d samples in %d tile groups (%.2f per sample); "
                "%lld triangles submitted, %.2fx the %lld casters x samples\n",
-               static_cast<long long>(s.tasks_stats.shadow_maps), scene.bake.samples, s.groups,
-               static_cast<double>(s.tasks_stats.shadow_maps) / std::max(1, scene.bake.samples),
+               static_cast<long long>(s.tasks_stats.shadow_maps), samples, s.groups,
+               static_cast<double>(s.tasks_stats.shadow_maps) / std::max(1, samples),
                static_cast<long long>(s.tasks_stats.triangles_submitted),
                limit_triangles > 0 ? s.tasks_stats.triangles_submitted / limit_triangles : 0.0,
                static_cast<long long>(s.casters));
-  if (scene.bake.adaptive() && s.tiles > 0) {
+  if (s.lights.empty() && scene.bake.adaptive() && s.tiles > 0) {
     std::fprintf(stderr,
                  "  adaptive sampling: tolerance %g, %.1f samples per tile on average "
                  "(first batch %d, max %d)\n",
                  scene.bake.adaptive_tolerance, static_cast<double>(s.tile_samples_total) / s.tiles,
                  scene.bake.adaptive_min_samples, scene.bake.samples);
   }
-  std::printf("pdsm: %s (%s)\n", flags.output_path.c_str(), HumanBytes(s.file_bytes).c_str());
-  if (!previews.camera.empty()) {
-    std::printf("preview: %s (camera view, the baked soft shadows)\n", previews.camera.c_str());
+  for (const BakeSummary& light : s.lights) {
+    std::fprintf(stderr,
+                 "  light \"%s\": %dx%d, %d samples, %d tiles (%d all lit), %lld tasks, %.2fs; "
+                 "%lld shadow maps, %lld vertices\n",
+                 light.light_name.c_str(), light.width, light.height, light.samples, light.tiles,
+                 light.tiles_all_lit, static_cast<long long>(light.tasks), light.seconds,
+                 static_cast<long long>(light.tasks_stats.shadow_maps),
+                 static_cast<long long>(light.assembly.vertices));
   }
-  if (!previews.light.empty()) {
-    std::printf("light view: %s (the map seen from the light)\n", previews.light.c_str());
+  std::printf("pdsm: %s (%s%s)\n", flags.output_path.c_str(), HumanBytes(s.file_bytes).c_str(),
+              s.lights.empty() ? "" : absl::StrFormat(", %d lights", s.lights.size()).c_str());
+  for (const PreviewPaths& light : previews) {
+    if (!light.camera.empty()) {
+      std::printf("preview: %s (camera view, the baked soft shadows)\n", light.camera.c_str());
+    }
+    if (!light.light.empty()) {
+      std::printf("light view: %s (the map seen from the light)\n", light.light.c_str());
+    }
   }
 }
 
 // Receivers the light's frustum does not hold get no shadow from the bake (query: nan): say how
 // much, and what to do, rather than bake silently. Under 0.1% is rounding at the window's edge.
 void WarnAboutUncoveredReceivers(const Scene& scene, const std::string& pdsm_path) {
-  absl::StatusOr<PdsmHeader> header = ReadPdsmHeader(pdsm_path);
+  absl::StatusOr<PdsmHeader> header = ReadPdsmHeader(pdsm_path, scene.light_name);
   if (!header.ok()) return;  // just written; a failure here is the camera view's to report
   const double outside = ReceiverAreaOutsideFrustum(scene, header->geometry);
   if (outside < 1e-3) return;
+  const std::string light =
+      scene.light_name.empty() ? "the light's" : absl::StrCat("light \"", scene.light_name, "\"'s");
   std::fprintf(stderr,
-               "pdsm: warning: %.1f%% of the receivers' area is outside the light's frustum "
+               "pdsm: warning: %.1f%% of the receivers' area is outside %s frustum "
                "(behind the light, or more than 85 degrees off its axis): it gets no baked "
                "shadow and `pdsm query` gives nan there; move the light back or away from the "
                "receivers, aim it at them, or use a sun light for wide ground\n",
-               100 * outside);
+               100 * outside, light.c_str());
 }
 
 // The camera view of the PDSM just written, read back so that the picture shows what the file
@@ -123,7 +152,7 @@ absl::Status WriteBakeCameraView(const Scene& scene, const BakeFlags& flags,
                                  const PreviewPaths& previews, bool* written) {
   *written = false;
   if (previews.camera.empty()) return absl::OkStatus();
-  absl::StatusOr<PdsmImage> pdsm = ReadPdsm(flags.output_path);
+  absl::StatusOr<PdsmImage> pdsm = ReadPdsm(flags.output_path, scene.light_name);
   absl::Status s = pdsm.status();
   if (s.ok()) s = view::WriteCameraView(scene, *std::move(pdsm), previews.camera);
   if (absl::IsResourceExhausted(s)) {
@@ -207,11 +236,20 @@ int RunBake(const BakeFlags& flags) {
   options.output_path = flags.output_path;
   const PreviewPaths previews = PreviewPathsOf(flags);
   options.preview_path = previews.light;
-  if (absl::Status s = CheckOutputPaths({{"-o", flags.output_path},
-                                         {"--preview", previews.camera},
-                                         {"--preview (its .light.png)", previews.light}},
-                                        {flags.scene_path});
-      !s.ok()) {
+  OutputPaths outputs = {{"-o", flags.output_path},
+                         {"--preview", previews.camera},
+                         {"--preview (its .light.png)", previews.light}};
+  if (scene->LightCount() > 1) {
+    outputs.resize(1);  // the pictures are each light's
+    for (size_t i = 0; i < scene->LightCount(); ++i) {
+      const std::string name = LightOf(*scene, i).name;
+      outputs.push_back(
+          {absl::StrCat("--preview (light ", name, ")"), LightPreviewPath(previews.camera, name)});
+      outputs.push_back({absl::StrCat("--preview (light ", name, ", its .light.png)"),
+                         LightPreviewPath(previews.light, name)});
+    }
+  }
+  if (absl::Status s = CheckOutputPaths(outputs, {flags.scene_path}); !s.ok()) {
     return ReportError(s);
   }
   options.threads = flags.threads;
@@ -223,12 +261,25 @@ int RunBake(const BakeFlags& flags) {
   absl::StatusOr<BakeSummary> summary = RunLocalBake(*scene, options);
   progress.Finish();
   if (!summary.ok()) return ReportError(summary.status());
-  WarnAboutUncoveredReceivers(*scene, flags.output_path);
-  bool camera_written = false;
-  if (absl::Status s = WriteBakeCameraView(*scene, flags, previews, &camera_written); !s.ok()) {
-    return ReportError(s);
+  // A scene of several lights: the pictures of each light, its name before the extension
+  // (OUT.sun.png, OUT.light.sun.png). One picture shading every light is pdsm-view's to come.
+  std::vector<PreviewPaths> written;
+  for (size_t i = 0; i < scene->LightCount(); ++i) {
+    const Scene light = scene->LightCount() == 1 ? *scene : ForLight(*scene, i);
+    PreviewPaths paths = previews;
+    if (scene->LightCount() > 1) {
+      paths = {LightPreviewPath(previews.camera, light.light_name),
+               LightPreviewPath(previews.light, light.light_name)};
+    }
+    WarnAboutUncoveredReceivers(light, flags.output_path);
+    bool camera_written = false;
+    if (absl::Status s = WriteBakeCameraView(light, flags, paths, &camera_written); !s.ok()) {
+      return ReportError(s);
+    }
+    if (!camera_written) paths.camera.clear();
+    written.push_back(paths);
   }
-  PrintSummary(*scene, flags, {camera_written ? previews.camera : "", previews.light}, *summary);
+  PrintSummary(*scene, flags, written, *summary);
   return kExitOk;
 }
 

@@ -24,6 +24,7 @@ struct ExportFlags {
   std::optional<double> depth;
   std::string scene_path;
   std::string output_path;
+  std::string light;
   bool allow_mismatch = false;
 };
 
@@ -47,7 +48,7 @@ int RunExportImage(const ExportFlags& flags) {
       !s.ok()) {
     return ReportError(s);
   }
-  absl::StatusOr<PdsmImage> pdsm = ReadPdsm(flags.pdsm_path);
+  absl::StatusOr<PdsmImage> pdsm = ReadPdsm(flags.pdsm_path, flags.light);
   if (!pdsm.ok()) return ReportError(pdsm.status());
 
   absl::StatusOr<AttenuationImage> image;
@@ -62,6 +63,7 @@ int RunExportImage(const ExportFlags& flags) {
     image = AttenuationOnPlane(*pdsm, *flags.depth);
   } else {
     absl::StatusOr<Scene> scene = LoadSceneFile(flags.scene_path);
+    if (scene.ok()) scene = OneLight(*std::move(scene), flags.light, "pdsm export-image");
     if (!scene.ok()) return ReportError(scene.status());
     if (absl::Status s = view::CheckPdsmMatchesScene(*scene, pdsm->header, flags.pdsm_path);
         !s.ok()) {
@@ -96,6 +98,7 @@ void RegisterExportImageCommand(CLI::App& app, int* exit_code) {
                   "Scene file (JSON) of the bake: the attenuation on its receivers");
   cmd->add_option("-o,--output", flags->output_path, "Output image: .exr (float) or .png (8-bit)")
       ->required();
+  cmd->add_option("--light", flags->light, "The light of a PDSM (and scene) of several lights");
   cmd->add_flag("--allow-mismatch", flags->allow_mismatch,
                 "Warn instead of failing when the PDSM was baked from another scene/light");
   cmd->callback([flags, exit_code] { *exit_code = RunExportImage(*flags); });

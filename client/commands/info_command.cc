@@ -4,7 +4,9 @@
 #include <cstdio>
 #include <numbers>
 #include <string>
+#include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "client/cli_common.h"
 #include "client/commands.h"
@@ -15,6 +17,7 @@ namespace {
 
 struct InfoFlags {
   std::string pdsm_path;
+  std::string light;
   bool json = false;
 };
 
@@ -81,9 +84,8 @@ std::string LightSizeJson(const PdsmHeader& h) {
   return "";
 }
 
-int RunInfo(const InfoFlags& flags) {
-  absl::StatusOr<PdsmImage> pdsm = ReadPdsm(flags.pdsm_path);
-  if (!pdsm.ok()) return ReportError(pdsm.status());
+// One light's description: a JSON object, or lines of text under `title`.
+void Describe(const InfoFlags& flags, const std::string& title, const PdsmImage* pdsm) {
   const PdsmHeader& h = pdsm->header;
   const PdsmGeometry& g = h.geometry;
   size_t max_vertices = 0, empty_pixels = 0;
@@ -123,24 +125,26 @@ int RunInfo(const InfoFlags& flags) {
       absl::StrFormat(", \"surfacesOnly\": %s, \"zValidMin\": %.17g",
                       h.surfaces_only ? "true" : "false", g.z_valid_min);
   if (flags.json) {
+    const std::string name_json =
+        h.light_name.empty() ? "" : absl::StrCat(", \"name\": ", JsonString(h.light_name));
     std::printf(
-        "{\"formatVersion\": %d, \"scene\": %s, \"light\": %s, \"projection\": \"%s\", "
+        "{\"formatVersion\": %d, \"scene\": %s%s, \"light\": %s, \"projection\": \"%s\", "
         "\"resolution\": [%d, %d], \"window\": [%.17g, %.17g, %.17g, %.17g], "
         "\"depthRange\": [%.17g, %.17g], \"lightCenter\": %s, \"lightNormal\": %s, "
         "\"samples\": %d, \"shadowMapResolution\": %d, \"epsilon\": %.17g, "
         "\"depthBias\": %.17g, \"slopeBias\": %.17g, \"tileSize\": %d, "
         "\"sampling\": \"%s\", \"seed\": \"%llu\"%s, "
-        "\"vertices\": %zu, \"maxVerticesPerPixel\": %zu, \"emptyPixels\": %zu%s%s}\n",
-        h.format_version, JsonString(h.scene_name).c_str(),
+        "\"vertices\": %zu, \"maxVerticesPerPixel\": %zu, \"emptyPixels\": %zu%s%s}",
+        h.format_version, JsonString(h.scene_name).c_str(), name_json.c_str(),
         JsonString(LightShapeName(h.light_shape)).c_str(), projection.c_str(), g.width, g.height,
         g.s_min, g.s_max, g.t_min, g.t_max, g.z_near, g.z_far, v3_json(g.frame.center).c_str(),
         v3_json(g.frame.n).c_str(), h.samples, h.shadow_map_resolution, h.epsilon, h.depth_bias,
         h.slope_bias, h.tile_size, SamplingName(h.sampling),
         static_cast<unsigned long long>(h.seed), LightSizeJson(h).c_str(), pdsm->vertices.size(),
         max_vertices, empty_pixels, adaptive_json.c_str(), validity_json.c_str());
-    return kExitOk;
+    return;
   }
-  std::printf("%s: PDSM format %d, scene \"%s\"\n", flags.pdsm_path.c_str(), h.format_version,
+  std::printf("%s: PDSM format %d, scene \"%s\"\n", title.c_str(), h.format_version,
               h.scene_name.c_str());
   std::printf("  light       %s, %s, centre %s, normal %s\n", LightShapeName(h.light_shape),
               LightSizeText(h).c_str(), v3_text(g.frame.center).c_str(),
@@ -168,6 +172,43 @@ int RunInfo(const InfoFlags& flags) {
   }
   std::printf("  functions   %zu vertices, at most %zu per pixel, %zu empty pixels (all lit)\n",
               pdsm->vertices.size(), max_vertices, empty_pixels);
+}
+
+int RunInfo(const InfoFlags& flags) {
+  std::vector<PdsmImage> lights;
+  if (flags.light.empty()) {
+    absl::StatusOr<std::vector<PdsmImage>> all = ReadPdsmLights(flags.pdsm_path);
+    if (!all.ok()) return ReportError(all.status());
+    lights = *std::move(all);
+  } else {
+    absl::StatusOr<PdsmImage> one = ReadPdsm(flags.pdsm_path, flags.light);
+    if (!one.ok()) return ReportError(one.status());
+    lights.push_back(*std::move(one));
+  }
+  // One light: its object or its lines, as they always were. Several: {"lights": [...]} in
+  // file order, or a line saying how many, then each light's lines under its name.
+  if (lights.size() == 1) {
+    const std::string& name = lights[0].header.light_name;
+    Describe(
+        flags,
+        name.empty() ? flags.pdsm_path : absl::StrCat(flags.pdsm_path, " light \"", name, "\""),
+        &lights[0]);
+    if (flags.json) std::printf("\n");
+    return kExitOk;
+  }
+  if (flags.json) {
+    std::printf("{\"lights\": [");
+    for (size_t i = 0; i < lights.size(); ++i) {
+      if (i > 0) std::printf(", ");
+      Describe(flags, "", &lights[i]);
+    }
+    std::printf("]}\n");
+    return kExitOk;
+  }
+  std::printf("%s: %zu lights\n", flags.pdsm_path.c_str(), lights.size());
+  for (const PdsmImage& light : lights) {
+    Describe(flags, absl::StrCat("light \"", light.header.light_name, "\""), &light);
+  }
   return kExitOk;
 }
 
@@ -177,7 +218,9 @@ void RegisterInfoCommand(CLI::App& app, int* exit_code) {
   auto flags = std::make_shared<InfoFlags>();
   CLI::App* cmd = app.add_subcommand("info", "Describe a PDSM file");
   cmd->add_option("pdsm", flags->pdsm_path, "PDSM file (.exr)")->required();
-  cmd->add_flag("--json", flags->json, "Print one JSON object");
+  cmd->add_flag("--json", flags->json,
+                "Print one JSON object (several lights: {\"lights\": [one per light]})");
+  cmd->add_option("--light", flags->light, "Describe only this light of a file of several");
   cmd->callback([flags, exit_code] { *exit_code = RunInfo(*flags); });
 }
 

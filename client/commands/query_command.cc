@@ -1,6 +1,8 @@
 // `pdsm query PDSM.exr --points PTS.csv` or `pdsm query --job JOB --server ADDR --points
 // PTS.csv`: attenuation at world points, one output line each: "x,y,z,attenuation" (nan
-// outside the PDSM frustum). The remote form evaluates on the coordinator with the same code.
+// outside the PDSM frustum); a file of several lights gives one column per light in file
+// (scene) order, "x,y,z,A_1,...,A_n", or the one light `--light NAME` names. The remote form
+// evaluates on the coordinator with the same code.
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -23,14 +25,27 @@ struct QueryFlags {
   std::string pdsm_path;
   std::string points_path;
   std::string job_id;
+  std::string light;
   ServiceFlags service;
 };
 
 absl::Status QueryLocal(const QueryFlags& flags, const std::vector<QueryPoint>& points) {
-  absl::StatusOr<PdsmImage> pdsm = ReadPdsm(flags.pdsm_path);
-  if (!pdsm.ok()) return pdsm.status();
+  std::vector<PdsmImage> lights;
+  if (flags.light.empty()) {
+    absl::StatusOr<std::vector<PdsmImage>> all = ReadPdsmLights(flags.pdsm_path);
+    if (!all.ok()) return all.status();
+    lights = *std::move(all);
+  } else {
+    absl::StatusOr<PdsmImage> one = ReadPdsm(flags.pdsm_path, flags.light);
+    if (!one.ok()) return one.status();
+    lights.push_back(*std::move(one));
+  }
+  std::vector<double> attenuation(lights.size());
   for (const QueryPoint& point : points) {
-    PrintAttenuationLine(point, QueryAttenuation(*pdsm, point.world));
+    for (size_t i = 0; i < lights.size(); ++i) {
+      attenuation[i] = QueryAttenuation(lights[i], point.world);
+    }
+    PrintAttenuationLine(point, attenuation);
   }
   return absl::OkStatus();
 }
@@ -72,6 +87,10 @@ int RunQuery(const QueryFlags& flags) {
   if (!flags.job_id.empty() && flags.service.server.empty()) {
     return ReportError(absl::InvalidArgumentError("--job needs --server ADDR"));
   }
+  if (!flags.job_id.empty() && !flags.light.empty()) {
+    // A job bakes one light (the service's several-light jobs are still to come).
+    return ReportError(absl::InvalidArgumentError("--light: only with a PDSM file, not --job"));
+  }
   absl::StatusOr<std::vector<QueryPoint>> points = ReadPointsCsv(flags.points_path);
   if (!points.ok()) return ReportError(points.status());
   const absl::Status s =
@@ -90,6 +109,9 @@ void RegisterQueryCommand(CLI::App& app, int* exit_code) {
                   "Points file: one x,y,z per line (a header row x,y,z allowed; - reads stdin)")
       ->required();
   cmd->add_option("--job", flags->job_id, "A finished job on the coordinator, instead of a file");
+  cmd->add_option("--light", flags->light,
+                  "The one light to answer for (a file of several lights: default one column "
+                  "per light, in scene order)");
   AddServiceFlags(cmd, &flags->service, /*required=*/false);
   cmd->callback([flags, exit_code] { *exit_code = RunQuery(*flags); });
 }

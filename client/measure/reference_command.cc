@@ -27,6 +27,7 @@ int RunReference(const ReferenceFlags& flags) {
   absl::StatusOr<ReferenceMethod> method = ParseReferenceMethod(flags.method, "--method");
   if (!method.ok()) return ReportError(method.status());
   absl::StatusOr<Scene> scene = LoadSceneFile(flags.scene_path);
+  if (scene.ok()) scene = OneLight(*std::move(scene), "", "pdsm reference");
   if (!scene.ok()) return ReportError(scene.status());
   absl::StatusOr<std::vector<QueryPoint>> points = ReadPointsCsv(flags.points_path);
   if (!points.ok()) return ReportError(points.status());

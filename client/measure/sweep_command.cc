@@ -182,6 +182,7 @@ int RunSweep(const SweepFlags& flags) {
     return ReportError(s);
   }
   absl::StatusOr<Scene> scene = LoadSceneFile(flags.scene_path);
+  if (scene.ok()) scene = OneLight(*std::move(scene), "", "pdsm sweep");
   if (!scene.ok()) return ReportError(scene.status());
   if (flags.replot) {
     const std::filesystem::path csv = std::filesystem::path(flags.out_dir) / "sweep.csv";

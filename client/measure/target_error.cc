@@ -197,6 +197,7 @@ class TargetErrorSearch {
 absl::StatusOr<TargetErrorResult> BakeToTargetError(const TargetErrorOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   absl::StatusOr<Scene> scene = LoadSceneFile(options.scene_path);
+  if (scene.ok()) scene = OneLight(*std::move(scene), "", "pdsm bake --target-error");
   if (!scene.ok()) return scene.status();
   // The pattern is a knob too: --sampling, else the scene's (whose default is the measured
   // best, Sobol; docs/accuracy.md, "Sampling patterns").

@@ -43,8 +43,8 @@ absl::Status WaitForJob(const ServiceConnection& c, const ServiceFlags& service,
 
 }  // namespace
 
-absl::StatusOr<PdsmImage> LoadPdsmFile(const std::string& path) {
-  absl::StatusOr<PdsmImage> pdsm = ReadPdsm(path);
+absl::StatusOr<PdsmImage> LoadPdsmFile(const std::string& path, const std::string& light) {
+  absl::StatusOr<PdsmImage> pdsm = ReadPdsm(path, light);
   if (!pdsm.ok()) {
     const std::string message(pdsm.status().message());
     // ReadPdsm's messages usually name the file already; make sure they do.

@@ -11,9 +11,10 @@
 
 namespace pdsm::view {
 
-// Reads a PDSM file. Errors name the file: NOT_FOUND, DATA_LOSS (corrupt or not a PDSM),
-// FAILED_PRECONDITION (a format version this build does not read).
-absl::StatusOr<PdsmImage> LoadPdsmFile(const std::string& path);
+// Reads light `light` of a PDSM file (empty: its only light; ReadPdsm). Errors name the file:
+// NOT_FOUND (also: no such light), DATA_LOSS (corrupt or not a PDSM), FAILED_PRECONDITION (a
+// format version this build does not read, or several lights and no `light`).
+absl::StatusOr<PdsmImage> LoadPdsmFile(const std::string& path, const std::string& light = "");
 
 // Waits for `job_id` with WatchJob, printing a progress line on stderr, then downloads its
 // PDSM (FetchPdsm) into a temporary file and reads it. FAILED_PRECONDITION when the job

@@ -76,6 +76,7 @@ absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
   }
   absl::StatusOr<Scene> scene = options.job_id.empty() ? LoadSceneFile(options.scene_path)
                                                        : LoadJobScene(options.scene_path, job);
+  if (scene.ok()) scene = OneLight(*std::move(scene), options.light, "pdsm-view");
   if (!scene.ok()) return scene.status();
   view.scene = *std::move(scene);
   if (!options.job_id.empty() && (!options.headless || options.partial)) {
@@ -83,7 +84,7 @@ absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
     if (absl::Status s = StartFromPlan(options, job, &view); !s.ok()) return s;
   } else {
     absl::StatusOr<PdsmImage> pdsm = options.job_id.empty()
-                                         ? LoadPdsmFile(options.pdsm_path)
+                                         ? LoadPdsmFile(options.pdsm_path, options.light)
                                          : FetchJobPdsm(options.service, options.job_id);
     if (!pdsm.ok()) return pdsm.status();
     view.pdsm = *std::move(pdsm);

@@ -120,6 +120,9 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
                  "Headless: time N frames of each mode (--compare or all)");
   app.add_flag("--partial", o.partial,
                "--job, headless: render the tiles finished so far instead of waiting");
+  app.add_option("--light", o.light,
+                 "The light to shade with, of a scene and PDSM of several (shading with every "
+                 "light at once is still to come)");
   app.add_flag("--allow-mismatch", o.allow_mismatch,
                "Warn instead of failing when the PDSM was baked from another scene/light");
   app.add_flag("-v,--verbose", o.verbose, "Debug logging");

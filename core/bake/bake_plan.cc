@@ -114,6 +114,7 @@ void MakeTiles(BakePlan* plan) {
 void FillHeader(const Scene& scene, BakePlan* plan) {
   PdsmHeader& h = plan->header;
   h.scene_name = scene.name;
+  h.light_name = scene.light_name;
   h.light_shape = scene.light.shape;
   h.light_half_width = scene.light.half_width;
   h.light_half_height = scene.light.half_height;

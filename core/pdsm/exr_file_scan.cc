@@ -8,8 +8,12 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <set>
+#include <string>
 #include <utility>
+#include <vector>
 
+#include "absl/strings/escaping.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "core/pdsm/pdsm_image.h"
@@ -23,6 +27,9 @@ namespace {
 constexpr size_t kMaxNameLength = 255;
 // Prefix of a deep tile chunk: dx, dy, lx, ly (int32), three uint64 sizes.
 constexpr uint64_t kTilePrefixBytes = 4 * 4 + 3 * 8;
+// Parts of a multipart PDSM: one per light (scene.h's kMaxLights), with room for the
+// several faces a light may one day bake into.
+constexpr size_t kMaxParts = 65536;
 // zlib cannot inflate more than 1032 bytes per byte of deflate stream; OpenEXR's ZIP and RLE
 // schemes stay below that. Sizes claiming more are corrupt, and refusing them keeps every
 // buffer OpenEXR allocates for a tile within a constant times the tile's bytes in the file.
@@ -216,21 +223,21 @@ absl::Status NotAPdsm(absl::string_view path, absl::string_view why) {
   return absl::DataLossError(absl::StrCat("not a PDSM file: ", path, " (", why, ")"));
 }
 
-// Magic number and version field: OpenEXR, format 2, single-part deep ("non-image", 0x800);
-// long names (0x400) allowed, tiled (0x200: a single-part image), multipart (0x1000) and
-// unknown flags not.
-absl::Status CheckMagicAndVersion(const Source& source, absl::string_view path) {
+// Magic number and version field: OpenEXR, format 2, deep ("non-image", 0x800), single-part
+// or multipart (0x1000); long names (0x400) allowed, tiled (0x200: a single-part image) and
+// unknown flags not. Sets `*multipart`.
+absl::Status CheckMagicAndVersion(const Source& source, absl::string_view path, bool* multipart) {
   std::string bytes;
   if (source.size() < 8 || !source.Read(0, 8, &bytes) ||
       std::memcmp(bytes.data(), "\x76\x2f\x31\x01", 4) != 0) {
     return NotAPdsm(path, "not an OpenEXR file");
   }
   const uint32_t version = ByteReader(bytes.data() + 4).U32();
-  if ((version & 0xff) != 2 || (version & 0x800) == 0 || (version & ~uint32_t{0xcff}) != 0) {
-    return NotAPdsm(path, absl::StrFormat("version field 0x%08x: not a single-part deep tiled "
-                                          "OpenEXR 2 file",
-                                          version));
+  if ((version & 0xff) != 2 || (version & 0x800) == 0 || (version & ~uint32_t{0x1cff}) != 0) {
+    return NotAPdsm(
+        path, absl::StrFormat("version field 0x%08x: not a deep tiled OpenEXR 2 file", version));
   }
+  *multipart = (version & 0x1000) != 0;
   return absl::OkStatus();
 }
 
@@ -285,24 +292,36 @@ absl::StatusOr<Grid> CheckLayout(const ExrHeaderBytes& h, absl::string_view path
   return g;
 }
 
+// Where a part's chunks are, and how they are framed: a multipart file's chunks start with
+// the number of their part.
+struct PartFraming {
+  int part = -1;      // -1: a single-part file (no part number before a chunk)
+  std::string label;  // "path" or "path: part 2"
+  uint64_t prefix_bytes() const { return part < 0 ? kTilePrefixBytes : kTilePrefixBytes + 4; }
+};
+
 // One tile's prefix against the grid and the file.
 absl::Status CheckTile(const Source& source, const Grid& g, int64_t index, uint64_t offset,
-                       uint64_t first_chunk, absl::string_view path) {
+                       uint64_t first_chunk, const PartFraming& framing) {
   const auto corrupt = [&](absl::string_view why) {
-    return absl::DataLossError(absl::StrFormat("%s: tile %d: %s", path, index, why));
+    return absl::DataLossError(absl::StrFormat("%s: tile %d: %s", framing.label, index, why));
   };
-  if (offset < first_chunk || offset > source.size() || source.size() - offset < kTilePrefixBytes) {
+  const uint64_t prefix = framing.prefix_bytes();
+  if (offset < first_chunk || offset > source.size() || source.size() - offset < prefix) {
     return corrupt("its offset is outside the file (truncated?)");
   }
   std::string bytes;
-  if (!source.Read(offset, kTilePrefixBytes, &bytes)) return corrupt("cannot be read");
+  if (!source.Read(offset, prefix, &bytes)) return corrupt("cannot be read");
   ByteReader in(bytes.data());
+  if (framing.part >= 0 && in.I32() != framing.part) {
+    return corrupt("its chunk names another part");
+  }
   const int32_t dx = in.I32(), dy = in.I32(), lx = in.I32(), ly = in.I32();
   const uint64_t packed_table = in.U64(), packed_data = in.U64(), unpacked_data = in.U64();
   if (dx != index % g.tiles_x || dy != index / g.tiles_x || lx != 0 || ly != 0) {
     return corrupt("its chunk names another tile");
   }
-  const uint64_t left = source.size() - offset - kTilePrefixBytes;
+  const uint64_t left = source.size() - offset - prefix;
   if (packed_table > left || packed_data > left - packed_table) {
     return corrupt("its packed sizes run past the end of the file (truncated?)");
   }
@@ -323,26 +342,57 @@ absl::Status CheckTile(const Source& source, const Grid& g, int64_t index, uint6
   return absl::OkStatus();
 }
 
+// The offset table of one part, at `table_start`, and every tile it points to (at or after
+// `first_chunk`, the end of the last part's table).
 absl::Status CheckTiles(const Source& source, const Grid& g, uint64_t table_start,
-                        absl::string_view path) {
+                        uint64_t first_chunk, const PartFraming& framing) {
   const uint64_t count = static_cast<uint64_t>(g.Count());
-  if (table_start > source.size() || (source.size() - table_start) / 8 < count) {
-    return absl::DataLossError(absl::StrFormat(
-        "%s: the offset table of %d tiles does not fit in the file (truncated?)", path, count));
-  }
   std::string table;
   if (!source.Read(table_start, count * 8, &table)) {
-    return absl::DataLossError(absl::StrCat(path, ": cannot read the tile offset table"));
+    return absl::DataLossError(absl::StrCat(framing.label, ": cannot read the tile offset table"));
   }
-  const uint64_t first_chunk = table_start + count * 8;
   for (uint64_t i = 0; i < count; ++i) {
     const uint64_t offset = ByteReader(table.data() + 8 * i).U64();
-    if (absl::Status s = CheckTile(source, g, static_cast<int64_t>(i), offset, first_chunk, path);
+    if (absl::Status s =
+            CheckTile(source, g, static_cast<int64_t>(i), offset, first_chunk, framing);
         !s.ok()) {
       return s;
     }
   }
   return absl::OkStatus();
+}
+
+// A multipart file's headers, each with a distinct string `name` (OpenEXR requires one),
+// ended by an empty header; at most kMaxParts. `*tables_start`: the byte after the empty header.
+absl::StatusOr<std::vector<ExrHeaderBytes>> ParseParts(const Source& source, absl::string_view path,
+                                                       uint64_t* tables_start) {
+  std::vector<ExrHeaderBytes> parts;
+  std::set<std::string> names;
+  uint64_t pos = 8;
+  for (;;) {
+    absl::StatusOr<ExrHeaderBytes> header = HeaderParser(source, pos, path).Parse();
+    if (!header.ok()) return header.status();
+    pos = header->end;
+    if (header->attributes.empty()) break;  // the empty header after the last part
+    if (parts.size() == kMaxParts) {
+      return absl::DataLossError(
+          absl::StrFormat("%s: more than %d parts (corrupt header?)", path, kMaxParts));
+    }
+    const ExrAttributeBytes* name = header->Find("name");
+    if (name == nullptr || name->type != "string" || name->value.empty()) {
+      return absl::DataLossError(
+          absl::StrFormat("%s: part %d has no string attribute \"name\"", path, parts.size()));
+    }
+    if (!names.insert(name->value).second) {
+      return absl::DataLossError(
+          absl::StrFormat("%s: two parts are named \"%s\"", path, absl::CEscape(name->value)));
+    }
+    parts.push_back(*std::move(header));
+  }
+  if (parts.empty())
+    return absl::DataLossError(absl::StrCat(path, ": a multipart file of no part"));
+  *tables_start = pos;
+  return parts;
 }
 
 }  // namespace
@@ -360,7 +410,7 @@ absl::StatusOr<ExrHeaderBytes> ParseExrHeaderBytes(std::string_view bytes,
   return HeaderParser(source, 0, label).Parse();
 }
 
-absl::StatusOr<ExrHeaderBytes> ScanPdsmFile(
+absl::StatusOr<std::vector<ExrHeaderBytes>> ScanPdsmFile(
     const std::string& path,
     const std::function<absl::Status(const ExrHeaderBytes&)>& check_header) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
@@ -375,16 +425,49 @@ absl::StatusOr<ExrHeaderBytes> ScanPdsmFile(
     return absl::DataLossError(absl::StrCat("not a PDSM file: ", path, " (not a regular file)"));
   }
   const FileSource source(fd, static_cast<uint64_t>(info.st_size));
-  if (absl::Status s = CheckMagicAndVersion(source, path); !s.ok()) return s;
-  absl::StatusOr<ExrHeaderBytes> header = HeaderParser(source, 8, path).Parse();
-  if (!header.ok()) return header.status();
-  if (check_header) {
-    if (absl::Status s = check_header(*header); !s.ok()) return s;
+  bool multipart = false;
+  if (absl::Status s = CheckMagicAndVersion(source, path, &multipart); !s.ok()) return s;
+  std::vector<ExrHeaderBytes> parts;
+  uint64_t tables_start = 0;  // the offset tables, one per part in part order, then the chunks
+  if (multipart) {
+    absl::StatusOr<std::vector<ExrHeaderBytes>> headers = ParseParts(source, path, &tables_start);
+    if (!headers.ok()) return headers.status();
+    parts = *std::move(headers);
+  } else {
+    absl::StatusOr<ExrHeaderBytes> header = HeaderParser(source, 8, path).Parse();
+    if (!header.ok()) return header.status();
+    tables_start = header->end;
+    parts.push_back(*std::move(header));
   }
-  absl::StatusOr<Grid> grid = CheckLayout(*header, path);
-  if (!grid.ok()) return grid.status();
-  if (absl::Status s = CheckTiles(source, *grid, header->end, path); !s.ok()) return s;
-  return header;
+  std::vector<PartFraming> framing(parts.size());
+  std::vector<Grid> grids;
+  for (size_t p = 0; p < parts.size(); ++p) {
+    framing[p].part = multipart ? static_cast<int>(p) : -1;
+    framing[p].label = multipart ? absl::StrFormat("%s: part %d", path, p) : path;
+    if (check_header) {
+      if (absl::Status s = check_header(parts[p]); !s.ok()) return s;
+    }
+    absl::StatusOr<Grid> grid = CheckLayout(parts[p], framing[p].label);
+    if (!grid.ok()) return grid.status();
+    grids.push_back(*grid);
+  }
+  uint64_t table_entries = 0;
+  for (const Grid& g : grids) table_entries += static_cast<uint64_t>(g.Count());
+  if (tables_start > source.size() || (source.size() - tables_start) / 8 < table_entries) {
+    return absl::DataLossError(
+        absl::StrFormat("%s: the offset table of %d tiles does not fit in the file (truncated?)",
+                        path, table_entries));
+  }
+  const uint64_t first_chunk = tables_start + table_entries * 8;
+  uint64_t table_start = tables_start;
+  for (size_t p = 0; p < parts.size(); ++p) {
+    if (absl::Status s = CheckTiles(source, grids[p], table_start, first_chunk, framing[p]);
+        !s.ok()) {
+      return s;
+    }
+    table_start += static_cast<uint64_t>(grids[p].Count()) * 8;
+  }
+  return parts;
 }
 
 }  // namespace pdsm

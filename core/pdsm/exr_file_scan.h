@@ -42,9 +42,13 @@ struct ExrHeaderBytes {
 // `label` when it is malformed. `end` counts from the start of `bytes`.
 absl::StatusOr<ExrHeaderBytes> ParseExrHeaderBytes(std::string_view bytes, absl::string_view label);
 
-// Reads and checks `path` within its own length. DATA_LOSS naming the file when:
-// - the magic number is not OpenEXR's, or the version field is not a single-part deep file
-//   of format 2 ("not a PDSM file");
+// Reads and checks `path` within its own length: a single-part file, or a multipart one (one
+// part per light; docs/pdsm_format.md, "Several lights") whose every part is checked as below.
+// DATA_LOSS naming the file (and the part) when:
+// - the magic number is not OpenEXR's, or the version field is not a deep file of format 2
+//   ("not a PDSM file");
+// - a multipart file has no part, more than 65536, a part without a string `name` or two
+//   parts of one name, or a chunk whose part number is not its part's;
 // - an attribute's name or type is not NUL-terminated within 255 bytes, its size is negative
 //   or larger than what is left of the file, a fixed-size type (int, double, v3d, box2i,
 //   tiledesc, …) has another size, or a structured value (chlist, stringvector, preview) does
@@ -56,10 +60,11 @@ absl::StatusOr<ExrHeaderBytes> ParseExrHeaderBytes(std::string_view bytes, absl:
 //   than 0, its packed sizes run past the end of the file, or an unpacked size (the sample
 //   count table: the tile's pixels × 4 bytes) is more than zlib could inflate from its
 //   packed bytes (at most 1032:1).
-// `check_header`, when given, runs on the header's attributes as soon as they are read and
-// its error is returned first (the checksum: a damaged header is named as such rather than by
-// what it damaged). NOT_FOUND when there is no file. On success the header's attributes.
-absl::StatusOr<ExrHeaderBytes> ScanPdsmFile(
+// `check_header`, when given, runs on each header's attributes before anything else of the
+// header is judged, and its error is returned first (the checksum: a damaged header is named
+// as such rather than by what it damaged). NOT_FOUND when there is no file. On success every
+// part's header attributes, in file order (one for a single-part file).
+absl::StatusOr<std::vector<ExrHeaderBytes>> ScanPdsmFile(
     const std::string& path,
     const std::function<absl::Status(const ExrHeaderBytes&)>& check_header = nullptr);
 

@@ -337,10 +337,13 @@ absl::Status StatusFromCurrentException(absl::string_view path, absl::string_vie
 // ---------------------------------------------------------------------------------------
 // Header <-> attributes.
 
-Imf::Header ExrHeaderFromPdsm(const PdsmHeader& h) {
+Imf::Header ExrHeaderFromPdsm(const PdsmHeader& h,
+                              const std::optional<Imath::Box2i>& display_window) {
   const PdsmGeometry& g = h.geometry;
   Imf::Header exr(g.width, g.height);  // data and display windows [0, w-1] x [0, h-1]
+  if (display_window) exr.displayWindow() = *display_window;
   exr.setType(Imf::DEEPTILE);
+  if (!h.light_name.empty()) exr.setName(h.light_name);
   exr.compression() = Imf::ZIPS_COMPRESSION;  // deep allows only NONE, RLE, ZIPS
   exr.lineOrder() = Imf::INCREASING_Y;
   exr.setTileDescription(Imf::TileDescription(h.tile_size, h.tile_size, Imf::ONE_LEVEL));
@@ -439,6 +442,7 @@ absl::StatusOr<PdsmHeader> PdsmHeaderFromExr(const Imf::Header& exr, absl::strin
   PdsmHeader h;
   h.format_version = in.Get<int>(kAttrFormatVersion);
   h.scene_name = in.Get<std::string>(kAttrSceneName);
+  if (exr.hasName()) h.light_name = exr.name();
   ReadLight(in, &h);
   ReadGeometry(in, exr, &h.geometry);
   ReadBakeSettings(in, exr, &h);

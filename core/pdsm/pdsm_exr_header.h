@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <optional>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
@@ -33,8 +34,11 @@ absl::Status StatusFromCurrentException(absl::string_view path, absl::string_vie
 
 // The deep tiled header of a PDSM: channels, tiling, compression, chunkCount, every pdsm*
 // attribute, and the header checksum over all of them (SealExrHeader).
+// The part is named h.light_name when that is not empty. `display_window`: the parts of a
+// multipart file share one (OpenEXR requires it); unset, the data window.
 // REQUIRES: ValidateHeaderForWrite(h) is OK.
-Imf::Header ExrHeaderFromPdsm(const PdsmHeader& h);
+Imf::Header ExrHeaderFromPdsm(const PdsmHeader& h,
+                              const std::optional<Imath::Box2i>& display_window = std::nullopt);
 
 // INVALID_ARGUMENT naming `path` when `h` cannot be written (sizes, tile size, version).
 absl::Status ValidateHeaderForWrite(const PdsmHeader& h, absl::string_view path);

@@ -4,10 +4,13 @@
 #include <OpenEXR/ImfDeepTiledInputFile.h>
 #include <OpenEXR/ImfDeepTiledInputPart.h>
 #include <OpenEXR/ImfDeepTiledOutputFile.h>
+#include <OpenEXR/ImfDeepTiledOutputPart.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfIO.h>
 #include <OpenEXR/ImfMultiPartInputFile.h>
+#include <OpenEXR/ImfMultiPartOutputFile.h>
 #include <OpenEXR/ImfPartType.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <cmath>
@@ -16,6 +19,8 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <optional>
+#include <set>
 #include <string_view>
 #include <system_error>
 #include <utility>
@@ -23,6 +28,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
 #include "absl/strings/string_view.h"
 #include "core/pdsm/exr_file_scan.h"
 #include "core/pdsm/exr_output_stream.h"
@@ -39,11 +45,14 @@ namespace {
 
 class ExrPdsmWriter final : public PdsmWriter {
  public:
+  // `staged`: Finish() completes the file but does not commit it; it stays at staged_path()
+  // until the writer is destroyed (a part of a multipart file, PdsmLightsWriter).
   ExrPdsmWriter(std::string path, FileSystem* fs, const PdsmHeader& header,
                 std::unique_ptr<AtomicFile> file, std::unique_ptr<ExrOutputStream> stream,
-                std::unique_ptr<Imf::DeepTiledOutputFile> exr)
+                std::unique_ptr<Imf::DeepTiledOutputFile> exr, bool staged = false)
       : path_(std::move(path)),
         fs_(fs),
+        staged_(staged),
         header_(header),
         grid_{header.geometry.width, header.geometry.height, header.tile_size},
         file_(std::move(file)),
@@ -93,10 +102,21 @@ class ExrPdsmWriter final : public PdsmWriter {
     if (header_.adaptive()) {
       if (absl::Status s = RewriteWithTileSamples(); !s.ok()) return Fail(s);
     }
-    if (absl::Status s = file_->Commit(); !s.ok()) return Fail(s);
+    if (staged_) {
+      if (absl::Status s = file_->Flush(); !s.ok()) return Fail(s);
+    } else if (absl::Status s = file_->Commit(); !s.ok()) {
+      return Fail(s);
+    }
     finished_ = true;
     return absl::OkStatus();
   }
+
+  bool finished() const { return finished_; }
+  void set_display_window(const std::optional<Imath::Box2i>& window) { display_window_ = window; }
+  // The header as written, adaptive tile counts included once finished.
+  const PdsmHeader& header() const { return header_; }
+  // Where a staged writer's finished file is. REQUIRES: staged, finished.
+  const std::string& staged_path() const { return file_->temp_path(); }
 
  private:
   // The tile's index in row-major tile order, or why it is not a tile of the grid.
@@ -140,7 +160,7 @@ class ExrPdsmWriter final : public PdsmWriter {
       ExrOutputStream out(copy_file->get());
       try {
         Imf::DeepTiledInputFile in(file_->temp_path().c_str(), Imf::globalThreadCount());
-        Imf::DeepTiledOutputFile copy(out, ExrHeaderFromPdsm(header_));
+        Imf::DeepTiledOutputFile copy(out, ExrHeaderFromPdsm(header_, display_window_));
         copy.copyPixels(in);
       } catch (...) {
         if (!out.error().ok()) return out.error();
@@ -188,12 +208,14 @@ class ExrPdsmWriter final : public PdsmWriter {
 
   const std::string path_;
   FileSystem* const fs_;
+  const bool staged_;
   PdsmHeader header_;  // tile_samples filled as tiles arrive (adaptive bakes)
   const TileGrid grid_;
   std::unique_ptr<AtomicFile> file_;         // the rewritten one once RewriteWithTileSamples() ran
   std::unique_ptr<ExrOutputStream> stream_;  // writes to *file_; null after a rewrite
   std::unique_ptr<Imf::DeepTiledOutputFile> exr_;  // writes to *stream_; null once finished
   std::map<int64_t, PdsmTile> pending_;            // out-of-order tiles by index
+  std::optional<Imath::Box2i> display_window_;     // of a multipart file's parts
   int64_t next_tile_ = 0;                          // all tiles before it are written
   DeepTileBuffers buffers_;
   absl::Status error_;  // sticky: after a failure nothing more is written
@@ -207,7 +229,7 @@ class ExrPdsmWriter final : public PdsmWriter {
 // no size in the file makes OpenEXR allocate more than the file can back) and of its header
 // checksum (nothing read from a header that does not match it).
 absl::Status OpenChecked(const std::string& path, std::unique_ptr<Imf::MultiPartInputFile>* file) {
-  absl::StatusOr<ExrHeaderBytes> scanned = ScanPdsmFile(
+  absl::StatusOr<std::vector<ExrHeaderBytes>> scanned = ScanPdsmFile(
       path, [&path](const ExrHeaderBytes& header) { return VerifyHeaderChecksum(header, path); });
   if (!scanned.ok()) return scanned.status();
   try {
@@ -275,9 +297,12 @@ absl::Status CheckDepthOrder(const PdsmImage& image, absl::string_view path) {
 
 }  // namespace
 
-absl::StatusOr<std::unique_ptr<PdsmWriter>> PdsmWriter::Create(const std::string& path,
-                                                               const PdsmHeader& header,
-                                                               FileSystem* fs) {
+namespace {
+
+// A writer of `header` into a new AtomicFile for `path`.
+absl::StatusOr<std::unique_ptr<ExrPdsmWriter>> CreateExrWriter(
+    const std::string& path, const PdsmHeader& header, FileSystem* fs, bool staged,
+    const std::optional<Imath::Box2i>& display_window) {
   if (absl::Status s = ValidateHeaderForWrite(header, path); !s.ok()) return s;
   if (fs == nullptr) fs = FileSystem::Default();
   absl::StatusOr<std::unique_ptr<AtomicFile>> file = AtomicFile::Create(path, fs);
@@ -285,31 +310,181 @@ absl::StatusOr<std::unique_ptr<PdsmWriter>> PdsmWriter::Create(const std::string
   auto stream = std::make_unique<ExrOutputStream>(file->get());
   std::unique_ptr<Imf::DeepTiledOutputFile> exr;
   try {
-    exr = std::make_unique<Imf::DeepTiledOutputFile>(*stream, ExrHeaderFromPdsm(header));
+    exr = std::make_unique<Imf::DeepTiledOutputFile>(*stream,
+                                                     ExrHeaderFromPdsm(header, display_window));
   } catch (...) {
     if (!stream->error().ok()) return stream->error();
     return absl::InternalError(
         StatusFromCurrentException((*file)->temp_path(), "cannot start").message());
   }
-  return std::make_unique<ExrPdsmWriter>(path, fs, header, *std::move(file), std::move(stream),
-                                         std::move(exr));
+  auto writer = std::make_unique<ExrPdsmWriter>(path, fs, header, *std::move(file),
+                                                std::move(stream), std::move(exr), staged);
+  writer->set_display_window(display_window);
+  return writer;
 }
 
-absl::StatusOr<PdsmHeader> ReadPdsmHeader(const std::string& path) {
-  std::unique_ptr<Imf::MultiPartInputFile> file;
-  if (absl::Status s = OpenChecked(path, &file); !s.ok()) return s;
-  return PdsmHeaderFromExr(file->header(0), path);
+// Each light into a staged single-part file (ExrPdsmWriter, staged), then every part's
+// compressed tiles copied, undecoded, into one multipart file (OpenEXR's copyPixels).
+class ExrPdsmLightsWriter final : public PdsmLightsWriter {
+ public:
+  ExrPdsmLightsWriter(std::string path, FileSystem* fs, int lights, Imath::Box2i display_window)
+      : path_(std::move(path)), fs_(fs), lights_(lights), display_window_(display_window) {}
+
+  absl::StatusOr<PdsmWriter*> BeginLight(const PdsmHeader& header) override {
+    if (!error_.ok()) return error_;
+    if (static_cast<int>(parts_.size()) == lights_) {
+      return absl::FailedPreconditionError(
+          absl::StrFormat("%s: all %d lights were begun already", path_, lights_));
+    }
+    if (!parts_.empty() && !parts_.back()->finished()) {
+      return absl::FailedPreconditionError(
+          absl::StrFormat("%s: light \"%s\" begun before light \"%s\" was finished", path_,
+                          header.light_name, parts_.back()->header().light_name));
+    }
+    if (header.light_name.empty() || !names_.insert(header.light_name).second) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s: every light of a multipart PDSM needs a name of its own (got \"%s\")", path_,
+          header.light_name));
+    }
+    absl::StatusOr<std::unique_ptr<ExrPdsmWriter>> part =
+        CreateExrWriter(path_, header, fs_, /*staged=*/true, display_window_);
+    if (!part.ok()) return Fail(part.status());
+    parts_.push_back(*std::move(part));
+    return parts_.back().get();
+  }
+
+  absl::Status Finish() override {
+    if (!error_.ok()) return error_;
+    if (static_cast<int>(parts_.size()) != lights_ || !parts_.back()->finished()) {
+      return absl::FailedPreconditionError(absl::StrFormat(
+          "%s: %d of %d lights finished", path_,
+          parts_.size() - (parts_.empty() || parts_.back()->finished() ? 0 : 1), lights_));
+    }
+    absl::StatusOr<std::unique_ptr<AtomicFile>> file = AtomicFile::Create(path_, fs_);
+    if (!file.ok()) return Fail(file.status());
+    {
+      ExrOutputStream out(file->get());
+      try {
+        std::vector<Imf::Header> headers;
+        for (const auto& part : parts_) {
+          headers.push_back(ExrHeaderFromPdsm(part->header(), display_window_));
+        }
+        Imf::MultiPartOutputFile multipart(out, headers.data(), static_cast<int>(headers.size()));
+        for (size_t p = 0; p < parts_.size(); ++p) {
+          Imf::DeepTiledInputFile in(parts_[p]->staged_path().c_str(), Imf::globalThreadCount());
+          Imf::DeepTiledOutputPart(multipart, static_cast<int>(p)).copyPixels(in);
+        }
+      } catch (...) {
+        if (!out.error().ok()) return Fail(out.error());
+        return Fail(StatusFromCurrentException((*file)->temp_path(), "assembling"));
+      }
+    }
+    // The multipart file's destructor wrote its offset tables: a failure shows only here.
+    if (!(*file)->status().ok()) return Fail((*file)->status());
+    if (absl::Status s = (*file)->Commit(); !s.ok()) return Fail(s);
+    parts_.clear();  // removes the staged files
+    return absl::OkStatus();
+  }
+
+ private:
+  absl::Status Fail(absl::Status status) {
+    error_ = status;
+    parts_.clear();
+    return status;
+  }
+
+  const std::string path_;
+  FileSystem* const fs_;
+  const int lights_;
+  const Imath::Box2i display_window_;
+  std::vector<std::unique_ptr<ExrPdsmWriter>> parts_;
+  std::set<std::string> names_;
+  absl::Status error_;
+};
+
+}  // namespace
+
+namespace {
+
+// Every staged light holds a descriptor until the file is assembled: raise the soft limit on
+// open files towards the hard one when `lights` (and a margin for the rest of the process)
+// need it. RESOURCE_EXHAUSTED when even the hard limit is too low.
+absl::Status ReserveFileDescriptors(const std::string& path, int lights) {
+  constexpr rlim_t kMargin = 256;
+  const rlim_t wanted = static_cast<rlim_t>(lights) + kMargin;
+  struct rlimit limit;
+  if (::getrlimit(RLIMIT_NOFILE, &limit) != 0 || limit.rlim_cur >= wanted) {
+    return absl::OkStatus();
+  }
+  if (limit.rlim_max != RLIM_INFINITY && limit.rlim_max < wanted) {
+    return absl::ResourceExhaustedError(absl::StrFormat(
+        "%s: %d lights are staged in %d open files until the file is assembled, but this "
+        "process may open at most %d (ulimit -n; the hard limit)",
+        path, lights, lights, static_cast<long long>(limit.rlim_max)));
+  }
+  limit.rlim_cur = wanted;
+  if (::setrlimit(RLIMIT_NOFILE, &limit) != 0) {
+    return absl::ResourceExhaustedError(
+        absl::StrFormat("%s: %d lights need %d open files; raising ulimit -n failed", path, lights,
+                        static_cast<long long>(wanted)));
+  }
+  return absl::OkStatus();
 }
 
-absl::StatusOr<PdsmImage> ReadPdsm(const std::string& path) {
-  std::unique_ptr<Imf::MultiPartInputFile> file;
-  if (absl::Status s = OpenChecked(path, &file); !s.ok()) return s;
+}  // namespace
+
+absl::StatusOr<std::unique_ptr<PdsmWriter>> PdsmWriter::Create(const std::string& path,
+                                                               const PdsmHeader& header,
+                                                               FileSystem* fs) {
+  absl::StatusOr<std::unique_ptr<ExrPdsmWriter>> writer =
+      CreateExrWriter(path, header, fs, /*staged=*/false, std::nullopt);
+  if (!writer.ok()) return writer.status();
+  return std::unique_ptr<PdsmWriter>(*std::move(writer));
+}
+
+absl::StatusOr<std::unique_ptr<PdsmLightsWriter>> PdsmLightsWriter::Create(
+    const std::string& path, int lights, int max_width, int max_height, FileSystem* fs) {
+  if (lights < 2 || max_width < 1 || max_height < 1) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "%s: a multipart PDSM needs 2 or more lights and a size (got %d lights, %dx%d)", path,
+        lights, max_width, max_height));
+  }
+  if (absl::Status s = ReserveFileDescriptors(path, lights); !s.ok()) return s;
+  if (fs == nullptr) fs = FileSystem::Default();
+  return std::make_unique<ExrPdsmLightsWriter>(
+      path, fs, lights, Imath::Box2i(Imath::V2i(0, 0), Imath::V2i(max_width - 1, max_height - 1)));
+}
+
+namespace {
+
+// The part of an open file that holds light `light` ("" for the file's only light).
+absl::StatusOr<int> FindPart(const Imf::MultiPartInputFile& file, const std::string& path,
+                             std::string_view light) {
+  const int parts = file.parts();
+  std::vector<std::string> names;
+  for (int p = 0; p < parts; ++p) {
+    const Imf::Header& h = file.header(p);
+    names.push_back(h.hasName() ? h.name() : std::string());
+    if (!light.empty() && names.back() == light) return p;
+  }
+  if (light.empty() && parts == 1) return 0;
+  const std::string listed = absl::StrCat("\"", absl::StrJoin(names, "\", \""), "\"");
+  if (light.empty()) {
+    return absl::FailedPreconditionError(
+        absl::StrFormat("%s holds %d lights (%s): name one (--light NAME)", path, parts, listed));
+  }
+  return absl::NotFoundError(
+      absl::StrFormat("%s has no light \"%s\"; its lights: %s", path, light, listed));
+}
+
+absl::StatusOr<PdsmImage> ReadPart(Imf::MultiPartInputFile& file, const std::string& path,
+                                   int part_index) {
   PdsmImage image;
-  absl::StatusOr<PdsmHeader> header = PdsmHeaderFromExr(file->header(0), path);
+  absl::StatusOr<PdsmHeader> header = PdsmHeaderFromExr(file.header(part_index), path);
   if (!header.ok()) return header.status();
   image.header = *std::move(header);
   try {
-    Imf::DeepTiledInputPart part(*file, 0);
+    Imf::DeepTiledInputPart part(file, part_index);
     if (!part.isComplete()) {
       return absl::DataLossError(absl::StrCat(path, ": incomplete file (truncated?)"));
     }
@@ -320,6 +495,48 @@ absl::StatusOr<PdsmImage> ReadPdsm(const std::string& path) {
   }
   if (absl::Status s = CheckDepthOrder(image, path); !s.ok()) return s;
   return image;
+}
+
+}  // namespace
+
+absl::StatusOr<std::vector<PdsmHeader>> ReadPdsmHeaders(const std::string& path) {
+  std::unique_ptr<Imf::MultiPartInputFile> file;
+  if (absl::Status s = OpenChecked(path, &file); !s.ok()) return s;
+  std::vector<PdsmHeader> headers;
+  for (int p = 0; p < file->parts(); ++p) {
+    absl::StatusOr<PdsmHeader> header = PdsmHeaderFromExr(file->header(p), path);
+    if (!header.ok()) return header.status();
+    headers.push_back(*std::move(header));
+  }
+  return headers;
+}
+
+absl::StatusOr<PdsmHeader> ReadPdsmHeader(const std::string& path, std::string_view light) {
+  std::unique_ptr<Imf::MultiPartInputFile> file;
+  if (absl::Status s = OpenChecked(path, &file); !s.ok()) return s;
+  absl::StatusOr<int> part = FindPart(*file, path, light);
+  if (!part.ok()) return part.status();
+  return PdsmHeaderFromExr(file->header(*part), path);
+}
+
+absl::StatusOr<PdsmImage> ReadPdsm(const std::string& path, std::string_view light) {
+  std::unique_ptr<Imf::MultiPartInputFile> file;
+  if (absl::Status s = OpenChecked(path, &file); !s.ok()) return s;
+  absl::StatusOr<int> part = FindPart(*file, path, light);
+  if (!part.ok()) return part.status();
+  return ReadPart(*file, path, *part);
+}
+
+absl::StatusOr<std::vector<PdsmImage>> ReadPdsmLights(const std::string& path) {
+  std::unique_ptr<Imf::MultiPartInputFile> file;
+  if (absl::Status s = OpenChecked(path, &file); !s.ok()) return s;
+  std::vector<PdsmImage> lights;
+  for (int p = 0; p < file->parts(); ++p) {
+    absl::StatusOr<PdsmImage> image = ReadPart(*file, path, p);
+    if (!image.ok()) return image.status();
+    lights.push_back(*std::move(image));
+  }
+  return lights;
 }
 
 }  // namespace pdsm

@@ -6,6 +6,8 @@
 
 #include <memory>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
@@ -37,12 +39,49 @@ class PdsmWriter {
   virtual absl::Status Finish() = 0;
 };
 
-// Reads a whole PDSM. Errors: NOT_FOUND (no file), DATA_LOSS (not a PDSM or corrupt),
-// FAILED_PRECONDITION (a format version this build does not read).
-absl::StatusOr<PdsmImage> ReadPdsm(const std::string& path);
+// Writes the PDSM of a scene with several lights: one multipart deep OpenEXR file, one part
+// per light in the order begun, each part what PdsmWriter writes for that light alone plus
+// the light's name (docs/pdsm_format.md, "Several lights"). Lights are written one after
+// another: each goes to a temporary file beside `path` (as PdsmWriter's, removed however the
+// writer ends), and Finish() copies every part's compressed tiles, undecoded, into the file,
+// committed as PdsmWriter commits. One temporary file (one descriptor) per light is open
+// until then: Create raises the process's soft limit on open files as far as its hard limit
+// when the lights need it (RESOURCE_EXHAUSTED when that is too low). The bytes depend only on the
+// headers and tiles, not on the order of tiles within a light. Errors as PdsmWriter's, sticky. Not
+// thread-safe.
+class PdsmLightsWriter {
+ public:
+  // `lights` >= 2 parts; every part's resolution at most max_width x max_height (the file's
+  // display window, which OpenEXR requires to be one for all parts). `fs` null: the real one.
+  static absl::StatusOr<std::unique_ptr<PdsmLightsWriter>> Create(const std::string& path,
+                                                                  int lights, int max_width,
+                                                                  int max_height,
+                                                                  FileSystem* fs = nullptr);
+  virtual ~PdsmLightsWriter() = default;
 
-// Reads only the header.
-absl::StatusOr<PdsmHeader> ReadPdsmHeader(const std::string& path);
+  // The writer of the next light's part, owned by this (valid until Finish or destruction):
+  // its WriteTile and Finish as PdsmWriter's, except that Finish completes the part only.
+  // REQUIRES: the light before it finished. INVALID_ARGUMENT when header.light_name is empty
+  // or names a light begun already.
+  virtual absl::StatusOr<PdsmWriter*> BeginLight(const PdsmHeader& header) = 0;
+  // REQUIRES: every light finished. Assembles and commits the file.
+  virtual absl::Status Finish() = 0;
+};
+
+// Reads one light's whole PDSM. `light` empty: the file's only light (FAILED_PRECONDITION
+// naming the lights when it holds several); else the part named `light` (NOT_FOUND naming the
+// lights there are when none is). Errors: NOT_FOUND (no file), DATA_LOSS (not a PDSM or
+// corrupt), FAILED_PRECONDITION (a format version this build does not read).
+absl::StatusOr<PdsmImage> ReadPdsm(const std::string& path, std::string_view light = {});
+
+// Every light of the file, in file order (one for a one-light file). Errors as ReadPdsm's.
+absl::StatusOr<std::vector<PdsmImage>> ReadPdsmLights(const std::string& path);
+
+// Only the header of `light`, as ReadPdsm selects it.
+absl::StatusOr<PdsmHeader> ReadPdsmHeader(const std::string& path, std::string_view light = {});
+
+// Every light's header, in file order. Errors as ReadPdsm's.
+absl::StatusOr<std::vector<PdsmHeader>> ReadPdsmHeaders(const std::string& path);
 
 }  // namespace pdsm
 

@@ -47,9 +47,10 @@ struct SmallFile {
     const PdsmImage image = RandomImage(FullHeader(40, 24, 16), 7);
     EXPECT_TRUE(WriteTiles(path, image.header, CutTiles(image)).ok());
     bytes = Bytes(path);
-    absl::StatusOr<ExrHeaderBytes> header = ScanPdsmFile(path);
-    EXPECT_TRUE(header.ok()) << header.status();
-    header_end = header->end;
+    absl::StatusOr<std::vector<ExrHeaderBytes>> parts = ScanPdsmFile(path);
+    EXPECT_TRUE(parts.ok()) << parts.status();
+    EXPECT_EQ(parts->size(), 1u);
+    header_end = parts->front().end;
     table_end = header_end + 6 * 8;
   }
   // Offset of attribute `name`'s int32 size field.
@@ -74,8 +75,10 @@ std::string Rewritten(const PdsmImage& image, const TempDir& dir) {
 TEST(HeaderChecksum, EveryWriterAddsItAndTheReaderVerifiesIt) {
   TempDir dir;
   const SmallFile file(dir);
-  absl::StatusOr<ExrHeaderBytes> header = ScanPdsmFile(file.path);
-  ASSERT_TRUE(header.ok()) << header.status();
+  absl::StatusOr<std::vector<ExrHeaderBytes>> parts = ScanPdsmFile(file.path);
+  ASSERT_TRUE(parts.ok()) << parts.status();
+  ASSERT_EQ(parts->size(), 1u);
+  const ExrHeaderBytes* header = &parts->front();
   const ExrAttributeBytes* checksum = header->Find(kHeaderChecksumAttribute);
   ASSERT_NE(checksum, nullptr);
   EXPECT_EQ(checksum->type, "string");

@@ -20,6 +20,7 @@
 #include <OpenEXR/ImfVecAttribute.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <limits>
@@ -56,6 +57,7 @@ void ExpectVec3Eq(const glm::dvec3& a, const glm::dvec3& b) {
 void ExpectHeadersEqual(const PdsmHeader& a, const PdsmHeader& b) {
   EXPECT_EQ(a.format_version, b.format_version);
   EXPECT_EQ(a.scene_name, b.scene_name);
+  EXPECT_EQ(a.light_name, b.light_name);
   EXPECT_EQ(a.light_shape, b.light_shape);
   EXPECT_EQ(a.light_half_width, b.light_half_width);
   EXPECT_EQ(a.light_half_height, b.light_half_height);
@@ -571,9 +573,161 @@ TEST_F(PdsmFileTest, DecreasingDepthsAreDataLossNamingThePixel) {
   EXPECT_THAT(s.message(), HasSubstr("pixel (0, 0)"));
 }
 
+// ---------------------------------------------------------------------------------------
+// Several lights: one multipart file.
+
+// Three lights of different sizes and bakes, written through a PdsmLightsWriter with each
+// light's tiles in `order` (0: in order, 1: reversed).
+struct ThreeLights {
+  std::vector<PdsmImage> images;
+  ThreeLights() {
+    const int sizes[3][3] = {{40, 24, 16}, {130, 70, 32}, {7, 5, 1}};
+    const char* names[] = {"sun", "lamp_1", "lamp.2-b"};
+    for (int i = 0; i < 3; ++i) {
+      PdsmImage image =
+          RandomImage(FullHeader(sizes[i][0], sizes[i][1], sizes[i][2]), 20 + i, i == 1 ? 500 : 0);
+      image.header.light_name = names[i];
+      images.push_back(std::move(image));
+    }
+  }
+  absl::Status Write(const std::string& path, int order) const {
+    absl::StatusOr<std::unique_ptr<PdsmLightsWriter>> writer =
+        PdsmLightsWriter::Create(path, 3, 130, 70);
+    if (!writer.ok()) return writer.status();
+    for (const PdsmImage& image : images) {
+      absl::StatusOr<PdsmWriter*> part = (*writer)->BeginLight(image.header);
+      if (!part.ok()) return part.status();
+      std::vector<PdsmTile> tiles = CutTiles(image);
+      if (order == 1) std::reverse(tiles.begin(), tiles.end());
+      for (const PdsmTile& tile : tiles) {
+        if (absl::Status s = (*part)->WriteTile(tile); !s.ok()) return s;
+      }
+      if (absl::Status s = (*part)->Finish(); !s.ok()) return s;
+    }
+    return (*writer)->Finish();
+  }
+};
+
+TEST_F(PdsmFileTest, SeveralLightsRoundTripOnePartEach) {
+  const ThreeLights lights;
+  const std::string path = Path("lights.exr");
+  ASSERT_TRUE(lights.Write(path, 0).ok());
+  EXPECT_EQ(Files(), std::vector<std::string>{"lights.exr"});  // no staged part left
+
+  absl::StatusOr<std::vector<PdsmHeader>> headers = ReadPdsmHeaders(path);
+  ASSERT_TRUE(headers.ok()) << headers.status();
+  ASSERT_EQ(headers->size(), 3u);
+  absl::StatusOr<std::vector<PdsmImage>> all = ReadPdsmLights(path);
+  ASSERT_TRUE(all.ok()) << all.status();
+  ASSERT_EQ(all->size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    SCOPED_TRACE(lights.images[i].header.light_name);
+    ExpectHeadersEqual(lights.images[i].header, (*headers)[i]);
+    ExpectImagesEqual(lights.images[i], (*all)[i]);
+    absl::StatusOr<PdsmImage> one = ReadPdsm(path, lights.images[i].header.light_name);
+    ASSERT_TRUE(one.ok()) << one.status();
+    ExpectImagesEqual(lights.images[i], *one);
+  }
+  // No name: the file holds several lights, and the error lists them.
+  absl::StatusOr<PdsmImage> unnamed = ReadPdsm(path);
+  EXPECT_EQ(unnamed.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_THAT(unnamed.status().message(), HasSubstr("\"sun\", \"lamp_1\", \"lamp.2-b\""));
+  absl::StatusOr<PdsmHeader> missing = ReadPdsmHeader(path, "moon");
+  EXPECT_EQ(missing.status().code(), absl::StatusCode::kNotFound);
+  EXPECT_THAT(missing.status().message(), HasSubstr("no light \"moon\""));
+}
+
+TEST_F(PdsmFileTest, SeveralLightsBytesDoNotDependOnTileOrder) {
+  const ThreeLights lights;
+  ASSERT_TRUE(lights.Write(Path("a.exr"), 0).ok());
+  ASSERT_TRUE(lights.Write(Path("b.exr"), 1).ok());
+  EXPECT_TRUE(ReadBytes(Path("a.exr")) == ReadBytes(Path("b.exr")));
+}
+
+TEST_F(PdsmFileTest, OneNamedLightIsASinglePartFileWithItsName) {
+  PdsmImage image = RandomImage(FullHeader(40, 24, 16), 7);
+  const std::string unnamed = Path("unnamed.exr");
+  ASSERT_TRUE(WriteTiles(unnamed, image.header, CutTiles(image)).ok());
+  image.header.light_name = "key";
+  const std::string named = Path("named.exr");
+  ASSERT_TRUE(WriteTiles(named, image.header, CutTiles(image)).ok());
+  // An unnamed light's file carries no name attribute at all (the bytes of before).
+  EXPECT_EQ(ReadBytes(unnamed).find("name\0string"), std::string::npos);
+  absl::StatusOr<PdsmImage> by_name = ReadPdsm(named, "key");
+  ASSERT_TRUE(by_name.ok()) << by_name.status();
+  EXPECT_EQ(by_name->header.light_name, "key");
+  absl::StatusOr<PdsmImage> only = ReadPdsm(named);  // its only light needs no name
+  ASSERT_TRUE(only.ok()) << only.status();
+  EXPECT_EQ(ReadPdsm(unnamed, "key").status().code(), absl::StatusCode::kNotFound);
+}
+
+TEST_F(PdsmFileTest, SeveralLightsWriterRefusesMisuseAndLeavesNothing) {
+  const ThreeLights lights;
+  const std::string path = Path("misuse.exr");
+  {
+    absl::StatusOr<std::unique_ptr<PdsmLightsWriter>> writer =
+        PdsmLightsWriter::Create(path, 2, 130, 70);
+    ASSERT_TRUE(writer.ok());
+    PdsmHeader unnamed = lights.images[0].header;
+    unnamed.light_name.clear();
+    EXPECT_EQ((*writer)->BeginLight(unnamed).status().code(), absl::StatusCode::kInvalidArgument);
+  }
+  {
+    absl::StatusOr<std::unique_ptr<PdsmLightsWriter>> writer =
+        PdsmLightsWriter::Create(path, 2, 130, 70);
+    ASSERT_TRUE(writer.ok());
+    absl::StatusOr<PdsmWriter*> part = (*writer)->BeginLight(lights.images[0].header);
+    ASSERT_TRUE(part.ok());
+    // The first light is not finished: the second may not begin, nor the file end.
+    EXPECT_EQ((*writer)->BeginLight(lights.images[1].header).status().code(),
+              absl::StatusCode::kFailedPrecondition);
+  }
+  {
+    absl::StatusOr<std::unique_ptr<PdsmLightsWriter>> writer =
+        PdsmLightsWriter::Create(path, 2, 130, 70);
+    ASSERT_TRUE(writer.ok());
+    absl::StatusOr<PdsmWriter*> part = (*writer)->BeginLight(lights.images[0].header);
+    ASSERT_TRUE(part.ok());
+    for (const PdsmTile& tile : CutTiles(lights.images[0]))
+      ASSERT_TRUE((*part)->WriteTile(tile).ok());
+    ASSERT_TRUE((*part)->Finish().ok());
+    EXPECT_FALSE(Files().empty());  // the staged part
+    EXPECT_EQ((*writer)->BeginLight(lights.images[0].header).status().code(),
+              absl::StatusCode::kInvalidArgument);  // "sun" again
+    EXPECT_EQ((*writer)->Finish().code(), absl::StatusCode::kFailedPrecondition);
+  }
+  EXPECT_TRUE(Files().empty());  // abandoned: no file, no staged part
+}
+
+TEST_F(PdsmFileTest, SeveralLightsWriterRaisesTheOpenFileLimitItNeeds) {
+  struct rlimit before;
+  ASSERT_EQ(::getrlimit(RLIMIT_NOFILE, &before), 0);
+  if (before.rlim_max != RLIM_INFINITY && before.rlim_max < 2000) {
+    GTEST_SKIP() << "hard limit on open files " << before.rlim_max << " < 2000";
+  }
+  struct rlimit low = before;
+  low.rlim_cur = 64;
+  ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &low), 0);
+  absl::StatusOr<std::unique_ptr<PdsmLightsWriter>> writer =
+      PdsmLightsWriter::Create(Path("many.exr"), 1000, 8, 8);
+  struct rlimit after;
+  ASSERT_EQ(::getrlimit(RLIMIT_NOFILE, &after), 0);
+  ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &before), 0);
+  ASSERT_TRUE(writer.ok()) << writer.status();
+  EXPECT_GE(after.rlim_cur, 1000u);
+}
+
 // The file must be readable by OpenEXR's own tools (DESIGN.md, "PDSM file").
-TEST_F(PdsmFileTest, OpenExrToolsAcceptTheFile) {
-  const std::string path = WriteSample("tools.exr", 130, 70);
+class PdsmFileToolsTest : public PdsmFileTest, public ::testing::WithParamInterface<bool> {};
+
+TEST_P(PdsmFileToolsTest, OpenExrToolsAcceptTheFile) {
+  const bool several_lights = GetParam();
+  std::string path = Path("tools.exr");
+  if (several_lights) {
+    ASSERT_TRUE(ThreeLights().Write(path, 0).ok());
+  } else {
+    path = WriteSample("tools.exr", 130, 70);
+  }
   const std::string log = Path("tool.log");
   bool ran = false;
   for (const char* tool : {"exrheader", "exrinfo -s", "exrinfo -v -a"}) {
@@ -587,10 +741,13 @@ TEST_F(PdsmFileTest, OpenExrToolsAcceptTheFile) {
       const std::string out = ReadBytes(log);
       EXPECT_THAT(out, HasSubstr("pdsmFormatVersion"));
       EXPECT_THAT(out, HasSubstr("deeptile"));
+      if (several_lights) EXPECT_THAT(out, HasSubstr("lamp.2-b"));
     }
   }
   if (!ran) GTEST_SKIP() << "neither exrheader nor exrinfo in /usr/bin";
 }
+
+INSTANTIATE_TEST_SUITE_P(OneAndSeveralLights, PdsmFileToolsTest, ::testing::Bool());
 
 }  // namespace
 }  // namespace pdsm

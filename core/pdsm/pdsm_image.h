@@ -21,6 +21,10 @@ inline constexpr int kPdsmFormatVersion = 2;
 struct PdsmHeader {
   int format_version = 1;  // MinimumFormatVersion(*this) for what a bake writes
   std::string scene_name;
+  // The light's name from the scene (Light.name): the OpenEXR part's `name` attribute. Empty
+  // for a single light given no name (no `name` attribute: the file of a one-light scene is
+  // what it was before lights had names).
+  std::string light_name;
   LightShape light_shape = LightShape::kRect;
   // The light's size. Lengths are world units, which are also light-space units: the light
   // frame (u, v, n) is orthonormal. Rect: half extents along u and v; disk: radius (0 for

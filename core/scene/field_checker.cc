@@ -36,6 +36,15 @@ absl::string_view FieldChecker::OverrideMark(absl::string_view field) const {
   return overridden_.count(std::string(name)) ? " (override)" : "";
 }
 
+std::string FieldChecker::UserSpelling(absl::string_view field) const {
+  for (const auto& [from, to] : renames_) {
+    if (field.substr(0, from.size()) != from) continue;
+    const absl::string_view rest = field.substr(from.size());
+    if (rest.empty() || rest[0] == '.' || rest[0] == '[') return absl::StrCat(to, rest);
+  }
+  return std::string(field);
+}
+
 absl::Status FieldChecker::CheckFinite(absl::string_view field, double x) const {
   if (std::isfinite(x)) return absl::OkStatus();
   return Error(field, absl::StrCat("must be finite (got ", FormatDouble(x), ")"));

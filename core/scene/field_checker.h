@@ -9,6 +9,7 @@
 #include <set>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <google/protobuf/repeated_field.h>
 #include <glm/glm.hpp>
@@ -42,10 +43,21 @@ class FieldChecker {
 
   const std::string& source() const { return source_; }
 
+  // The same checks for a field that the checks' code spells `from` but the user wrote as
+  // `to`: a field "from.x" or "from[1]" is named "to.x", "to[1]" (the checks of `light` and
+  // `bake` serve each entry of `lights`, as "lights[2]" and "lights[2].bake"). Renames apply
+  // in the order added, the first that matches wins; override marks follow the spelling of
+  // the code ("bake.samples").
+  FieldChecker Renamed(std::string from, std::string to) const {
+    FieldChecker copy = *this;
+    copy.renames_.emplace_back(std::move(from), std::move(to));
+    return copy;
+  }
+
   // "SOURCE: FIELD[ (override)]: what".
   absl::Status Error(absl::string_view field, absl::string_view what) const {
     return absl::InvalidArgumentError(
-        absl::StrCat(source_, ": ", field, OverrideMark(field), ": ", what));
+        absl::StrCat(source_, ": ", UserSpelling(field), OverrideMark(field), ": ", what));
   }
 
   absl::Status CheckFinite(absl::string_view field, double x) const;
@@ -64,9 +76,12 @@ class FieldChecker {
  private:
   // " (override)" when a bake field's value came from the overrides, not from the file.
   absl::string_view OverrideMark(absl::string_view field) const;
+  // `field` with the first rename whose `from` is a whole leading component of it applied.
+  std::string UserSpelling(absl::string_view field) const;
 
   std::string source_;
   std::set<std::string> overridden_;
+  std::vector<std::pair<std::string, std::string>> renames_;  // (from, to)
 };
 
 }  // namespace pdsm::internal

@@ -1,5 +1,5 @@
 // The validated, in-memory scene a bake works on: world-space triangles in double precision,
-// one light with its frame, and the bake settings with every default filled in.
+// the lights with their frames, and each light's bake settings with every default filled in.
 #ifndef PDSM_CORE_SCENE_SCENE_H_
 #define PDSM_CORE_SCENE_SCENE_H_
 
@@ -7,9 +7,12 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <glm/glm.hpp>
+
+#include "absl/status/statusor.h"
 
 #include "core/geometry/light_frame.h"
 
@@ -87,13 +90,43 @@ struct BakeSettings {
   int tile_group_size = 0;
 };
 
+// One light of a scene with the settings it bakes with.
+struct SceneLight {
+  std::string name;  // empty only for a one-light scene's light that was given no name
+  LightSpec spec;
+  BakeSettings bake;  // the scene's `bake`, then the light's own, then any overrides
+};
+
+// A bake plans one light at a time (core/bake/bake_plan.h): `light`, `bake` and `light_name`
+// are the light this Scene bakes, the scene file's first one. A file's further lights wait in
+// `more_lights`; ForLight gives the Scene that bakes any one of them.
 struct Scene {
   std::string name;
   std::string source_path;  // the scene file, for messages
   std::vector<TriangleMesh> meshes;
   LightSpec light;
   BakeSettings bake;
+  std::string light_name;               // "" for an unnamed single light
+  std::vector<SceneLight> more_lights;  // the file's lights after the first, in order
+
+  size_t LightCount() const { return 1 + more_lights.size(); }
 };
+
+// The i-th light of `scene` (0: the first, held in light/bake/light_name). REQUIRES:
+// i < scene.LightCount().
+SceneLight LightOf(const Scene& scene, size_t i);
+
+// `scene` baking its i-th light: that light in light/bake/light_name, no further lights, the
+// same meshes (copied). REQUIRES: i < scene.LightCount().
+Scene ForLight(const Scene& scene, size_t i);
+
+// The index of the light named `name`, or -1.
+int FindLight(const Scene& scene, std::string_view name);
+
+// For the commands that work on one light (`what`: "pdsm reference"): `scene` baking the light
+// named `light`, or its only light when `light` is empty. INVALID_ARGUMENT naming the scene
+// file and its lights when `light` names none of them, or is empty and there are several.
+absl::StatusOr<Scene> OneLight(Scene scene, std::string_view light, std::string_view what);
 
 // Limits on user input (docs/scene_format.md). Larger requests are refused, not clamped.
 inline constexpr int kMaxPdsmResolution = 16384;
@@ -103,6 +136,9 @@ inline constexpr int kMaxTileSize = 4096;
 // A scene's `name`: a label for headers, listings and logs, not a payload (a 5 MiB name made
 // one job listing exceed a client's 4 MiB message limit).
 inline constexpr size_t kMaxSceneNameBytes = 256;
+// Lights of one scene (one PDSM file part each), and the length of a light's name.
+inline constexpr int kMaxLights = 16384;
+inline constexpr size_t kMaxLightNameBytes = 64;
 
 }  // namespace pdsm
 

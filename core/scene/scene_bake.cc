@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <string>
 #include <tuple>
+#include <vector>
+
+#include <google/protobuf/descriptor.h>
+#include <google/protobuf/message.h>
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
@@ -262,6 +266,30 @@ pdsm::v1::BakeParams BakeParamsOf(const BakeSettings& b) {
   out.set_surfaces_only(b.surfaces_only);
   out.set_tile_group_size(b.tile_group_size);
   return out;
+}
+
+pdsm::v1::BakeParams MergedBakeParams(const pdsm::v1::BakeParams& base,
+                                      const pdsm::v1::BakeParams& top,
+                                      std::set<std::string>* replaced) {
+  // ListFields gives exactly the "set" fields: present optionals and messages, non-empty
+  // repeated fields, non-default proto3 enums.
+  std::vector<const google::protobuf::FieldDescriptor*> fields;
+  top.GetReflection()->ListFields(top, &fields);
+  pdsm::v1::BakeParams merged = base;
+  for (const google::protobuf::FieldDescriptor* field : fields) {
+    merged.GetReflection()->ClearField(&merged, field);
+    if (replaced != nullptr) replaced->insert(field->json_name());
+  }
+  merged.MergeFrom(top);
+  return merged;
+}
+
+void ClearBakeFields(const std::set<std::string>& names, pdsm::v1::BakeParams* params) {
+  const google::protobuf::Descriptor* descriptor = params->GetDescriptor();
+  for (int i = 0; i < descriptor->field_count(); ++i) {
+    const google::protobuf::FieldDescriptor* field = descriptor->field(i);
+    if (names.contains(field->json_name())) params->GetReflection()->ClearField(params, field);
+  }
 }
 
 }  // namespace pdsm::internal

@@ -4,6 +4,9 @@
 #ifndef PDSM_CORE_SCENE_SCENE_BAKE_H_
 #define PDSM_CORE_SCENE_SCENE_BAKE_H_
 
+#include <set>
+#include <string>
+
 #include "absl/status/statusor.h"
 #include "core/scene/field_checker.h"
 #include "core/scene/scene.h"
@@ -23,6 +26,16 @@ absl::StatusOr<BakeSettings> BuildBake(const FieldChecker& checks, const pdsm::v
 // `settings` as a message with every field set (depthBias only when the settings hold one):
 // BuildBake of the result gives `settings` back, whatever the defaults.
 pdsm::v1::BakeParams BakeParamsOf(const BakeSettings& settings);
+
+// `top` laid over `base`: every field set in `top` (a present optional or message, a non-empty
+// repeated field as a whole, a non-default enum) replaces base's; the others stay base's.
+// When `replaced` is given it receives the JSON names of top's set fields ("samples").
+pdsm::v1::BakeParams MergedBakeParams(const pdsm::v1::BakeParams& base,
+                                      const pdsm::v1::BakeParams& top,
+                                      std::set<std::string>* replaced = nullptr);
+
+// Clears in `params` every field named (JSON names) in `names`.
+void ClearBakeFields(const std::set<std::string>& names, pdsm::v1::BakeParams* params);
 
 }  // namespace pdsm::internal
 

@@ -6,6 +6,7 @@
 
 #include <set>
 #include <string>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/scene/field_checker.h"
@@ -32,6 +33,10 @@ class SceneBuilder {
   absl::StatusOr<Scene> Build(const pdsm::v1::Scene& message) const;
 
  private:
+  // `light` or every entry of `lights`, each with its bake settings (the scene's `bake` with
+  // the light's own fields in place of those it sets). Errors name "lights[i].field".
+  absl::StatusOr<std::vector<SceneLight>> BuildLights(const pdsm::v1::Scene& message) const;
+
   FieldChecker checks_;
   MeshSources sources_;
 };

@@ -11,8 +11,6 @@
 #include <utility>
 #include <vector>
 
-#include <google/protobuf/descriptor.h>
-#include <google/protobuf/message.h>
 #include <google/protobuf/util/json_util.h>
 
 #include "absl/status/status.h"
@@ -39,19 +37,18 @@ std::string SceneFolder(const std::string& scene_path) {
 }
 
 // Every field set in `overrides` replaces the scene's (a repeated field as a whole, the
-// frustum as a whole). Returns the JSON names of the replaced fields, for messages.
+// frustum as a whole), and the same field of every light's own `bake`: a command-line flag
+// wins over both. Returns the JSON names of the replaced fields, for messages.
 std::set<std::string> ApplyOverrides(const pdsm::v1::BakeParams& overrides,
-                                     pdsm::v1::BakeParams* bake) {
-  // ListFields gives exactly the "set" fields: present optionals and messages, non-empty
-  // repeated fields, non-default proto3 enums.
-  std::vector<const google::protobuf::FieldDescriptor*> fields;
-  overrides.GetReflection()->ListFields(overrides, &fields);
+                                     pdsm::v1::Scene* scene) {
   std::set<std::string> names;
-  for (const google::protobuf::FieldDescriptor* field : fields) {
-    bake->GetReflection()->ClearField(bake, field);
-    names.insert(field->json_name());
+  *scene->mutable_bake() = internal::MergedBakeParams(scene->bake(), overrides, &names);
+  if (scene->has_light() && scene->light().has_bake()) {
+    internal::ClearBakeFields(names, scene->mutable_light()->mutable_bake());
   }
-  bake->MergeFrom(overrides);
+  for (pdsm::v1::Light& light : *scene->mutable_lights()) {
+    if (light.has_bake()) internal::ClearBakeFields(names, light.mutable_bake());
+  }
   return names;
 }
 
@@ -103,7 +100,7 @@ absl::StatusOr<std::set<std::string>> ParseWithOverrides(const std::string& path
     return absl::InvalidArgumentError(absl::StrCat(
         path, ": invalid scene JSON: ", OneLineJsonError(std::string(parsed.message()))));
   }
-  return ApplyOverrides(overrides, message->mutable_bake());
+  return ApplyOverrides(overrides, message);
 }
 
 }  // namespace

@@ -1023,3 +1023,123 @@ TEST_F(SceneAssetTest, AssetMeshesStillTakeTransformAndRole) {
 
 }  // namespace
 }  // namespace pdsm
+
+// ---- Several lights ---------------------------------------------------------------------
+
+namespace pdsm {
+namespace {
+
+constexpr char kSun[] = R"({"direction": [0,-1,0], "angularDiameterDeg": 0.53})";
+
+// A scene with `lights` (the JSON array's contents) and `bake`.
+std::string LightsJson(const std::string& lights, const std::string& bake = "{}") {
+  return absl::StrCat(R"({"name": "world", "meshes": [)", kSquare, R"(], "lights": [)", lights,
+                      R"(], "bake": )", bake, "}");
+}
+
+TEST_F(SceneLoaderTest, LightsLoadInOrderWithTheirNames) {
+  absl::StatusOr<Scene> scene = Load(LightsJson(absl::StrCat(
+      R"({"name": "sun", "sun": )", kSun,
+      R"(}, {"name": "lamp_1", "rect": {"center": [0,10,0], "normal": [0,-1,0], "up": [0,0,1],)",
+      R"( "size": [3,2]}}, {"name": "lamp.2-b", "disk": {"center": [1,5,1], "normal": [0,-1,0], "radius": 0.25}})")));
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  ASSERT_EQ(scene->LightCount(), 3u);
+  EXPECT_EQ(scene->light_name, "sun");
+  EXPECT_EQ(scene->light.shape, LightShape::kSun);
+  EXPECT_EQ(scene->more_lights[0].name, "lamp_1");
+  EXPECT_EQ(scene->more_lights[0].spec.shape, LightShape::kRect);
+  EXPECT_EQ(scene->more_lights[1].name, "lamp.2-b");
+  EXPECT_DOUBLE_EQ(scene->more_lights[1].spec.radius, 0.25);
+  EXPECT_EQ(FindLight(*scene, "lamp.2-b"), 2);
+  EXPECT_EQ(FindLight(*scene, "moon"), -1);
+
+  const Scene second = ForLight(*scene, 1);
+  EXPECT_EQ(second.LightCount(), 1u);
+  EXPECT_EQ(second.light_name, "lamp_1");
+  EXPECT_EQ(second.light.shape, LightShape::kRect);
+  EXPECT_EQ(second.meshes.size(), scene->meshes.size());
+  EXPECT_EQ(second.name, "world");
+}
+
+TEST_F(SceneLoaderTest, EachLightTakesTheScenesBakeAndItsOwnAndOverridesWin) {
+  const std::string json =
+      LightsJson(absl::StrCat(R"({"name": "a", "sun": )", kSun,
+                              R"(, "bake": {"samples": 8, "epsilon": 0.05}},)",
+                              R"({"name": "b", "sun": )", kSun, "}"),
+                 R"({"samples": 32, "resolution": [64, 48], "epsilon": 0.02})");
+  absl::StatusOr<Scene> scene = Load(json);
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  EXPECT_EQ(scene->bake.samples, 8);  // a's own
+  EXPECT_DOUBLE_EQ(scene->bake.epsilon, 0.05);
+  EXPECT_EQ(scene->bake.width, 64);  // the scene's
+  EXPECT_EQ(scene->more_lights[0].bake.samples, 32);
+  EXPECT_DOUBLE_EQ(scene->more_lights[0].bake.epsilon, 0.02);
+  // A command-line flag replaces the light's own value too.
+  pdsm::v1::BakeParams overrides;
+  overrides.set_samples(4);
+  absl::StatusOr<Scene> overridden = Load(json, overrides);
+  ASSERT_TRUE(overridden.ok()) << overridden.status();
+  EXPECT_EQ(overridden->bake.samples, 4);
+  EXPECT_EQ(overridden->more_lights[0].bake.samples, 4);
+  EXPECT_DOUBLE_EQ(overridden->bake.epsilon, 0.05);  // not overridden: still a's
+}
+
+TEST_F(SceneLoaderTest, OneLightFormTakesANameAndItsOwnBake) {
+  absl::StatusOr<Scene> scene =
+      Load(absl::StrCat(R"({"meshes": [], "light": {"name": "key", "sun": )", kSun,
+                        R"(, "bake": {"samples": 12}}, "bake": {"samples": 40}})"));
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  EXPECT_EQ(scene->LightCount(), 1u);
+  EXPECT_EQ(scene->light_name, "key");
+  EXPECT_EQ(scene->bake.samples, 12);
+}
+
+TEST_F(SceneLoaderTest, BadLightsNameTheEntryAndField) {
+  const std::string sun = absl::StrCat(R"("sun": )", kSun);
+  ExpectInvalid(Load(LightsJson(absl::StrCat("{", sun, "}, {", sun, R"(, "name": "b"})"))),
+                "lights[0].name", "required when the scene has several lights");
+  ExpectInvalid(
+      Load(LightsJson(absl::StrCat(R"({"name": "a", )", sun, R"(}, {"name": "a", )", sun, "}"))),
+      "lights[1].name", "\"a\" names another light already");
+  ExpectInvalid(Load(LightsJson(absl::StrCat(R"({"name": "a b", )", sun, "}"))), "lights[0].name",
+                "only letters, digits");
+  ExpectInvalid(
+      Load(LightsJson(absl::StrCat(R"({"name": ")", std::string(65, 'x'), R"(", )", sun, "}"))),
+      "lights[0].name", "at most 64 bytes");
+  ExpectInvalid(
+      Load(LightsJson(absl::StrCat(
+          R"({"name": "a", )", sun,
+          R"(}, {"name": "b", "disk": {"center": [0,5,0], "normal": [0,-1,0], "radius": 0}})"))),
+      "lights[1].disk.radius", "must be > 0 (got 0)");
+  ExpectInvalid(
+      Load(LightsJson(absl::StrCat(R"({"name": "a", )", sun, R"(, "bake": {"samples": 0}})"))),
+      "lights[0].bake.samples", "(got 0)");
+  // A bad value in the scene's bake stays the scene's, even for a light with a bake of its own.
+  ExpectInvalid(
+      Load(LightsJson(absl::StrCat(R"({"name": "a", )", sun, R"(, "bake": {"samples": 2}})"),
+                      R"({"epsilon": 7})")),
+      "bake.epsilon", "(got 7)");
+  ExpectInvalid(Load(LightsJson(R"({"name": "a"})")), "lights[0]", "one of rect, disk, sun");
+  ExpectInvalid(
+      Load(absl::StrCat(R"({"meshes": [], "light": {)", sun, R"(}, "lights": [{)", sun, "}]}")),
+      "lights", "either light (one light) or lights");
+}
+
+TEST_F(SceneLoaderTest, OneLightSelectsOrNamesTheLights) {
+  const std::string sun = absl::StrCat(R"("sun": )", kSun);
+  absl::StatusOr<Scene> scene =
+      Load(LightsJson(absl::StrCat(R"({"name": "a", )", sun, R"(}, {"name": "b", )", sun, "}")));
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  absl::StatusOr<Scene> b = OneLight(*scene, "b", "test");
+  ASSERT_TRUE(b.ok()) << b.status();
+  EXPECT_EQ(b->light_name, "b");
+  EXPECT_EQ(b->LightCount(), 1u);
+  absl::StatusOr<Scene> none = OneLight(*scene, "", "pdsm reference");
+  EXPECT_EQ(none.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(none.status().message(), HasSubstr("pdsm reference works on one light"));
+  EXPECT_THAT(none.status().message(), HasSubstr("(\"a\", \"b\")"));
+  EXPECT_THAT(OneLight(*scene, "c", "test").status().message(), HasSubstr("no light \"c\""));
+}
+
+}  // namespace
+}  // namespace pdsm

@@ -449,6 +449,17 @@ TEST(Service, BadCallersAndBadJobsGetTheRightStatusAndDisturbNothing) {
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("meshes[0].path"), std::string::npos);
 
+  // Several lights: not yet a service job (bake locally); said, not half-baked.
+  pdsm::v1::Scene several;
+  for (const char* name : {"a", "b"}) {
+    pdsm::v1::Light* light = several.add_lights();
+    light->set_name(name);
+    *light->mutable_rect() = path_scene.light().rect();
+  }
+  status = submit(several);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::UNIMPLEMENTED);
+  EXPECT_NE(status.error_message().find("2 lights"), std::string::npos) << status.error_message();
+
   pdsm::v1::Scene unknown_asset = path_scene;
   unknown_asset.mutable_meshes(0)->set_asset_sha256(std::string(64, 'a'));
   EXPECT_EQ(submit(unknown_asset).error_code(), grpc::StatusCode::FAILED_PRECONDITION);
