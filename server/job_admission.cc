@@ -104,9 +104,9 @@ absl::StatusOr<JobRecord> NewJobRecord(const pdsm::v1::SubmitBakeRequest& reques
 absl::StatusOr<pdsm::v1::BakeParams> JobBakeParams(const std::string& serialized_scene,
                                                    const std::string& label) {
   using google::protobuf::internal::WireFormatLite;
-  // Only Scene.light (3) and Scene.bake (4) are parsed; the meshes (which may be large inline
-  // arrays) are skipped by length.
-  constexpr int kLightField = 3, kBakeField = 4;
+  // Only Scene.light (3), Scene.bake (4) and Scene.lights (5) are parsed; the meshes (which
+  // may be large inline arrays) are skipped by length.
+  constexpr int kLightField = 3, kBakeField = 4, kLightsField = 5;
   google::protobuf::io::CodedInputStream in(
       reinterpret_cast<const uint8_t*>(serialized_scene.data()),
       static_cast<int>(serialized_scene.size()));
@@ -115,7 +115,7 @@ absl::StatusOr<pdsm::v1::BakeParams> JobBakeParams(const std::string& serialized
       absl::DataLossError(absl::StrCat(label, ": stored scene is corrupt"));
   while (const uint32_t tag = in.ReadTag()) {
     const int field = WireFormatLite::GetTagFieldNumber(tag);
-    const bool wanted = field == kLightField || field == kBakeField;
+    const bool wanted = field == kLightField || field == kBakeField || field == kLightsField;
     if (!wanted ||
         WireFormatLite::GetTagWireType(tag) != WireFormatLite::WIRETYPE_LENGTH_DELIMITED) {
       if (!WireFormatLite::SkipField(&in, tag)) return corrupt;
@@ -125,13 +125,14 @@ absl::StatusOr<pdsm::v1::BakeParams> JobBakeParams(const std::string& serialized
     if (!in.ReadVarint32(&length)) return corrupt;
     const auto limit = in.PushLimit(static_cast<int>(length));
     google::protobuf::MessageLite* target =
-        field == kLightField ? static_cast<google::protobuf::MessageLite*>(scene.mutable_light())
-                             : scene.mutable_bake();
+        field == kLightField    ? static_cast<google::protobuf::MessageLite*>(scene.mutable_light())
+        : field == kLightsField ? static_cast<google::protobuf::MessageLite*>(scene.add_lights())
+                                : scene.mutable_bake();
     if (!target->MergeFromCodedStream(&in) || !in.ConsumedEntireMessage()) return corrupt;
     in.PopLimit(limit);
   }
   if (!in.ConsumedEntireMessage()) return corrupt;
-  return EffectiveBakeParams(scene.bake(), scene.light().has_sun(), label);
+  return EffectiveBakeParams(scene, label);
 }
 
 std::string RandomHex(int bytes) {

@@ -132,6 +132,8 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags,
 void WarnAboutUncoveredReceivers(const Scene& scene, const std::string& pdsm_path) {
   absl::StatusOr<PdsmHeader> header = ReadPdsmHeader(pdsm_path, scene.light_name);
   if (!header.ok()) return;  // just written; a failure here is the camera view's to report
+  // A spot lights its cone only: receivers outside it are outside on purpose.
+  if (scene.light.is_spot()) return;
   const double outside = ReceiverAreaOutsideFrustum(scene, header->geometry);
   if (outside < 1e-3) return;
   const std::string light =

@@ -53,6 +53,13 @@ const char* SamplingName(SamplingPattern pattern) {
   return "?";
 }
 
+// "rect", "disk", "spot" (a disk with a cone), "sun".
+const char* LightKindName(const PdsmHeader& h) {
+  return h.light_shape == LightShape::kDisk && h.cone_half_angle_deg > 0
+             ? "spot"
+             : LightShapeName(h.light_shape);
+}
+
 double SunDiameterDegrees(const PdsmHeader& h) {
   return 2 * std::atan(h.tan_half_angle) * 180 / std::numbers::pi;
 }
@@ -63,6 +70,10 @@ std::string LightSizeText(const PdsmHeader& h) {
     case LightShape::kRect:
       return absl::StrFormat("size %.6g x %.6g", 2 * h.light_half_width, 2 * h.light_half_height);
     case LightShape::kDisk:
+      if (h.cone_half_angle_deg > 0) {
+        return absl::StrFormat("radius %.6g, cone %.6g deg off its axis", h.light_radius,
+                               h.cone_half_angle_deg);
+      }
       return absl::StrFormat("radius %.6g", h.light_radius);
     case LightShape::kSun:
       return absl::StrFormat("%.6g deg across", SunDiameterDegrees(h));
@@ -77,6 +88,10 @@ std::string LightSizeJson(const PdsmHeader& h) {
       return absl::StrFormat(", \"lightSize\": [%.17g, %.17g]", 2 * h.light_half_width,
                              2 * h.light_half_height);
     case LightShape::kDisk:
+      if (h.cone_half_angle_deg > 0) {
+        return absl::StrFormat(", \"lightRadius\": %.17g, \"coneHalfAngleDeg\": %.17g",
+                               h.light_radius, h.cone_half_angle_deg);
+      }
       return absl::StrFormat(", \"lightRadius\": %.17g", h.light_radius);
     case LightShape::kSun:
       return absl::StrFormat(", \"angularDiameterDeg\": %.17g", SunDiameterDegrees(h));
@@ -136,8 +151,8 @@ void Describe(const InfoFlags& flags, const std::string& title, const PdsmImage*
         "\"sampling\": \"%s\", \"seed\": \"%llu\"%s, "
         "\"vertices\": %zu, \"maxVerticesPerPixel\": %zu, \"emptyPixels\": %zu%s%s}",
         h.format_version, JsonString(h.scene_name).c_str(), name_json.c_str(),
-        JsonString(LightShapeName(h.light_shape)).c_str(), projection.c_str(), g.width, g.height,
-        g.s_min, g.s_max, g.t_min, g.t_max, g.z_near, g.z_far, v3_json(g.frame.center).c_str(),
+        JsonString(LightKindName(h)).c_str(), projection.c_str(), g.width, g.height, g.s_min,
+        g.s_max, g.t_min, g.t_max, g.z_near, g.z_far, v3_json(g.frame.center).c_str(),
         v3_json(g.frame.n).c_str(), h.samples, h.shadow_map_resolution, h.epsilon, h.depth_bias,
         h.slope_bias, h.tile_size, SamplingName(h.sampling),
         static_cast<unsigned long long>(h.seed), LightSizeJson(h).c_str(), pdsm->vertices.size(),
@@ -146,7 +161,7 @@ void Describe(const InfoFlags& flags, const std::string& title, const PdsmImage*
   }
   std::printf("%s: PDSM format %d, scene \"%s\"\n", title.c_str(), h.format_version,
               h.scene_name.c_str());
-  std::printf("  light       %s, %s, centre %s, normal %s\n", LightShapeName(h.light_shape),
+  std::printf("  light       %s, %s, centre %s, normal %s\n", LightKindName(h),
               LightSizeText(h).c_str(), v3_text(g.frame.center).c_str(),
               v3_text(g.frame.n).c_str());
   std::printf("  projection  %s, %dx%d pixels, window s [%.6g, %.6g] t [%.6g, %.6g]\n",

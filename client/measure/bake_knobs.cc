@@ -44,8 +44,7 @@ absl::StatusOr<std::string> SceneSamplingName(const std::string& scene_path) {
   absl::StatusOr<pdsm::v1::Scene> message = ParseSceneFile(scene_path);
   if (!message.ok()) return message.status();
   // The loader's effective value: an unset pattern is the default it applies (SOBOL).
-  absl::StatusOr<pdsm::v1::BakeParams> effective =
-      EffectiveBakeParams(message->bake(), message->light().has_sun(), scene_path);
+  absl::StatusOr<pdsm::v1::BakeParams> effective = EffectiveBakeParams(*message, scene_path);
   if (!effective.ok()) return effective.status();
   return pdsm::v1::Sampling_Name(effective->sampling());
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include "absl/strings/str_format.h"
 #include "core/bake/tile_reach.h"
@@ -46,8 +47,10 @@ int ClipTriangleNear(const glm::dvec3 tri[3], double z_min, glm::dvec3 out[4]) {
   return n;
 }
 
+// `max_tangent`: perspective windows stop at |s|, |t| <= it (kMaxWindowTangent, or a spot's
+// cone).
 void FitTriangle(const glm::dvec3 tri[3], bool casts, bool receives, Projection projection,
-                 double z_min, WindowFit* fit) {
+                 double z_min, double max_tangent, WindowFit* fit) {
   glm::dvec3 clipped[4];
   const int n = projection == Projection::kPerspective ? ClipTriangleNear(tri, z_min, clipped) : 3;
   if (projection == Projection::kOrthographic) std::copy(tri, tri + 3, clipped);
@@ -55,8 +58,8 @@ void FitTriangle(const glm::dvec3 tri[3], bool casts, bool receives, Projection 
     const glm::dvec3& p = clipped[k];
     double s = p.x, t = p.y;
     if (projection == Projection::kPerspective) {
-      s = std::clamp(p.x / p.z, -kMaxWindowTangent, kMaxWindowTangent);
-      t = std::clamp(p.y / p.z, -kMaxWindowTangent, kMaxWindowTangent);
+      s = std::clamp(p.x / p.z, -max_tangent, max_tangent);
+      t = std::clamp(p.y / p.z, -max_tangent, max_tangent);
     }
     fit->s_lo = std::min(fit->s_lo, s);
     fit->s_hi = std::max(fit->s_hi, s);
@@ -119,6 +122,7 @@ void FillHeader(const Scene& scene, BakePlan* plan) {
   h.light_half_width = scene.light.half_width;
   h.light_half_height = scene.light.half_height;
   h.light_radius = scene.light.radius;
+  h.cone_half_angle_deg = scene.light.cone_half_angle_deg;
   h.tan_half_angle = scene.light.tan_half_angle;
   h.samples = scene.bake.samples;
   h.shadow_map_resolution = scene.bake.shadow_map_resolution;
@@ -172,6 +176,7 @@ double ScanFloor(const BakePlan& plan, double z_near_receivers) {
 // The bounds of the scene's triangles (only receivers when asked) beyond z_min, projected.
 WindowFit FitScene(const Scene& scene, const PdsmGeometry& g, double z_min, bool receivers_only) {
   WindowFit fit;
+  const double max_tangent = MaxWindowTangent(scene.light);
   for (const TriangleMesh& mesh : scene.meshes) {
     if (receivers_only && !Receives(mesh.role)) continue;
     for (size_t k = 0; k + 2 < mesh.indices.size(); k += 3) {
@@ -179,7 +184,8 @@ WindowFit FitScene(const Scene& scene, const PdsmGeometry& g, double z_min, bool
                                  g.frame.LightFromWorld(mesh.positions_world[mesh.indices[k + 1]]),
                                  g.frame.LightFromWorld(mesh.positions_world[mesh.indices[k + 2]])};
       if (std::max({tri[0].z, tri[1].z, tri[2].z}) < z_min) continue;  // behind the light
-      FitTriangle(tri, Casts(mesh.role), Receives(mesh.role), g.projection, z_min, &fit);
+      FitTriangle(tri, Casts(mesh.role), Receives(mesh.role), g.projection, z_min, max_tangent,
+                  &fit);
     }
   }
   return fit;
@@ -207,6 +213,11 @@ void SetLattice(const Scene& scene, BakePlan* plan) {
 }  // namespace
 
 double DefaultDepthBias(double z_far) { return 1e-5 * std::abs(z_far); }
+
+double MaxWindowTangent(const LightSpec& light) {
+  if (!light.is_spot()) return kMaxWindowTangent;
+  return std::min(kMaxWindowTangent, std::tan(light.cone_half_angle_deg * std::numbers::pi / 180));
+}
 
 absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
   BakePlan plan;

@@ -78,6 +78,10 @@ inline constexpr double kMaxRayTexels = 512;
 // Widest field of view a perspective PDSM is fitted to: |s|, |t| <= tan(85 degrees).
 inline constexpr double kMaxWindowTangent = 11.430052302761343;
 
+// The widest |s|, |t| a PDSM of `light` is fitted to: kMaxWindowTangent, or a spot's
+// tan(cone half-angle) (the square around its cone). The sun's window is not a tangent.
+double MaxWindowTangent(const LightSpec& light);
+
 // A scene with nothing in front of the light gets a default frustum (window [-1, 1]^2,
 // depths [1, 2]) and bakes to an all-lit PDSM. Errors: INVALID_ARGUMENT for a frustum
 // override the projection cannot use.

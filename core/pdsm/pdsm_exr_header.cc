@@ -86,6 +86,7 @@ constexpr char kAttrTileSamples[] = "pdsmTileSamples";
 // Optional attributes (written only when not at their default; absent reads as the default).
 constexpr char kAttrZValidMin[] = "pdsmZValidMin";
 constexpr char kAttrSurfacesOnly[] = "pdsmSurfacesOnly";
+constexpr char kAttrConeHalfAngle[] = "pdsmConeHalfAngleDeg";
 
 constexpr char kAttenuationNote[] =
     "channel 'attenuation' = A(z), the fraction of the light hidden from the point at depth "
@@ -221,6 +222,11 @@ void ReadLight(AttributeReader& in, PdsmHeader* h) {
   h->light_half_width = in.Get<double>(kAttrLightHalfWidth);
   h->light_half_height = in.Get<double>(kAttrLightHalfHeight);
   h->light_radius = in.Get<double>(kAttrLightRadius);
+  h->cone_half_angle_deg = in.GetOptional<double>(kAttrConeHalfAngle, 0.0);
+  if (in.status().ok() && !(h->cone_half_angle_deg >= 0 && h->cone_half_angle_deg <= 90)) {
+    in.Fail(absl::StrFormat("attribute %s = %g is not an angle in [0, 90] degrees",
+                            kAttrConeHalfAngle, h->cone_half_angle_deg));
+  }
   h->tan_half_angle = in.Get<double>(kAttrLightTanHalfAngle);
 }
 
@@ -386,6 +392,9 @@ Imf::Header ExrHeaderFromPdsm(const PdsmHeader& h,
   }
   if (g.z_valid_min != 0) exr.insert(kAttrZValidMin, Imf::DoubleAttribute(g.z_valid_min));
   if (h.surfaces_only) exr.insert(kAttrSurfacesOnly, Imf::IntAttribute(1));
+  if (h.cone_half_angle_deg > 0) {
+    exr.insert(kAttrConeHalfAngle, Imf::DoubleAttribute(h.cone_half_angle_deg));
+  }
   // What DeepTiledOutputFile would add itself, set first so that the checksum covers it.
   const TileGrid grid{g.width, g.height, h.tile_size};
   exr.setChunkCount(static_cast<int>(grid.Count()));

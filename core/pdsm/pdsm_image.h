@@ -30,6 +30,9 @@ struct PdsmHeader {
   // frame (u, v, n) is orthonormal. Rect: half extents along u and v; disk: radius (0 for
   // the other shapes); sun: tan of half its angular diameter (dimensionless, 0 otherwise).
   double light_half_width = 0, light_half_height = 0, light_radius = 0, tan_half_angle = 0;
+  // A spot light (a disk into a cone; LightSpec::cone_half_angle_deg): the cone's half-angle,
+  // degrees; 0 for every other light. Informational: the window already stops at the cone.
+  double cone_half_angle_deg = 0;
   PdsmGeometry geometry;
   int samples = 0;
   int shadow_map_resolution = 0;

@@ -37,12 +37,14 @@ absl::string_view FieldChecker::OverrideMark(absl::string_view field) const {
 }
 
 std::string FieldChecker::UserSpelling(absl::string_view field) const {
-  for (const auto& [from, to] : renames_) {
-    if (field.substr(0, from.size()) != from) continue;
-    const absl::string_view rest = field.substr(from.size());
-    if (rest.empty() || rest[0] == '.' || rest[0] == '[') return absl::StrCat(to, rest);
+  std::string spelt(field);
+  for (auto it = renames_.rbegin(); it != renames_.rend(); ++it) {
+    const auto& [from, to] = *it;
+    if (absl::string_view(spelt).substr(0, from.size()) != from) continue;
+    const std::string rest = spelt.substr(from.size());
+    if (rest.empty() || rest[0] == '.' || rest[0] == '[') spelt = absl::StrCat(to, rest);
   }
-  return std::string(field);
+  return spelt;
 }
 
 absl::Status FieldChecker::CheckFinite(absl::string_view field, double x) const {

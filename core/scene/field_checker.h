@@ -45,9 +45,10 @@ class FieldChecker {
 
   // The same checks for a field that the checks' code spells `from` but the user wrote as
   // `to`: a field "from.x" or "from[1]" is named "to.x", "to[1]" (the checks of `light` and
-  // `bake` serve each entry of `lights`, as "lights[2]" and "lights[2].bake"). Renames apply
-  // in the order added, the first that matches wins; override marks follow the spelling of
-  // the code ("bake.samples").
+  // `bake` serve each entry of `lights`, as "lights[2]" and "lights[2].bake"). Renames chain,
+  // the newest first: a checker renamed "light" -> "lights[2]" and then "light.disk" ->
+  // "light.spot" names "light.disk.radius" "lights[2].spot.radius". Override marks follow the
+  // spelling of the code ("bake.samples").
   FieldChecker Renamed(std::string from, std::string to) const {
     FieldChecker copy = *this;
     copy.renames_.emplace_back(std::move(from), std::move(to));
@@ -76,12 +77,13 @@ class FieldChecker {
  private:
   // " (override)" when a bake field's value came from the overrides, not from the file.
   absl::string_view OverrideMark(absl::string_view field) const;
-  // `field` with the first rename whose `from` is a whole leading component of it applied.
+  // `field` with each rename whose `from` is a whole leading component of it applied, newest
+  // first.
   std::string UserSpelling(absl::string_view field) const;
 
   std::string source_;
   std::set<std::string> overridden_;
-  std::vector<std::pair<std::string, std::string>> renames_;  // (from, to)
+  std::vector<std::pair<std::string, std::string>> renames_;  // (from, to), oldest first
 };
 
 }  // namespace pdsm::internal

@@ -54,6 +54,10 @@ struct LightSpec {
   double half_height = 0;     // rect, along v, world units
   double radius = 0;          // disk, world units
   double tan_half_angle = 0;  // sun: tan(angular diameter / 2)
+  // A spot light: a disk (shape kDisk, `radius`) whose PDSM covers only its cone, |s|, |t| <=
+  // tan(cone half-angle). 0: no cone (every other light).
+  double cone_half_angle_deg = 0;
+  bool is_spot() const { return cone_half_angle_deg > 0; }
 };
 
 enum class SamplingPattern { kStratified, kUniform, kSobol, kHalton, kBlueNoise };
@@ -139,6 +143,8 @@ inline constexpr size_t kMaxSceneNameBytes = 256;
 // Lights of one scene (one PDSM file part each), and the length of a light's name.
 inline constexpr int kMaxLights = 16384;
 inline constexpr size_t kMaxLightNameBytes = 64;
+// A spot's cone: a perspective PDSM covers at most 85 degrees off its axis (bake_plan.h).
+inline constexpr double kMaxConeHalfAngleDeg = 85;
 
 }  // namespace pdsm
 

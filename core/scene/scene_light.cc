@@ -58,6 +58,25 @@ absl::StatusOr<LightSpec> BuildDisk(const FieldChecker& checks, const pdsm::v1::
   return light;
 }
 
+absl::StatusOr<LightSpec> BuildSpot(const FieldChecker& checks, const pdsm::v1::SpotLight& spot) {
+  pdsm::v1::DiskLight disk;
+  *disk.mutable_center() = spot.center();
+  *disk.mutable_normal() = spot.normal();
+  disk.set_radius(spot.radius());
+  // The disk's checks, its fields spelt as the spot's.
+  absl::StatusOr<LightSpec> light = BuildDisk(checks.Renamed("light.disk", "light.spot"), disk);
+  if (!light.ok()) return light.status();
+  const double degrees = spot.cone_half_angle_deg();
+  const char* field = "light.spot.coneHalfAngleDeg";
+  if (absl::Status s = checks.CheckFinite(field, degrees); !s.ok()) return s;
+  if (!(degrees > 0 && degrees <= kMaxConeHalfAngleDeg)) {
+    return checks.Error(field, absl::StrCat("must be in (0, ", kMaxConeHalfAngleDeg,
+                                            "] degrees (got ", FormatDouble(degrees), ")"));
+  }
+  light->cone_half_angle_deg = degrees;
+  return light;
+}
+
 absl::StatusOr<LightSpec> BuildSun(const FieldChecker& checks, const pdsm::v1::SunLight& sun) {
   absl::StatusOr<glm::dvec3> direction = checks.Direction("light.sun.direction", sun.direction());
   if (!direction.ok()) return direction.status();
@@ -86,10 +105,12 @@ absl::StatusOr<LightSpec> BuildLight(const FieldChecker& checks, const pdsm::v1:
       return BuildDisk(checks, light.disk());
     case pdsm::v1::Light::kSun:
       return BuildSun(checks, light.sun());
+    case pdsm::v1::Light::kSpot:
+      return BuildSpot(checks, light.spot());
     case pdsm::v1::Light::SHAPE_NOT_SET:
       break;
   }
-  return checks.Error("light", "one of rect, disk, sun is required");
+  return checks.Error("light", "one of rect, disk, spot, sun is required");
 }
 
 }  // namespace pdsm::internal

@@ -150,7 +150,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"SunAngleZero", kSquare, Sun("0"), "{}", "light.sun.angularDiameterDeg", "(got 0)"},
         BadCase{"SunAngleNinety", kSquare, Sun("90"), "{}", "light.sun.angularDiameterDeg",
                 "must be in (0, 90) degrees (got 90)"},
-        BadCase{"NoLight", kSquare, "{}", "{}", "light", "one of rect, disk, sun is required"},
+        BadCase{"NoLight", kSquare, "{}", "{}", "light",
+                "one of rect, disk, spot, sun is required"},
         BadCase{"SamplesZero", kSquare, kRect, R"({"samples": 0})", "bake.samples",
                 "must be in [1, 65536] (got 0)"},
         BadCase{"SamplesTooMany", kSquare, kRect, R"({"samples": 65537})", "bake.samples",
@@ -1119,7 +1120,7 @@ TEST_F(SceneLoaderTest, BadLightsNameTheEntryAndField) {
       Load(LightsJson(absl::StrCat(R"({"name": "a", )", sun, R"(, "bake": {"samples": 2}})"),
                       R"({"epsilon": 7})")),
       "bake.epsilon", "(got 7)");
-  ExpectInvalid(Load(LightsJson(R"({"name": "a"})")), "lights[0]", "one of rect, disk, sun");
+  ExpectInvalid(Load(LightsJson(R"({"name": "a"})")), "lights[0]", "one of rect, disk, spot, sun");
   ExpectInvalid(
       Load(absl::StrCat(R"({"meshes": [], "light": {)", sun, R"(}, "lights": [{)", sun, "}]}")),
       "lights", "either light (one light) or lights");
@@ -1139,6 +1140,48 @@ TEST_F(SceneLoaderTest, OneLightSelectsOrNamesTheLights) {
   EXPECT_THAT(none.status().message(), HasSubstr("pdsm reference works on one light"));
   EXPECT_THAT(none.status().message(), HasSubstr("(\"a\", \"b\")"));
   EXPECT_THAT(OneLight(*scene, "c", "test").status().message(), HasSubstr("no light \"c\""));
+}
+
+}  // namespace
+}  // namespace pdsm
+
+namespace pdsm {
+namespace {
+
+TEST_F(SceneLoaderTest, SpotIsADiskWithACone) {
+  absl::StatusOr<Scene> scene = Load(SceneJson(
+      kSquare,
+      R"({"spot": {"center": [0,5,0], "normal": [0,-2,0], "radius": 0.5, "coneHalfAngleDeg": 30}})"));
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  EXPECT_EQ(scene->light.shape, LightShape::kDisk);
+  EXPECT_TRUE(scene->light.is_spot());
+  EXPECT_DOUBLE_EQ(scene->light.radius, 0.5);
+  EXPECT_DOUBLE_EQ(scene->light.cone_half_angle_deg, 30);
+  EXPECT_DOUBLE_EQ(scene->light.frame.n.y, -1);
+  absl::StatusOr<Scene> disk = Load(
+      SceneJson(kSquare, R"({"disk": {"center": [0,5,0], "normal": [0,-1,0], "radius": 0.5}})"));
+  ASSERT_TRUE(disk.ok());
+  EXPECT_FALSE(disk->light.is_spot());
+}
+
+TEST_F(SceneLoaderTest, BadSpotNamesTheSpotsFields) {
+  const auto spot = [](const std::string& radius, const std::string& cone) {
+    return absl::StrCat(R"({"spot": {"center": [0,5,0], "normal": [0,-1,0], "radius": )", radius,
+                        R"(, "coneHalfAngleDeg": )", cone, "}}");
+  };
+  ExpectInvalid(Load(SceneJson(kSquare, spot("0", "30"))), "light.spot.radius", "(got 0)");
+  ExpectInvalid(Load(SceneJson(kSquare, spot("1", "0"))), "light.spot.coneHalfAngleDeg",
+                "must be in (0, 85] degrees (got 0)");
+  ExpectInvalid(Load(SceneJson(kSquare, spot("1", "86"))), "light.spot.coneHalfAngleDeg",
+                "(got 86)");
+  ExpectInvalid(Load(LightsJson(absl::StrCat(R"({"name": "a", "sun": )", kSun,
+                                             R"(}, {"name": "b", )", spot("1", "90").substr(1)))),
+                "lights[1].spot.coneHalfAngleDeg", "(got 90)");
+  ExpectInvalid(
+      Load(SceneJson(
+          kSquare,
+          R"({"spot": {"center": [0,5,0], "normal": [0,0,0], "radius": 1, "coneHalfAngleDeg": 10}})")),
+      "light.spot.normal", "must be non-zero");
 }
 
 }  // namespace

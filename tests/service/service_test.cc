@@ -9,6 +9,9 @@
 #include <google/protobuf/util/json_util.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <numbers>
+
 #include "core/pdsm/pdsm_file.h"
 #include "tests/service/service_cluster.h"
 
@@ -132,11 +135,43 @@ TEST(Service, AdaptiveJobMatchesTheLocalBakeByteForByte) {
   EXPECT_TRUE(FetchBytes(cluster, job_id) == expected) << "fetched PDSM differs from local bake";
 }
 
+// A one-light scene in the `lights` form, a named spot light with its own bake: the service
+// plans it as the local bake does (its own samples, its cone, its name in the file) and
+// reports the light's effective settings.
+TEST(Service, NamedSpotLightWithItsOwnBakeMatchesTheLocalBake) {
+  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "8"}));
+  ASSERT_TRUE(cluster.StartCoordinator());
+  std::string text = ReadBytes(WriteServiceScene(cluster.dir(), 64, 64, 32));
+  const std::string light =
+      R"("light": {"rect": {"center": [0,10,0], "normal": [0,-1,0], "up": [0,0,1], "size": [3,3]}})";
+  const size_t at = text.find(light);
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, light.size(),
+               R"("lights": [{"name": "key", "spot": {"center": [0,10,0], "normal": [0,-1,0],)"
+               R"( "radius": 1, "coneHalfAngleDeg": 20}, "bake": {"samples": 24}}])");
+  const std::string scene = cluster.dir().File("spot.json");
+  WriteText(scene, text);
+  const std::string expected = LocalBakeBytes(cluster.dir(), scene);
+  cluster.AddWorker();
+  const std::string job_id = cluster.Submit(scene);
+  const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
+  ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error() << cluster.Log("coordinator.log");
+  EXPECT_EQ(job.bake().samples(), 24u);
+  EXPECT_TRUE(FetchBytes(cluster, job_id) == expected) << "fetched PDSM differs from local bake";
+  absl::StatusOr<PdsmHeader> header = ReadPdsmHeader(cluster.dir().File("local.exr"), "key");
+  ASSERT_TRUE(header.ok()) << header.status();
+  EXPECT_EQ(header->samples, 24);
+  EXPECT_DOUBLE_EQ(header->cone_half_angle_deg, 20);
+  EXPECT_LE(header->geometry.s_max, std::tan(20 * std::numbers::pi / 180) * 1.01);
+}
+
 TEST(Service, KilledWorkersDoNotChangeTheBytes) {
   ServiceCluster cluster(
       CoordinatorArgs({"--samples-per-task", "8", "--lease-seconds", LeaseSeconds(1)}));
   ASSERT_TRUE(cluster.StartCoordinator());
-  const std::string scene = WriteServiceScene(cluster.dir(), 128, 128, 32, 1024);
+  // 384 samples: enough work that the second kill still finds the job running on a quiet
+  // machine (with 128 a CI run once saw it end first: "the job ended before worker 1").
+  const std::string scene = WriteServiceScene(cluster.dir(), 128, 384, 32, 1024);
   const std::string expected = LocalBakeBytes(cluster.dir(), scene);
   const std::string job_id = cluster.Submit(scene);
   cluster.AddWorker();
