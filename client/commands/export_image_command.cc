@@ -63,7 +63,8 @@ int RunExportImage(const ExportFlags& flags) {
     image = AttenuationOnPlane(*pdsm, *flags.depth);
   } else {
     absl::StatusOr<Scene> scene = LoadSceneFile(flags.scene_path);
-    if (scene.ok()) scene = OneLight(*std::move(scene), flags.light, "pdsm export-image");
+    if (scene.ok())
+      scene = OneLight(*std::move(scene), flags.light, "pdsm export-image", "--light");
     if (!scene.ok()) return ReportError(scene.status());
     if (absl::Status s = view::CheckPdsmMatchesScene(*scene, pdsm->header, flags.pdsm_path);
         !s.ok()) {

@@ -111,6 +111,13 @@ int RunSubmit(const SubmitFlags& flags) {
   absl::StatusOr<Scene> local =
       SceneFromProto(*scene, flags.scene_path, /*base_dir=*/"", from_blobs);
   if (!local.ok()) return ReportError(local.status());
+  if (local->LightCount() > 1) {
+    // What the coordinator would answer (UNIMPLEMENTED), said before anything is uploaded.
+    return ReportError(absl::InvalidArgumentError(
+        absl::StrCat(flags.scene_path, ": lights: ", local->LightCount(),
+                     " lights; the service bakes one light per job so far: bake the scene locally "
+                     "(`pdsm bake`), or submit a scene per light")));
+  }
 
   absl::StatusOr<ServiceConnection> connection = Connect(flags.service);
   if (!connection.ok()) return ReportError(connection.status());

@@ -76,7 +76,7 @@ absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
   }
   absl::StatusOr<Scene> scene = options.job_id.empty() ? LoadSceneFile(options.scene_path)
                                                        : LoadJobScene(options.scene_path, job);
-  if (scene.ok()) scene = OneLight(*std::move(scene), options.light, "pdsm-view");
+  if (scene.ok()) scene = OneLight(*std::move(scene), options.light, "pdsm-view", "--light");
   if (!scene.ok()) return scene.status();
   view.scene = *std::move(scene);
   if (!options.job_id.empty() && (!options.headless || options.partial)) {

@@ -33,7 +33,8 @@ int FindLight(const Scene& scene, std::string_view name) {
   return -1;
 }
 
-absl::StatusOr<Scene> OneLight(Scene scene, std::string_view light, std::string_view what) {
+absl::StatusOr<Scene> OneLight(Scene scene, std::string_view light, std::string_view what,
+                               std::string_view flag) {
   if (light.empty() && scene.LightCount() == 1) return scene;
   const int index = light.empty() ? -1 : FindLight(scene, light);
   if (index >= 0) return index == 0 && scene.LightCount() == 1 ? scene : ForLight(scene, index);
@@ -43,7 +44,8 @@ absl::StatusOr<Scene> OneLight(Scene scene, std::string_view light, std::string_
   if (light.empty()) {
     return absl::InvalidArgumentError(absl::StrCat(
         scene.source_path, ": lights: ", std::string(what),
-        " works on one light, and the scene has ", scene.LightCount(), " (", listed, ")"));
+        " works on one light, and the scene has ", scene.LightCount(), " (", listed, ")",
+        flag.empty() ? "" : absl::StrCat("; choose one with ", std::string(flag), " NAME")));
   }
   return absl::InvalidArgumentError(absl::StrCat(
       scene.source_path, ": no light \"", std::string(light), "\" (its lights: ", listed, ")"));

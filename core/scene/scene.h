@@ -129,8 +129,10 @@ int FindLight(const Scene& scene, std::string_view name);
 
 // For the commands that work on one light (`what`: "pdsm reference"): `scene` baking the light
 // named `light`, or its only light when `light` is empty. INVALID_ARGUMENT naming the scene
-// file and its lights when `light` names none of them, or is empty and there are several.
-absl::StatusOr<Scene> OneLight(Scene scene, std::string_view light, std::string_view what);
+// file and its lights when `light` names none of them, or is empty and there are several;
+// `flag`, when the command has one ("--light"), is named as the way to choose.
+absl::StatusOr<Scene> OneLight(Scene scene, std::string_view light, std::string_view what,
+                               std::string_view flag = {});
 
 // Limits on user input (docs/scene_format.md). Larger requests are refused, not clamped.
 inline constexpr int kMaxPdsmResolution = 16384;

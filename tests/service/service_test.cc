@@ -49,6 +49,13 @@ TEST(Service, SubmitRefusesBadScenesBeforeSendingAnything) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find(bad + ": light.rect.size[1]"), std::string::npos) << r.err;
 
+  r = submit_with(
+      R"("light": {"rect": {"center": [0,10,0], "normal": [0,-1,0], "up": [0,0,1], "size": [3,3]}},)",
+      R"("lights": [{"name": "sun", "sun": {"direction": [0,-1,0], "angularDiameterDeg": 1}},)"
+      R"( {"name": "moon", "sun": {"direction": [0,-1,1], "angularDiameterDeg": 1}}],)");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find(bad + ": lights: 2 lights"), std::string::npos) << r.err;
+
   r = submit_with("\"path\": \"box.obj\"", "\"path\": \"missing.obj\"");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find(bad + ": meshes[1].path"), std::string::npos) << r.err;
