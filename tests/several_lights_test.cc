@@ -48,6 +48,22 @@ absl::StatusOr<BakeSummary> Bake(const Scene& scene, const std::string& path, in
   return RunLocalBake(scene, options);
 }
 
+// A 2 x 2 caster plate at height 2 over a receiver floor of half-size `floor_half`, lit by
+// `lights` (the JSON array's contents), baked with `bake`: written to the folder and loaded.
+absl::StatusOr<Scene> LoadPlateScene(const TempDir& dir, int floor_half, const std::string& lights,
+                                     const std::string& bake) {
+  const std::string h = std::to_string(floor_half);
+  const std::string path = dir.File("plate.json");
+  testing::WriteText(
+      path, absl::StrCat(R"({"name": "plate", "meshes": [{"inline": {"positions": [-)", h, ",0,-",
+                         h, ", ", h, ",0,-", h, ", ", h, ",0,", h, ", -", h, ",0,", h,
+                         R"(], "indices": [0,1,2, 0,2,3]}, "role": "RECEIVER_ONLY"},)",
+                         R"( {"inline": {"positions": [-1,2,-1, 1,2,-1, 1,2,1, -1,2,1],)",
+                         R"( "indices": [0,1,2, 0,2,3]}, "role": "CASTER_ONLY"}], "lights": [)",
+                         lights, R"(], "bake": )", bake, "}"));
+  return LoadSceneFile(path);
+}
+
 void ExpectSameLight(const PdsmImage& alone, const PdsmImage& part) {
   EXPECT_EQ(part.header.light_name, alone.header.light_name);
   EXPECT_EQ(part.header.light_shape, alone.header.light_shape);
@@ -107,20 +123,12 @@ TEST(SeveralLights, SameBytesForAnyThreadsAndBatches) {
 TEST(SeveralLights, AdaptiveLightBesideFixedOnes) {
   // One light adaptive through its own bake: its part carries its tiles' sample counts.
   TempDir dir;
-  const std::string scene_path = dir.File("scene.json");
-  testing::WriteText(scene_path, R"({
-    "name": "two",
-    "meshes": [
-      {"inline": {"positions": [-5,0,-5, 5,0,-5, 5,0,5, -5,0,5], "indices": [0,1,2, 0,2,3]},
-       "role": "RECEIVER_ONLY"},
-      {"inline": {"positions": [-1,2,-1, 1,2,-1, 1,2,1, -1,2,1], "indices": [0,1,2, 0,2,3]},
-       "role": "CASTER_ONLY"}],
-    "lights": [
+  absl::StatusOr<Scene> scene =
+      LoadPlateScene(dir, 5, R"(
       {"name": "fixed", "rect": {"center": [0,6,0], "normal": [0,-1,0], "up": [0,0,1], "size": [2,2]}},
       {"name": "adaptive", "disk": {"center": [1,6,0], "normal": [0,-1,0], "radius": 1},
-       "bake": {"adaptiveTolerance": 0.05, "samples": 64, "adaptiveMinSamples": 8}}],
-    "bake": {"resolution": [40, 40], "samples": 16, "tileSize": 8}})");
-  absl::StatusOr<Scene> scene = LoadSceneFile(scene_path);
+       "bake": {"adaptiveTolerance": 0.05, "samples": 64, "adaptiveMinSamples": 8}})",
+                     R"({"resolution": [40, 40], "samples": 16, "tileSize": 8})");
   ASSERT_TRUE(scene.ok()) << scene.status();
   const std::string path = dir.File("two.exr");
   ASSERT_TRUE(Bake(*scene, path).ok());
@@ -209,20 +217,12 @@ namespace {
 // A spot is the disk's shadow inside its cone, and no answer outside it.
 TEST(SpotLight, IsTheDisksShadowInsideItsConeAndNothingOutside) {
   TempDir dir;
-  const std::string scene_path = dir.File("spot.json");
-  testing::WriteText(scene_path, R"({
-    "name": "spot",
-    "meshes": [
-      {"inline": {"positions": [-20,0,-20, 20,0,-20, 20,0,20, -20,0,20], "indices": [0,1,2, 0,2,3]},
-       "role": "RECEIVER_ONLY"},
-      {"inline": {"positions": [-1,2,-1, 1,2,-1, 1,2,1, -1,2,1], "indices": [0,1,2, 0,2,3]},
-       "role": "CASTER_ONLY"}],
-    "lights": [
+  absl::StatusOr<Scene> scene =
+      LoadPlateScene(dir, 20, R"(
       {"name": "disk", "disk": {"center": [0.5,6,0], "normal": [0,-1,0], "radius": 0.6}},
       {"name": "spot", "spot": {"center": [0.5,6,0], "normal": [0,-1,0], "radius": 0.6,
-                                "coneHalfAngleDeg": 25}}],
-    "bake": {"resolution": [128, 128], "samples": 64, "tileSize": 32, "epsilon": 0}})");
-  absl::StatusOr<Scene> scene = LoadSceneFile(scene_path);
+                                "coneHalfAngleDeg": 25}})",
+                     R"({"resolution": [128, 128], "samples": 64, "tileSize": 32, "epsilon": 0})");
   ASSERT_TRUE(scene.ok()) << scene.status();
   const std::string path = dir.File("spot.exr");
   ASSERT_TRUE(Bake(*scene, path).ok());

@@ -129,12 +129,10 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags,
 
 // Receivers the light's frustum does not hold get no shadow from the bake (query: nan): say how
 // much, and what to do, rather than bake silently. Under 0.1% is rounding at the window's edge.
-void WarnAboutUncoveredReceivers(const Scene& scene, const std::string& pdsm_path) {
-  absl::StatusOr<PdsmHeader> header = ReadPdsmHeader(pdsm_path, scene.light_name);
-  if (!header.ok()) return;  // just written; a failure here is the camera view's to report
+void WarnAboutUncoveredReceivers(const Scene& scene, const PdsmHeader& header) {
   // A spot lights its cone only: receivers outside it are outside on purpose.
   if (scene.light.is_spot()) return;
-  const double outside = ReceiverAreaOutsideFrustum(scene, header->geometry);
+  const double outside = ReceiverAreaOutsideFrustum(scene, header.geometry);
   if (outside < 1e-3) return;
   const std::string light =
       scene.light_name.empty() ? "the light's" : absl::StrCat("light \"", scene.light_name, "\"'s");
@@ -146,15 +144,18 @@ void WarnAboutUncoveredReceivers(const Scene& scene, const std::string& pdsm_pat
                100 * outside, light.c_str());
 }
 
-// The camera view of the PDSM just written, read back so that the picture shows what the file
-// holds; `*written` says whether it was. A PDSM larger than this GL's buffers (a 2048^2 plates
+// The camera view of light `part` of the PDSM just written, read back (`reader`: the file, or
+// why it could not be opened) so that the picture shows what the file holds; `*written` says
+// whether it was. A PDSM larger than this GL's buffers (a 2048^2 plates
 // bake has 29 M vertices, 234 MB; llvmpipe takes 128 MB) is complete all the same: a warning,
 // not an error. Other failures are errors saying the PDSM was written.
 absl::Status WriteBakeCameraView(const Scene& scene, const BakeFlags& flags,
-                                 const PreviewPaths& previews, bool* written) {
+                                 const PreviewPaths& previews, absl::StatusOr<PdsmReader>& reader,
+                                 int part, bool* written) {
   *written = false;
   if (previews.camera.empty()) return absl::OkStatus();
-  absl::StatusOr<PdsmImage> pdsm = ReadPdsm(flags.output_path, scene.light_name);
+  absl::StatusOr<PdsmImage> pdsm =
+      reader.ok() ? reader->ReadLight(part) : absl::StatusOr<PdsmImage>(reader.status());
   absl::Status s = pdsm.status();
   if (s.ok()) s = view::WriteCameraView(scene, *std::move(pdsm), previews.camera);
   if (absl::IsResourceExhausted(s)) {
@@ -265,17 +266,26 @@ int RunBake(const BakeFlags& flags) {
   if (!summary.ok()) return ReportError(summary.status());
   // A scene of several lights: the pictures of each light, its name before the extension
   // (OUT.sun.png, OUT.light.sun.png). One picture shading every light is pdsm-view's to come.
+  // The file is opened once (its framing scanned once) for every light's warning and picture.
+  absl::StatusOr<PdsmReader> reader = PdsmReader::Open(flags.output_path);
   std::vector<PreviewPaths> written;
   for (size_t i = 0; i < scene->LightCount(); ++i) {
-    const Scene light = scene->LightCount() == 1 ? *scene : ForLight(*scene, i);
+    Scene one_light;  // a scene of several lights: light i's (ForLight copies the meshes)
+    if (scene->LightCount() > 1) one_light = ForLight(*scene, i);
+    const Scene& light = scene->LightCount() > 1 ? one_light : *scene;
     PreviewPaths paths = previews;
     if (scene->LightCount() > 1) {
       paths = {LightPreviewPath(previews.camera, light.light_name),
                LightPreviewPath(previews.light, light.light_name)};
     }
-    WarnAboutUncoveredReceivers(light, flags.output_path);
+    // The file's parts are the scene's lights in order.
+    if (reader.ok() && static_cast<size_t>(reader->light_count()) == scene->LightCount()) {
+      WarnAboutUncoveredReceivers(light, reader->headers()[i]);
+    }
     bool camera_written = false;
-    if (absl::Status s = WriteBakeCameraView(light, flags, paths, &camera_written); !s.ok()) {
+    if (absl::Status s =
+            WriteBakeCameraView(light, flags, paths, reader, static_cast<int>(i), &camera_written);
+        !s.ok()) {
       return ReportError(s);
     }
     if (!camera_written) paths.camera.clear();

@@ -499,7 +499,14 @@ absl::StatusOr<PdsmImage> ReadPart(Imf::MultiPartInputFile& file, const std::str
 
 }  // namespace
 
-absl::StatusOr<std::vector<PdsmHeader>> ReadPdsmHeaders(const std::string& path) {
+PdsmReader::PdsmReader(std::string path, std::unique_ptr<Imf::MultiPartInputFile> file,
+                       std::vector<PdsmHeader> headers)
+    : path_(std::move(path)), file_(std::move(file)), headers_(std::move(headers)) {}
+PdsmReader::PdsmReader(PdsmReader&&) noexcept = default;
+PdsmReader& PdsmReader::operator=(PdsmReader&&) noexcept = default;
+PdsmReader::~PdsmReader() = default;
+
+absl::StatusOr<PdsmReader> PdsmReader::Open(const std::string& path) {
   std::unique_ptr<Imf::MultiPartInputFile> file;
   if (absl::Status s = OpenChecked(path, &file); !s.ok()) return s;
   std::vector<PdsmHeader> headers;
@@ -508,31 +515,49 @@ absl::StatusOr<std::vector<PdsmHeader>> ReadPdsmHeaders(const std::string& path)
     if (!header.ok()) return header.status();
     headers.push_back(*std::move(header));
   }
-  return headers;
+  return PdsmReader(path, std::move(file), std::move(headers));
+}
+
+absl::StatusOr<int> PdsmReader::FindLight(std::string_view light) const {
+  return FindPart(*file_, path_, light);
+}
+
+absl::StatusOr<PdsmImage> PdsmReader::ReadLight(int part) {
+  if (part < 0 || part >= static_cast<int>(headers_.size())) {
+    return absl::OutOfRangeError(
+        absl::StrFormat("%s: no part %d of %d", path_, part, headers_.size()));
+  }
+  return ReadPart(*file_, path_, part);
+}
+
+absl::StatusOr<std::vector<PdsmHeader>> ReadPdsmHeaders(const std::string& path) {
+  absl::StatusOr<PdsmReader> reader = PdsmReader::Open(path);
+  if (!reader.ok()) return reader.status();
+  return reader->headers();
 }
 
 absl::StatusOr<PdsmHeader> ReadPdsmHeader(const std::string& path, std::string_view light) {
-  std::unique_ptr<Imf::MultiPartInputFile> file;
-  if (absl::Status s = OpenChecked(path, &file); !s.ok()) return s;
-  absl::StatusOr<int> part = FindPart(*file, path, light);
+  absl::StatusOr<PdsmReader> reader = PdsmReader::Open(path);
+  if (!reader.ok()) return reader.status();
+  absl::StatusOr<int> part = reader->FindLight(light);
   if (!part.ok()) return part.status();
-  return PdsmHeaderFromExr(file->header(*part), path);
+  return reader->headers()[*part];
 }
 
 absl::StatusOr<PdsmImage> ReadPdsm(const std::string& path, std::string_view light) {
-  std::unique_ptr<Imf::MultiPartInputFile> file;
-  if (absl::Status s = OpenChecked(path, &file); !s.ok()) return s;
-  absl::StatusOr<int> part = FindPart(*file, path, light);
+  absl::StatusOr<PdsmReader> reader = PdsmReader::Open(path);
+  if (!reader.ok()) return reader.status();
+  absl::StatusOr<int> part = reader->FindLight(light);
   if (!part.ok()) return part.status();
-  return ReadPart(*file, path, *part);
+  return reader->ReadLight(*part);
 }
 
 absl::StatusOr<std::vector<PdsmImage>> ReadPdsmLights(const std::string& path) {
-  std::unique_ptr<Imf::MultiPartInputFile> file;
-  if (absl::Status s = OpenChecked(path, &file); !s.ok()) return s;
+  absl::StatusOr<PdsmReader> reader = PdsmReader::Open(path);
+  if (!reader.ok()) return reader.status();
   std::vector<PdsmImage> lights;
-  for (int p = 0; p < file->parts(); ++p) {
-    absl::StatusOr<PdsmImage> image = ReadPart(*file, path, p);
+  for (int p = 0; p < reader->light_count(); ++p) {
+    absl::StatusOr<PdsmImage> image = reader->ReadLight(p);
     if (!image.ok()) return image.status();
     lights.push_back(*std::move(image));
   }

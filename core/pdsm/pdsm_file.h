@@ -4,6 +4,8 @@
 #ifndef PDSM_CORE_PDSM_PDSM_FILE_H_
 #define PDSM_CORE_PDSM_PDSM_FILE_H_
 
+#include <OpenEXR/ImfForward.h>  // Imf::MultiPartInputFile, held by PdsmReader
+
 #include <memory>
 #include <string>
 #include <string_view>
@@ -66,6 +68,36 @@ class PdsmLightsWriter {
   virtual absl::StatusOr<PdsmWriter*> BeginLight(const PdsmHeader& header) = 0;
   // REQUIRES: every light finished. Assembles and commits the file.
   virtual absl::Status Finish() = 0;
+};
+
+// An open PDSM file: its framing checked and its headers read once (the bounded pre-read and
+// the checksums of ReadPdsm), each light's functions read when asked. For a consumer of
+// several lights of one file, which would otherwise scan the file once per light. Not
+// thread-safe; movable.
+class PdsmReader {
+ public:
+  // Errors as ReadPdsm's.
+  static absl::StatusOr<PdsmReader> Open(const std::string& path);
+  PdsmReader(PdsmReader&&) noexcept;
+  PdsmReader& operator=(PdsmReader&&) noexcept;
+  ~PdsmReader();
+
+  const std::string& path() const { return path_; }
+  // One per light (part), in file order.
+  const std::vector<PdsmHeader>& headers() const { return headers_; }
+  int light_count() const { return static_cast<int>(headers_.size()); }
+  // The part of light `light` as ReadPdsm selects it (empty: the only light), with its errors.
+  absl::StatusOr<int> FindLight(std::string_view light) const;
+  // The whole PDSM of part `part`. OUT_OF_RANGE for no such part; else errors as ReadPdsm's.
+  absl::StatusOr<PdsmImage> ReadLight(int part);
+
+ private:
+  PdsmReader(std::string path, std::unique_ptr<Imf::MultiPartInputFile> file,
+             std::vector<PdsmHeader> headers);
+
+  std::string path_;
+  std::unique_ptr<Imf::MultiPartInputFile> file_;
+  std::vector<PdsmHeader> headers_;
 };
 
 // Reads one light's whole PDSM. `light` empty: the file's only light (FAILED_PRECONDITION

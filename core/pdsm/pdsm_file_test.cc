@@ -632,6 +632,17 @@ TEST_F(PdsmFileTest, SeveralLightsRoundTripOnePartEach) {
   absl::StatusOr<PdsmImage> unnamed = ReadPdsm(path);
   EXPECT_EQ(unnamed.status().code(), absl::StatusCode::kFailedPrecondition);
   EXPECT_THAT(unnamed.status().message(), HasSubstr("\"sun\", \"lamp_1\", \"lamp.2-b\""));
+  // One open file for every light: the same answers.
+  absl::StatusOr<PdsmReader> reader = PdsmReader::Open(path);
+  ASSERT_TRUE(reader.ok()) << reader.status();
+  ASSERT_EQ(reader->light_count(), 3);
+  absl::StatusOr<int> lamp = reader->FindLight("lamp_1");
+  ASSERT_TRUE(lamp.ok()) << lamp.status();
+  EXPECT_EQ(*lamp, 1);
+  absl::StatusOr<PdsmImage> second = reader->ReadLight(1);
+  ASSERT_TRUE(second.ok()) << second.status();
+  ExpectImagesEqual(lights.images[1], *second);
+  EXPECT_EQ(reader->ReadLight(3).status().code(), absl::StatusCode::kOutOfRange);
   absl::StatusOr<PdsmHeader> missing = ReadPdsmHeader(path, "moon");
   EXPECT_EQ(missing.status().code(), absl::StatusCode::kNotFound);
   EXPECT_THAT(missing.status().message(), HasSubstr("no light \"moon\""));
