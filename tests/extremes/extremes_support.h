@@ -54,12 +54,14 @@ inline Scene PlateScene(double light_size = 1.0) {
   return scene;
 }
 
-// Moves every mesh and the light by `offset` (world units).
+// Moves every mesh and every light by `offset` (world units). A sun's centre is the plan's
+// (placed before the scene), so moving it changes nothing.
 inline void Translate(Scene* scene, const glm::dvec3& offset) {
   for (TriangleMesh& mesh : scene->meshes) {
     for (glm::dvec3& p : mesh.positions_world) p += offset;
   }
   scene->light.frame.center += offset;
+  for (SceneLight& light : scene->more_lights) light.spec.frame.center += offset;
 }
 
 struct Baked {
