@@ -14,6 +14,7 @@
 #include "absl/strings/str_cat.h"
 #include "core/util/atomic_file.h"
 #include "core/util/process_log.h"
+#include "core/util/process_log_flags.h"
 #include "core/util/version.h"
 #include "metrics/metrics_http_server.h"
 #include "rpc/grpc_support.h"
@@ -261,14 +262,7 @@ int main(int argc, char** argv) {
   app.add_option("--max-asset-bytes", o.max_asset_bytes, "Largest mesh asset")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")
-      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}))
-      ->capture_default_str();
-  app.add_option("--log-format", flags.log_format,
-                 "text, or json: one object per line (time, level, component, message)")
-      ->check(CLI::IsMember(std::vector<std::string>(std::begin(pdsm::kLogFormatNames),
-                                                     std::end(pdsm::kLogFormatNames))))
-      ->capture_default_str();
+  pdsm::AddProcessLogFlags(app, &flags.log_level, &flags.log_format);
   app.set_version_flag("--version", pdsm::VersionLine("pdsm-coordinator"));
   try {
     app.parse(argc, argv);

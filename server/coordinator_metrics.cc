@@ -4,6 +4,7 @@
 #include "absl/strings/ascii.h"
 #include "core/util/version.h"
 #include "metrics/prometheus_text.h"
+#include "server/failure_codes.h"
 
 namespace pdsm {
 
@@ -59,8 +60,7 @@ std::string RenderCoordinatorMetrics(const CoordinatorMetrics& m) {
   // Every code, zeros included, so that rate() and alerts see a series from the start.
   out.Family("pdsm_task_failures_total", "counter",
              "Failed tasks (kind=\"failed\" above) by the status code the worker reported.");
-  for (int code = 1; code <= 16; ++code) {
-    const auto c = static_cast<absl::StatusCode>(code);
+  for (const absl::StatusCode c : kFailureCodes) {
     const auto it = s.tasks_failed_by_code.find(c);
     out.Sample("pdsm_task_failures_total",
                it == s.tasks_failed_by_code.end() ? 0.0 : static_cast<double>(it->second),

@@ -6,6 +6,7 @@
 #include "absl/strings/str_cat.h"
 #include "rpc/grpc_support.h"
 #include "server/call_replies.h"
+#include "server/failure_codes.h"
 #include "server/request_checks.h"
 
 namespace pdsm {
@@ -18,8 +19,7 @@ constexpr int64_t kIdleRetryMs = 250;
 // ReportFailureRequest.code: an absl/gRPC code name; anything else (empty: an older worker)
 // is UNKNOWN. A failure is never OK.
 absl::StatusCode FailureCode(const std::string& name) {
-  for (int code = 1; code <= 16; ++code) {
-    const auto c = static_cast<absl::StatusCode>(code);
+  for (const absl::StatusCode c : kFailureCodes) {
     if (absl::StatusCodeToString(c) == name) return c;
   }
   return absl::StatusCode::kUnknown;

@@ -14,6 +14,7 @@
 
 #include "absl/strings/str_format.h"
 #include "core/util/process_log.h"
+#include "core/util/process_log_flags.h"
 #include "core/util/version.h"
 #include "metrics/metrics_http_server.h"
 #include "rpc/grpc_support.h"
@@ -142,14 +143,7 @@ int main(int argc, char** argv) {
   app.add_option("--metrics-listen", flags.metrics_listen,
                  "host:port for Prometheus metrics over HTTP (GET /metrics; no token: keep it "
                  "private)");
-  app.add_option("--log-level", flags.log_level, "trace, debug, info, warn, error")
-      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}))
-      ->capture_default_str();
-  app.add_option("--log-format", flags.log_format,
-                 "text, or json: one object per line (time, level, component, message)")
-      ->check(CLI::IsMember(std::vector<std::string>(std::begin(pdsm::kLogFormatNames),
-                                                     std::end(pdsm::kLogFormatNames))))
-      ->capture_default_str();
+  pdsm::AddProcessLogFlags(app, &flags.log_level, &flags.log_format);
   // Hidden (no group): a test makes this worker plan every job "differently", as a worker of
   // another build would, to exercise rolling upgrades.
   app.add_option("--test-only-fingerprint-salt", flags.test_fingerprint_salt)->group("");
