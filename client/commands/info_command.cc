@@ -190,16 +190,9 @@ void Describe(const InfoFlags& flags, const std::string& title, const PdsmImage*
 }
 
 int RunInfo(const InfoFlags& flags) {
-  std::vector<PdsmImage> lights;
-  if (flags.light.empty()) {
-    absl::StatusOr<std::vector<PdsmImage>> all = ReadPdsmLights(flags.pdsm_path);
-    if (!all.ok()) return ReportError(all.status());
-    lights = *std::move(all);
-  } else {
-    absl::StatusOr<PdsmImage> one = ReadPdsm(flags.pdsm_path, flags.light);
-    if (!one.ok()) return ReportError(one.status());
-    lights.push_back(*std::move(one));
-  }
+  absl::StatusOr<std::vector<PdsmImage>> read = ReadPdsmLights(flags.pdsm_path, flags.light);
+  if (!read.ok()) return ReportError(read.status());
+  const std::vector<PdsmImage>& lights = *read;
   // One light: its object or its lines, as they always were. Several: {"lights": [...]} in
   // file order, or a line saying how many, then each light's lines under its name.
   if (lights.size() == 1) {

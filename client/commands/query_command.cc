@@ -30,16 +30,9 @@ struct QueryFlags {
 };
 
 absl::Status QueryLocal(const QueryFlags& flags, const std::vector<QueryPoint>& points) {
-  std::vector<PdsmImage> lights;
-  if (flags.light.empty()) {
-    absl::StatusOr<std::vector<PdsmImage>> all = ReadPdsmLights(flags.pdsm_path);
-    if (!all.ok()) return all.status();
-    lights = *std::move(all);
-  } else {
-    absl::StatusOr<PdsmImage> one = ReadPdsm(flags.pdsm_path, flags.light);
-    if (!one.ok()) return one.status();
-    lights.push_back(*std::move(one));
-  }
+  absl::StatusOr<std::vector<PdsmImage>> read = ReadPdsmLights(flags.pdsm_path, flags.light);
+  if (!read.ok()) return read.status();
+  const std::vector<PdsmImage>& lights = *read;
   std::vector<double> attenuation(lights.size());
   for (const QueryPoint& point : points) {
     for (size_t i = 0; i < lights.size(); ++i) {

@@ -46,13 +46,16 @@ namespace {
 class ExrPdsmWriter final : public PdsmWriter {
  public:
   // `staged`: Finish() completes the file but does not commit it; it stays at staged_path()
-  // until the writer is destroyed (a part of a multipart file, PdsmLightsWriter).
+  // until the writer is destroyed (a part of a multipart file, PdsmLightsWriter), whose
+  // parts share `display_window` (unset: the data window).
   ExrPdsmWriter(std::string path, FileSystem* fs, const PdsmHeader& header,
                 std::unique_ptr<AtomicFile> file, std::unique_ptr<ExrOutputStream> stream,
-                std::unique_ptr<Imf::DeepTiledOutputFile> exr, bool staged = false)
+                std::unique_ptr<Imf::DeepTiledOutputFile> exr, bool staged,
+                std::optional<Imath::Box2i> display_window)
       : path_(std::move(path)),
         fs_(fs),
         staged_(staged),
+        display_window_(display_window),
         header_(header),
         grid_{header.geometry.width, header.geometry.height, header.tile_size},
         file_(std::move(file)),
@@ -112,7 +115,6 @@ class ExrPdsmWriter final : public PdsmWriter {
   }
 
   bool finished() const { return finished_; }
-  void set_display_window(const std::optional<Imath::Box2i>& window) { display_window_ = window; }
   // The header as written, adaptive tile counts included once finished.
   const PdsmHeader& header() const { return header_; }
   // Where a staged writer's finished file is. REQUIRES: staged, finished.
@@ -209,13 +211,13 @@ class ExrPdsmWriter final : public PdsmWriter {
   const std::string path_;
   FileSystem* const fs_;
   const bool staged_;
+  const std::optional<Imath::Box2i> display_window_;
   PdsmHeader header_;  // tile_samples filled as tiles arrive (adaptive bakes)
   const TileGrid grid_;
   std::unique_ptr<AtomicFile> file_;         // the rewritten one once RewriteWithTileSamples() ran
   std::unique_ptr<ExrOutputStream> stream_;  // writes to *file_; null after a rewrite
   std::unique_ptr<Imf::DeepTiledOutputFile> exr_;  // writes to *stream_; null once finished
   std::map<int64_t, PdsmTile> pending_;            // out-of-order tiles by index
-  std::optional<Imath::Box2i> display_window_;     // of a multipart file's parts
   int64_t next_tile_ = 0;                          // all tiles before it are written
   DeepTileBuffers buffers_;
   absl::Status error_;  // sticky: after a failure nothing more is written
@@ -295,9 +297,8 @@ absl::Status CheckDepthOrder(const PdsmImage& image, absl::string_view path) {
   return absl::OkStatus();
 }
 
-}  // namespace
-
-namespace {
+// ---------------------------------------------------------------------------------------
+// Several lights.
 
 // A writer of `header` into a new AtomicFile for `path`.
 absl::StatusOr<std::unique_ptr<ExrPdsmWriter>> CreateExrWriter(
@@ -317,10 +318,8 @@ absl::StatusOr<std::unique_ptr<ExrPdsmWriter>> CreateExrWriter(
     return absl::InternalError(
         StatusFromCurrentException((*file)->temp_path(), "cannot start").message());
   }
-  auto writer = std::make_unique<ExrPdsmWriter>(path, fs, header, *std::move(file),
-                                                std::move(stream), std::move(exr), staged);
-  writer->set_display_window(display_window);
-  return writer;
+  return std::make_unique<ExrPdsmWriter>(path, fs, header, *std::move(file), std::move(stream),
+                                         std::move(exr), staged, display_window);
 }
 
 // Each light into a staged single-part file (ExrPdsmWriter, staged), then every part's
@@ -401,10 +400,6 @@ class ExrPdsmLightsWriter final : public PdsmLightsWriter {
   std::set<std::string> names_;
   absl::Status error_;
 };
-
-}  // namespace
-
-namespace {
 
 // Every staged light holds a descriptor until the file is assembled: raise the soft limit on
 // open files towards the hard one when `lights` (and a margin for the rest of the process)
@@ -552,11 +547,19 @@ absl::StatusOr<PdsmImage> ReadPdsm(const std::string& path, std::string_view lig
   return reader->ReadLight(*part);
 }
 
-absl::StatusOr<std::vector<PdsmImage>> ReadPdsmLights(const std::string& path) {
+absl::StatusOr<std::vector<PdsmImage>> ReadPdsmLights(const std::string& path,
+                                                      std::string_view light) {
   absl::StatusOr<PdsmReader> reader = PdsmReader::Open(path);
   if (!reader.ok()) return reader.status();
+  int first = 0, end = reader->light_count();
+  if (!light.empty()) {
+    absl::StatusOr<int> part = reader->FindLight(light);
+    if (!part.ok()) return part.status();
+    first = *part;
+    end = *part + 1;
+  }
   std::vector<PdsmImage> lights;
-  for (int p = 0; p < reader->light_count(); ++p) {
+  for (int p = first; p < end; ++p) {
     absl::StatusOr<PdsmImage> image = reader->ReadLight(p);
     if (!image.ok()) return image.status();
     lights.push_back(*std::move(image));

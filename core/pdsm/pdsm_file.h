@@ -106,8 +106,10 @@ class PdsmReader {
 // corrupt), FAILED_PRECONDITION (a format version this build does not read).
 absl::StatusOr<PdsmImage> ReadPdsm(const std::string& path, std::string_view light = {});
 
-// Every light of the file, in file order (one for a one-light file). Errors as ReadPdsm's.
-absl::StatusOr<std::vector<PdsmImage>> ReadPdsmLights(const std::string& path);
+// Every light of the file, in file order (one for a one-light file); only the light named
+// `light` when it is not empty. Errors as ReadPdsm's.
+absl::StatusOr<std::vector<PdsmImage>> ReadPdsmLights(const std::string& path,
+                                                      std::string_view light = {});
 
 // Only the header of `light`, as ReadPdsm selects it.
 absl::StatusOr<PdsmHeader> ReadPdsmHeader(const std::string& path, std::string_view light = {});
