@@ -89,19 +89,24 @@ void Coordinator::TickUntilStopped() {
 
 absl::StatusOr<pdsm::v1::Job> Coordinator::SubmitBake(const pdsm::v1::SubmitBakeRequest& request) {
   if (absl::Status s = CheckSubmitRequest(request); !s.ok()) return s;
-  absl::StatusOr<BakePlan> plan =
-      PlanJobScene(request.scene(), "scene", *assets_, &options_.limits);
-  if (!plan.ok()) return plan.status();
-  absl::StatusOr<JobRecord> record = NewJobRecord(request, *plan, UnixNowMs());
+  absl::StatusOr<std::vector<BakePlan>> plans =
+      PlanJobLights(request.scene(), "scene", *assets_, &options_.limits);
+  if (!plans.ok()) return plans.status();
+  absl::StatusOr<JobRecord> record = NewJobRecord(request, *plans, UnixNowMs());
   if (!record.ok()) return record.status();
   bool created = false;
   absl::StatusOr<JobRecord> stored = store_->CreateJob(*record, &created);
   if (!stored.ok()) return stored.status();
   if (created) {
-    spdlog::info("job {}: submitted \"{}\", {}x{}, {} samples, {} tiles, priority {}",
-                 stored->job_id, stored->scene_name, stored->width, stored->height, stored->samples,
-                 stored->tiles_total, stored->priority);
-    if (absl::Status s = Activate(*stored, {}, *std::move(plan)); !s.ok()) return s;
+    if (plans->size() == 1) {
+      spdlog::info("job {}: submitted \"{}\", {}x{}, {} samples, {} tiles, priority {}",
+                   stored->job_id, stored->scene_name, stored->width, stored->height,
+                   stored->samples, stored->tiles_total, stored->priority);
+    } else {
+      spdlog::info("job {}: submitted \"{}\", {} lights, {} tiles, priority {}", stored->job_id,
+                   stored->scene_name, plans->size(), stored->tiles_total, stored->priority);
+    }
+    if (absl::Status s = Activate(*stored, {}, *std::move(plans)); !s.ok()) return s;
   }
   return GetJob(stored->job_id);
 }
@@ -112,39 +117,61 @@ void Coordinator::SubmitBakeAsync(const pdsm::v1::SubmitBakeRequest* request,
 }
 
 absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<int>& done_tiles,
-                                   std::optional<BakePlan> plan) {
+                                   std::optional<std::vector<BakePlan>> plans) {
   pdsm::v1::Scene scene;
   if (!scene.ParseFromString(record.scene)) {
     return absl::DataLossError(absl::StrCat("job ", record.job_id, ": stored scene is corrupt"));
   }
-  if (!plan) {
-    absl::StatusOr<BakePlan> planned =
-        PlanJobScene(scene, absl::StrCat("job ", record.job_id), *assets_, nullptr);
+  if (!plans) {
+    absl::StatusOr<std::vector<BakePlan>> planned =
+        PlanJobLights(scene, absl::StrCat("job ", record.job_id), *assets_, nullptr);
     if (!planned.ok()) return planned.status();
-    plan = *std::move(planned);
+    plans = *std::move(planned);
   }
-  auto shared_plan = std::make_shared<const BakePlan>(*std::move(plan));
+  std::vector<std::shared_ptr<const BakePlan>> shared_plans;
+  for (BakePlan& plan : *plans) {
+    shared_plans.push_back(std::make_shared<const BakePlan>(std::move(plan)));
+  }
+  const std::string job_id = record.job_id;
   auto job = std::make_shared<StoredJob>(
-      store_.get(), options_.data_dir, record, std::move(scene), shared_plan,
-      [this](const std::string& id) { Forget(id); }, options_.fs);
+      store_.get(), options_.data_dir, record, std::move(scene), std::move(shared_plans),
+      [this](const std::string& id) { Forget(id); },
+      [this, job_id](const absl::Status& why) { EndLights(job_id, why); }, options_.fs);
   {
     absl::MutexLock lock(&mu_);
-    active_[record.job_id] = job;
+    active_[job_id] = job;
   }
-  EngineJob spec;
-  spec.job_id = record.job_id;
-  spec.priority = record.priority;
-  spec.sequence = record.sequence;
-  spec.plan = shared_plan;
-  spec.samples_per_task = options_.samples_per_task > 0
-                              ? options_.samples_per_task
-                              : std::clamp((shared_plan->header.samples + 7) / 8, 1, 64);
-  spec.done_tiles = done_tiles;
-  spec.started = record.state == pdsm::v1::RUNNING;
-  spec.output = job;
-  absl::Status added = engine_.AddJob(std::move(spec));
-  if (!added.ok()) Forget(record.job_id);
-  return added;
+  for (const JobLight& light : job->lights()) {
+    EngineJob spec;
+    spec.job_id = light.engine_id;
+    spec.priority = record.priority;
+    spec.sequence = record.sequence;
+    spec.plan = light.plan;
+    spec.samples_per_task = options_.samples_per_task > 0
+                                ? options_.samples_per_task
+                                : std::clamp((light.plan->header.samples + 7) / 8, 1, 64);
+    for (int tile : done_tiles) {
+      if (tile >= light.tile_offset && tile < light.tile_offset + light.tile_count()) {
+        spec.done_tiles.push_back(tile - light.tile_offset);
+      }
+    }
+    spec.started = record.state == pdsm::v1::RUNNING;
+    spec.output = job->LightOutput(light.index);
+    if (absl::Status added = engine_.AddJob(std::move(spec)); !added.ok()) {
+      // Never for a fresh coordinator's ids. The lights added so far end; the others never
+      // started, so the job is let go here.
+      EndLights(job_id, added);
+      Forget(job_id);
+      return added;
+    }
+  }
+  return absl::OkStatus();
+}
+
+void Coordinator::EndLights(const std::string& job_id, const absl::Status& why) {
+  const std::shared_ptr<StoredJob> job = Active(job_id);
+  if (!job) return;
+  for (const JobLight& light : job->lights()) engine_.Fail(light.engine_id, why);
 }
 
 absl::Status Coordinator::Resume() {
@@ -187,12 +214,99 @@ absl::StatusOr<pdsm::v1::Job> Coordinator::CancelJob(const std::string& job_id) 
   if (!IsTerminal(record->state)) {
     const absl::Status why = absl::CancelledError("cancelled by request");
     const std::shared_ptr<StoredJob> job = Active(job_id);
-    if (job && engine_.Cancel(job_id, why)) job->RecordEnd(JobEnd::kCancelled, why);
+    if (job) {
+      bool cancelled = false;
+      for (const JobLight& light : job->lights()) {
+        cancelled = engine_.Cancel(light.engine_id, why) || cancelled;
+      }
+      if (cancelled) job->RecordEnd(JobEnd::kCancelled, why);
+    }
   }
   return GetJob(job_id);
 }
 
 // ---- Job views -------------------------------------------------------------------------
+
+std::vector<std::optional<JobProgress>> Coordinator::LightsProgress(const StoredJob& job) const {
+  std::vector<std::optional<JobProgress>> progress;
+  for (const JobLight& light : job.lights()) {
+    std::optional<JobProgress> p = engine_.Progress(light.engine_id);
+    progress.push_back(p ? std::move(p) : job.LightEndProgress(light.index));
+  }
+  return progress;
+}
+
+std::optional<JobProgress> Coordinator::SumProgress(
+    const std::vector<std::optional<JobProgress>>& lights) {
+  std::optional<JobProgress> sum;
+  for (const std::optional<JobProgress>& p : lights) {
+    if (!p) continue;
+    if (!sum) {
+      sum = *p;
+      continue;
+    }
+    sum->started = sum->started || p->started;
+    sum->tiles_total += p->tiles_total;
+    sum->tiles_done += p->tiles_done;
+    sum->samples_total += p->samples_total;
+    sum->samples_done += p->samples_done;
+    sum->samples_at_add += p->samples_at_add;
+    sum->added_ms = std::min(sum->added_ms, p->added_ms);
+  }
+  return sum;
+}
+
+void Coordinator::AddLightsProgress(const JobRecord& record, const std::vector<JobLightSize>& sizes,
+                                    const StoredJob* active,
+                                    const std::vector<std::optional<JobProgress>>& progress,
+                                    pdsm::v1::Job* job) const {
+  // An ended job of several lights: its done tiles, told apart by light.
+  std::vector<int> done_tiles;
+  if (sizes.size() > 1 && progress.empty() && record.state != pdsm::v1::SUCCEEDED) {
+    if (absl::StatusOr<std::vector<int>> done = store_->DoneTiles(record.job_id); done.ok()) {
+      done_tiles = *std::move(done);
+    }
+  }
+  int offset = 0;
+  int64_t samples_done = 0;
+  for (size_t i = 0; i < sizes.size(); ++i) {
+    const JobLightSize& size = sizes[i];
+    pdsm::v1::LightProgress* light = job->add_lights();
+    light->set_name(size.name);
+    light->set_width(size.width);
+    light->set_height(size.height);
+    light->set_samples(size.samples);
+    light->set_tiles_total(size.tiles);
+    light->set_samples_total(int64_t{size.tiles} * size.samples);
+    *light->mutable_bake() = size.bake;
+    if (record.state == pdsm::v1::SUCCEEDED) {
+      light->set_tiles_done(size.tiles);
+      light->set_samples_done(light->samples_total());
+    } else if (i < progress.size() && progress[i]) {
+      light->set_tiles_done(progress[i]->tiles_done);
+      light->set_samples_done(progress[i]->samples_done);
+    } else {
+      const int done =
+          sizes.size() == 1
+              ? record.tiles_done
+              : static_cast<int>(std::count_if(done_tiles.begin(), done_tiles.end(), [&](int t) {
+                  return t >= offset && t < offset + size.tiles;
+                }));
+      light->set_tiles_done(done);
+      light->set_samples_done(int64_t{done} * size.samples);
+    }
+    if (active != nullptr && !active->ended() && i < active->lights().size()) {
+      light->set_plan_fingerprint(active->lights()[i].fingerprint);
+    }
+    light->set_progress(light->samples_total() > 0 ? static_cast<double>(light->samples_done()) /
+                                                         static_cast<double>(light->samples_total())
+                                                   : 0.0);
+    samples_done += light->samples_done();
+    offset += size.tiles;
+  }
+  // An ended job's work over its lights' own samples (the record keeps the first light's).
+  if (progress.empty() && sizes.size() > 1) job->set_samples_done(samples_done);
+}
 
 pdsm::v1::Job Coordinator::ToProto(const JobRecord& record) const {
   pdsm::v1::Job job;
@@ -226,11 +340,12 @@ pdsm::v1::Job Coordinator::ToProto(const JobRecord& record) const {
       spdlog::warn("{}", std::string(bake.status().message()));
     }
   }
-  if (const std::shared_ptr<StoredJob> active = Active(record.job_id); active && !active->ended()) {
-    job.set_plan_fingerprint(active->fingerprint());
-  }
-  if (!IsTerminal(record.state)) {
-    if (const std::optional<JobProgress> p = engine_.Progress(record.job_id)) {
+  const std::shared_ptr<StoredJob> active = Active(record.job_id);
+  if (active && !active->ended()) job.set_plan_fingerprint(active->fingerprint());
+  std::vector<std::optional<JobProgress>> light_progress;
+  if (active && !IsTerminal(record.state)) {
+    light_progress = LightsProgress(*active);
+    if (const std::optional<JobProgress> p = SumProgress(light_progress)) {
       if (p->started) job.set_state(pdsm::v1::RUNNING);
       job.set_tiles_done(p->tiles_done);
       job.set_samples_done(p->samples_done);
@@ -240,6 +355,16 @@ pdsm::v1::Job Coordinator::ToProto(const JobRecord& record) const {
         job.set_eta_seconds(static_cast<double>(p->samples_total - p->samples_done) * elapsed_s /
                             static_cast<double>(gained));
       }
+    }
+  }
+  // Each light (GetJob and WatchJob: ListJobs' records carry no scene to size them from).
+  if (!record.scene.empty()) {
+    absl::StatusOr<std::vector<JobLightSize>> sizes =
+        JobLightSizes(record.scene, absl::StrCat("job ", record.job_id));
+    if (sizes.ok()) {
+      AddLightsProgress(record, *sizes, active.get(), light_progress, &job);
+    } else {
+      spdlog::warn("{}", std::string(sizes.status().message()));
     }
   }
   job.set_progress(job.samples_total() > 0
@@ -281,8 +406,8 @@ absl::StatusOr<std::string> Coordinator::PdsmPath(const std::string& job_id) {
   return JobPaths(options_.data_dir, job_id).pdsm;
 }
 
-absl::StatusOr<std::vector<int>> Coordinator::FinishedTiles(const std::string& job_id) {
-  const std::shared_ptr<StoredJob> job = Active(job_id);
+absl::StatusOr<std::shared_ptr<StoredJob>> Coordinator::RunningJob(const std::string& job_id) {
+  std::shared_ptr<StoredJob> job = Active(job_id);
   if (!job || job->ended()) {
     absl::StatusOr<JobRecord> record = store_->GetJob(job_id);
     if (!record.ok()) return record.status();
@@ -290,31 +415,54 @@ absl::StatusOr<std::vector<int>> Coordinator::FinishedTiles(const std::string& j
                                                       pdsm::v1::JobState_Name(record->state),
                                                       ": its tiles are only served while it runs"));
   }
-  return job->FinishedTiles();
+  return job;
+}
+
+absl::StatusOr<std::vector<int>> Coordinator::FinishedTiles(const std::string& job_id,
+                                                            std::string_view light) {
+  absl::StatusOr<std::shared_ptr<StoredJob>> job = RunningJob(job_id);
+  if (!job.ok()) return job.status();
+  absl::StatusOr<int> index = FindJobLight((*job)->lights(), light, job_id);
+  if (!index.ok()) return index.status();
+  return (*job)->FinishedTiles(*index);
 }
 
 absl::StatusOr<std::string> Coordinator::FinishedTilePath(const std::string& job_id,
-                                                          int tile_index) {
+                                                          std::string_view light, int tile_index) {
+  // The index is checked first, against the light's tiles as the stored scene sizes them: a
+  // tile that can never exist is INVALID_ARGUMENT whatever the job's state.
   absl::StatusOr<JobRecord> record = store_->GetJob(job_id);
   if (!record.ok()) return record.status();
-  if (tile_index < 0 || tile_index >= record->tiles_total) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "tile_index: ", tile_index, " is outside the job's tiles [0, ", record->tiles_total, ")"));
+  absl::StatusOr<std::vector<JobLightSize>> sizes =
+      JobLightSizes(record->scene, absl::StrCat("job ", job_id));
+  if (!sizes.ok()) return sizes.status();
+  int light_tiles = -1;
+  for (const JobLightSize& size : *sizes) {
+    if (sizes->size() == 1 || size.name == light) light_tiles = size.tiles;
   }
-  absl::StatusOr<std::vector<int>> done = FinishedTiles(job_id);
-  if (!done.ok()) return done.status();
-  if (!std::binary_search(done->begin(), done->end(), tile_index)) {
+  if (light_tiles >= 0 && (tile_index < 0 || tile_index >= light_tiles)) {
+    return absl::InvalidArgumentError(absl::StrCat("tile_index: ", tile_index, " is outside the ",
+                                                   sizes->size() == 1 ? "job's" : "light's",
+                                                   " tiles [0, ", light_tiles, ")"));
+  }
+  absl::StatusOr<std::shared_ptr<StoredJob>> job = RunningJob(job_id);
+  if (!job.ok()) return job.status();
+  absl::StatusOr<int> index = FindJobLight((*job)->lights(), light, job_id);
+  if (!index.ok()) return index.status();
+  const JobLight& l = (*job)->lights()[*index];
+  const std::vector<int> done = (*job)->FinishedTiles(*index);
+  if (!std::binary_search(done.begin(), done.end(), tile_index)) {
     return absl::NotFoundError(
         absl::StrCat("job ", job_id, ": tile ", tile_index, " is not assembled (yet)"));
   }
-  return JobPaths(options_.data_dir, job_id).Tile(tile_index);
+  return (*job)->paths().Tile(l.tile_offset + tile_index);
 }
 
-absl::StatusOr<std::vector<double>> Coordinator::Query(
-    const std::string& job_id, const std::vector<glm::dvec3>& points_world) {
+absl::StatusOr<QueryAnswer> Coordinator::Query(const std::string& job_id, std::string_view light,
+                                               const std::vector<glm::dvec3>& points_world) {
   absl::StatusOr<std::string> path = PdsmPath(job_id);
   if (!path.ok()) return path.status();
-  return query_cache_.Query(job_id, *path, points_world);
+  return query_cache_.Query(job_id, *path, light, points_world);
 }
 
 CoordinatorMetrics Coordinator::Metrics() {
@@ -328,26 +476,39 @@ CoordinatorMetrics Coordinator::Metrics() {
     spdlog::warn("metrics: {}", std::string(totals.status().message()));
   }
   m.task_seconds = task_seconds_.Read();
-  std::vector<std::string> ids;
-  {
-    absl::MutexLock lock(&mu_);
-    for (const auto& [job_id, job] : active_) ids.push_back(job_id);
-  }
-  for (const std::string& job_id : ids) {
-    if (const std::optional<JobProgress> p = engine_.Progress(job_id); p && p->samples_total > 0) {
-      m.job_progress.emplace_back(
-          job_id, static_cast<double>(p->samples_done) / static_cast<double>(p->samples_total));
-    }
-  }
+  // The engine counts its jobs, one per light: count the jobs.
+  m.engine.jobs_started = m.engine.jobs_waiting = 0;
+  CountActiveJobs(&m.engine.jobs_started, &m.engine.jobs_waiting, &m.job_progress);
   m.uptime_seconds = static_cast<double>(SteadyNowMs() - started_ms_) / 1000.0;
   return m;
+}
+
+void Coordinator::CountActiveJobs(int* started, int* waiting,
+                                  std::vector<std::pair<std::string, double>>* progress) const {
+  std::vector<std::shared_ptr<StoredJob>> jobs;
+  {
+    absl::MutexLock lock(&mu_);
+    for (const auto& [job_id, job] : active_) jobs.push_back(job);
+  }
+  for (const std::shared_ptr<StoredJob>& job : jobs) {
+    if (job->ended()) continue;
+    const std::optional<JobProgress> p = SumProgress(LightsProgress(*job));
+    if (!p) continue;  // ended meanwhile
+    ++*(p->started ? started : waiting);
+    if (progress != nullptr && p->samples_total > 0) {
+      progress->emplace_back(job->record().job_id, static_cast<double>(p->samples_done) /
+                                                       static_cast<double>(p->samples_total));
+    }
+  }
 }
 
 pdsm::v1::Stats Coordinator::GetStats() {
   const EngineStats s = engine_.Stats();
   pdsm::v1::Stats stats;
-  stats.set_jobs_running(s.jobs_started);
-  stats.set_jobs_queued(s.jobs_waiting);
+  int started = 0, waiting = 0;
+  CountActiveJobs(&started, &waiting, nullptr);
+  stats.set_jobs_running(started);
+  stats.set_jobs_queued(waiting);
   stats.set_tasks_pending(s.scheduler.tasks_pending);
   stats.set_tasks_leased(s.scheduler.tasks_leased);
   stats.set_tiles_in_flight(s.scheduler.tiles_open);
@@ -367,12 +528,13 @@ pdsm::v1::Stats Coordinator::GetStats() {
 std::optional<pdsm::v1::Task> Coordinator::LeaseTask(const std::string& worker_id) {
   const std::optional<TaskLease> lease = engine_.Lease(worker_id);
   if (!lease) return std::nullopt;
-  const std::shared_ptr<StoredJob> job = Active(lease->job_id);
+  const std::optional<EngineJobOf> of = ParseEngineJobId(lease->job_id);
+  const std::shared_ptr<StoredJob> job = of ? Active(of->job_id) : nullptr;
   spdlog::debug("job {} tile group {} ({} tiles): samples [{}, {}) leased to {} (lease {})",
                 lease->job_id, lease->group_index, lease->tiles.size(), lease->sample_begin,
                 lease->sample_end, worker_id, lease->lease_id);
   pdsm::v1::Task task;
-  task.set_job_id(lease->job_id);
+  task.set_job_id(of ? of->job_id : lease->job_id);
   task.set_lease_id(lease->lease_id);
   task.set_group_index(lease->group_index);
   task.mutable_tile_indices()->Assign(lease->tiles.begin(), lease->tiles.end());
@@ -380,7 +542,11 @@ std::optional<pdsm::v1::Task> Coordinator::LeaseTask(const std::string& worker_i
   task.set_sample_end(lease->sample_end);
   task.set_lease_ms(options_.lease_ms);
   // Ended between the lease and here: the worker's result will be dropped.
-  if (job) task.set_plan_fingerprint(job->fingerprint());
+  if (job && of->light < static_cast<int>(job->lights().size())) {
+    const JobLight& light = job->lights()[of->light];
+    task.set_light(light.name);
+    task.set_plan_fingerprint(light.fingerprint);
+  }
   return task;
 }
 

@@ -22,6 +22,8 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -40,6 +42,7 @@
 #include "server/coordinator_assets.h"
 #include "server/coordinator_metrics.h"
 #include "server/job_admission.h"
+#include "server/job_lights.h"
 #include "server/job_store.h"
 #include "server/query_cache.h"
 #include "server/stored_job.h"
@@ -82,13 +85,19 @@ class Coordinator {
   absl::StatusOr<pdsm::v1::Job> CancelJob(const std::string& job_id);
   // The finished file. FAILED_PRECONDITION unless the job SUCCEEDED.
   absl::StatusOr<std::string> PdsmPath(const std::string& job_id);
-  // A running (or queued) job's assembled tiles so far, ascending, and one tile's file.
-  // FAILED_PRECONDITION once the job has ended; NOT_FOUND for an unknown job or a tile not
-  // assembled yet; INVALID_ARGUMENT for a tile index outside [0, tiles_total).
-  absl::StatusOr<std::vector<int>> FinishedTiles(const std::string& job_id);
-  absl::StatusOr<std::string> FinishedTilePath(const std::string& job_id, int tile_index);
-  absl::StatusOr<std::vector<double>> Query(const std::string& job_id,
-                                            const std::vector<glm::dvec3>& points_world);
+  // A running (or queued) job's assembled tiles of one light so far (the light's own tile
+  // indices), ascending, and one tile's file. `light`: a light's name, "" for a one-light job
+  // (errors as FindJobLight's, server/job_lights.h). FAILED_PRECONDITION once the job has
+  // ended; NOT_FOUND for an unknown job or a tile not assembled yet; INVALID_ARGUMENT for a
+  // tile index outside the light's [0, tiles_total).
+  absl::StatusOr<std::vector<int>> FinishedTiles(const std::string& job_id,
+                                                 std::string_view light = {});
+  absl::StatusOr<std::string> FinishedTilePath(const std::string& job_id, std::string_view light,
+                                               int tile_index);
+  // The attenuation at each point of the finished job's light `light` ("" every light): as
+  // QueryCache::Query.
+  absl::StatusOr<QueryAnswer> Query(const std::string& job_id, std::string_view light,
+                                    const std::vector<glm::dvec3>& points_world);
   pdsm::v1::Stats GetStats();
   // Everything /metrics shows (server/coordinator_metrics.h). Thread-safe.
   CoordinatorMetrics Metrics();
@@ -119,9 +128,34 @@ class Coordinator {
   absl::Status Resume();
   // Hands the job to the engine. `plan`: the job's plan when the caller has it (a new job);
   // otherwise planned from the record's scene.
+  // Hands the job's lights to the engine, one engine job each (server/job_lights.h).
+  // `plans`: the job's plans when the caller has them (a new job); otherwise planned from the
+  // record's scene. `done_tiles`: the job's (not a light's) tiles stored already.
   absl::Status Activate(const JobRecord& record, const std::vector<int>& done_tiles,
-                        std::optional<BakePlan> plan);
+                        std::optional<std::vector<BakePlan>> plans);
+  // Ends every light of the job still in the engine as failed with `why`.
+  void EndLights(const std::string& job_id, const absl::Status& why);
   std::shared_ptr<StoredJob> Active(const std::string& job_id) const;
+  // The job when it is running here; else FAILED_PRECONDITION saying its state (NOT_FOUND
+  // for no such job).
+  absl::StatusOr<std::shared_ptr<StoredJob>> RunningJob(const std::string& job_id);
+  // Each light's progress: the engine's while its engine job runs, the light's last after
+  // it ended; nullopt for neither (the whole job ended meanwhile).
+  std::vector<std::optional<JobProgress>> LightsProgress(const StoredJob& job) const;
+  // The lights' progress summed (nullopt when none has any): the job's.
+  static std::optional<JobProgress> SumProgress(
+      const std::vector<std::optional<JobProgress>>& lights);
+  // Job.lights, and for an ended job of several lights its samples_done over their samples.
+  // `active`: the job when it runs here (for the fingerprints); `progress`: LightsProgress of
+  // it, empty when it does not run.
+  void AddLightsProgress(const JobRecord& record, const std::vector<JobLightSize>& sizes,
+                         const StoredJob* active,
+                         const std::vector<std::optional<JobProgress>>& progress,
+                         pdsm::v1::Job* job) const;
+  // Adds the active jobs to *started (with a task leased) or *waiting, and to *progress (if
+  // not null) their done fraction.
+  void CountActiveJobs(int* started, int* waiting,
+                       std::vector<std::pair<std::string, double>>* progress) const;
   void Forget(const std::string& job_id);
   // The job as the API shows it: the stored record, with the engine's progress while it runs.
   pdsm::v1::Job ToProto(const JobRecord& record) const;

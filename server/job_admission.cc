@@ -10,6 +10,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/synchronization/mutex.h"
+#include "core/scene/scene.h"
 #include "core/scene/scene_loader.h"
 
 namespace pdsm {
@@ -32,80 +33,37 @@ absl::Status CheckSubmitRequest(const pdsm::v1::SubmitBakeRequest& request) {
   return absl::OkStatus();
 }
 
-absl::StatusOr<BakePlan> PlanJobScene(const pdsm::v1::Scene& scene, const std::string& label,
-                                      const CoordinatorAssets& assets,
-                                      const AdmissionLimits* limits) {
-  // Asset triangles are counted as they decode, to stop early on a huge scene; the final
-  // check counts every mesh (inline ones too) once.
-  int64_t asset_triangles = 0;
-  absl::StatusOr<Scene> loaded =
-      SceneFromProto(scene, label, /*base_dir=*/"",
-                     assets.Resolver(limits ? limits->max_triangles : 0, &asset_triangles));
-  if (!loaded.ok()) return loaded.status();
-  if (loaded->LightCount() > 1) {
-    return absl::UnimplementedError(absl::StrFormat(
-        "%s: lights: %d lights; the service bakes one light per job so far: bake the scene "
-        "locally (`pdsm bake`), or submit a scene per light",
-        label, loaded->LightCount()));
+namespace {
+
+// Within `limits`: the pixels and samples of one light's bake. `label` names the light.
+absl::Status CheckLightLimits(const BakeSettings& bake, const std::string& label,
+                              const AdmissionLimits& limits) {
+  const int64_t pixels = int64_t{bake.width} * bake.height;
+  if (pixels > limits.max_job_pixels) {
+    return absl::ResourceExhaustedError(
+        absl::StrFormat("%s: bake.resolution: %dx%d is %d pixels, above this coordinator's "
+                        "limit of %d",
+                        label, bake.width, bake.height, pixels, limits.max_job_pixels));
   }
-  if (limits != nullptr) {
-    int64_t triangles = 0;
-    for (const TriangleMesh& m : loaded->meshes) triangles += m.indices.size() / 3;
-    const int64_t pixels = int64_t{loaded->bake.width} * loaded->bake.height;
-    if (pixels > limits->max_job_pixels) {
-      return absl::ResourceExhaustedError(absl::StrFormat(
-          "%s: bake.resolution: %dx%d is %d pixels, above this coordinator's limit of %d", label,
-          loaded->bake.width, loaded->bake.height, pixels, limits->max_job_pixels));
-    }
-    const int tile = std::max(1, loaded->bake.tile_size);
-    const int64_t tiles = ((int64_t{loaded->bake.width} + tile - 1) / tile) *
-                          ((int64_t{loaded->bake.height} + tile - 1) / tile);
-    if (tiles > limits->max_job_tiles) {
-      return absl::ResourceExhaustedError(absl::StrFormat(
-          "%s: bake.tileSize: %d makes %d tiles of the %dx%d PDSM, above this coordinator's "
-          "limit of %d (a larger tileSize)",
-          label, loaded->bake.tile_size, tiles, loaded->bake.width, loaded->bake.height,
-          limits->max_job_tiles));
-    }
-    if (loaded->bake.samples > limits->max_samples) {
-      return absl::ResourceExhaustedError(
-          absl::StrFormat("%s: bake.samples: %d is above this coordinator's limit of %d", label,
-                          loaded->bake.samples, limits->max_samples));
-    }
-    if (triangles > limits->max_triangles) {
-      return absl::ResourceExhaustedError(
-          absl::StrFormat("%s: meshes: %d triangles, above this coordinator's limit of %d", label,
-                          triangles, limits->max_triangles));
-    }
+  if (bake.samples > limits.max_samples) {
+    return absl::ResourceExhaustedError(
+        absl::StrFormat("%s: bake.samples: %d is above this coordinator's limit of %d", label,
+                        bake.samples, limits.max_samples));
   }
-  return PlanBake(*loaded);
+  return absl::OkStatus();
 }
 
-absl::StatusOr<JobRecord> NewJobRecord(const pdsm::v1::SubmitBakeRequest& request,
-                                       const BakePlan& plan, int64_t now_unix_ms) {
-  JobRecord record;
-  record.job_id = RandomHex(8);
-  record.idempotency_key = request.idempotency_key();
-  record.scene_name = request.scene().name();
-  record.state = pdsm::v1::QUEUED;
-  record.priority = request.priority();
-  record.tiles_total = static_cast<int>(plan.tiles.size());
-  record.samples_total = int64_t{plan.header.samples} * record.tiles_total;
-  record.created_unix_ms = record.updated_unix_ms = now_unix_ms;
-  record.width = plan.geometry().width;
-  record.height = plan.geometry().height;
-  record.samples = plan.header.samples;
-  if (!request.scene().SerializeToString(&record.scene)) {
-    return absl::InternalError("cannot serialize the scene");
-  }
-  return record;
+int64_t TileCount(const BakeSettings& bake) {
+  const int tile = std::max(1, bake.tile_size);
+  return ((int64_t{bake.width} + tile - 1) / tile) * ((int64_t{bake.height} + tile - 1) / tile);
 }
 
-absl::StatusOr<pdsm::v1::BakeParams> JobBakeParams(const std::string& serialized_scene,
-                                                   const std::string& label) {
+// The scene's lights and bake, without its meshes (skipped by length: they may be large
+// inline arrays).
+absl::StatusOr<pdsm::v1::Scene> ReadSceneLights(const std::string& serialized_scene,
+                                                const std::string& label) {
   using google::protobuf::internal::WireFormatLite;
-  // Only Scene.light (3), Scene.bake (4) and Scene.lights (5) are parsed; the meshes (which
-  // may be large inline arrays) are skipped by length.
+  // Only Scene.light (3), Scene.bake (4) and Scene.lights (5) are parsed.
   constexpr int kLightField = 3, kBakeField = 4, kLightsField = 5;
   google::protobuf::io::CodedInputStream in(
       reinterpret_cast<const uint8_t*>(serialized_scene.data()),
@@ -132,7 +90,112 @@ absl::StatusOr<pdsm::v1::BakeParams> JobBakeParams(const std::string& serialized
     in.PopLimit(limit);
   }
   if (!in.ConsumedEntireMessage()) return corrupt;
-  return EffectiveBakeParams(scene, label);
+  return scene;
+}
+
+}  // namespace
+
+absl::StatusOr<std::vector<BakePlan>> PlanJobLights(const pdsm::v1::Scene& scene,
+                                                    const std::string& label,
+                                                    const CoordinatorAssets& assets,
+                                                    const AdmissionLimits* limits) {
+  // Asset triangles are counted as they decode, to stop early on a huge scene; the final
+  // check counts every mesh (inline ones too) once.
+  int64_t asset_triangles = 0;
+  absl::StatusOr<Scene> loaded =
+      SceneFromProto(scene, label, /*base_dir=*/"",
+                     assets.Resolver(limits ? limits->max_triangles : 0, &asset_triangles));
+  if (!loaded.ok()) return loaded.status();
+  const size_t count = loaded->LightCount();
+  if (limits != nullptr) {
+    int64_t triangles = 0;
+    for (const TriangleMesh& m : loaded->meshes) triangles += m.indices.size() / 3;
+    // Checked before anything is planned: a 1 KB request must not make the coordinator plan
+    // millions of tiles (8192^2 at tile size 1 took 87 s and 5 GB).
+    int64_t tiles = 0;
+    for (size_t i = 0; i < count; ++i) {
+      const SceneLight light = LightOf(*loaded, i);
+      const std::string light_label =
+          count == 1 ? label : absl::StrFormat("%s: lights[%d] \"%s\"", label, i, light.name);
+      if (absl::Status s = CheckLightLimits(light.bake, light_label, *limits); !s.ok()) return s;
+      tiles += TileCount(light.bake);
+      if (tiles > limits->max_job_tiles) {
+        return absl::ResourceExhaustedError(absl::StrFormat(
+            "%s: bake.tileSize: %d makes %d tiles%s, above this coordinator's limit of %d (a "
+            "larger tileSize%s)",
+            light_label, light.bake.tile_size, tiles,
+            count == 1 ? absl::StrFormat(" of the %dx%d PDSM", light.bake.width, light.bake.height)
+                       : std::string(" with the lights before it"),
+            limits->max_job_tiles, count == 1 ? "" : ", or fewer lights per job"));
+      }
+    }
+    if (triangles > limits->max_triangles) {
+      return absl::ResourceExhaustedError(
+          absl::StrFormat("%s: meshes: %d triangles, above this coordinator's limit of %d", label,
+                          triangles, limits->max_triangles));
+    }
+  }
+  std::vector<BakePlan> plans;
+  plans.reserve(count);
+  for (size_t i = 0; i < count; ++i) {
+    // A one-light scene is planned as it stands (its light may have no name).
+    const Scene one = count == 1 ? *std::move(loaded) : ForLight(*loaded, i);
+    absl::StatusOr<BakePlan> plan = PlanBake(one);
+    if (!plan.ok()) return plan.status();
+    plans.push_back(*std::move(plan));
+  }
+  return plans;
+}
+absl::StatusOr<JobRecord> NewJobRecord(const pdsm::v1::SubmitBakeRequest& request,
+                                       const std::vector<BakePlan>& plans, int64_t now_unix_ms) {
+  JobRecord record;
+  record.job_id = RandomHex(8);
+  record.idempotency_key = request.idempotency_key();
+  record.scene_name = request.scene().name();
+  record.state = pdsm::v1::QUEUED;
+  record.priority = request.priority();
+  for (const BakePlan& plan : plans) {
+    const int tiles = static_cast<int>(plan.tiles.size());
+    record.tiles_total += tiles;
+    record.samples_total += int64_t{plan.header.samples} * tiles;
+  }
+  record.created_unix_ms = record.updated_unix_ms = now_unix_ms;
+  record.width = plans.at(0).geometry().width;
+  record.height = plans.at(0).geometry().height;
+  record.samples = plans.at(0).header.samples;
+  if (!request.scene().SerializeToString(&record.scene)) {
+    return absl::InternalError("cannot serialize the scene");
+  }
+  return record;
+}
+
+absl::StatusOr<pdsm::v1::BakeParams> JobBakeParams(const std::string& serialized_scene,
+                                                   const std::string& label) {
+  absl::StatusOr<pdsm::v1::Scene> scene = ReadSceneLights(serialized_scene, label);
+  if (!scene.ok()) return scene.status();
+  return EffectiveBakeParams(*scene, label);
+}
+
+absl::StatusOr<std::vector<JobLightSize>> JobLightSizes(const std::string& serialized_scene,
+                                                        const std::string& label) {
+  absl::StatusOr<pdsm::v1::Scene> scene = ReadSceneLights(serialized_scene, label);
+  if (!scene.ok()) return scene.status();
+  std::vector<JobLightSize> sizes;
+  const int count = std::max(1, scene->lights_size());
+  for (int i = 0; i < count; ++i) {
+    absl::StatusOr<pdsm::v1::BakeParams> bake = EffectiveBakeParams(*scene, label, i);
+    if (!bake.ok()) return bake.status();
+    JobLightSize size;
+    size.name = scene->lights_size() > 0 ? scene->lights(i).name() : scene->light().name();
+    size.width = static_cast<int>(bake->resolution(0));
+    size.height = static_cast<int>(bake->resolution(1));
+    size.samples = static_cast<int>(bake->samples());
+    const int tile = std::max<int>(1, static_cast<int>(bake->tile_size()));
+    size.tiles = ((size.width + tile - 1) / tile) * ((size.height + tile - 1) / tile);
+    size.bake = *std::move(bake);
+    sizes.push_back(std::move(size));
+  }
+  return sizes;
 }
 
 std::string RandomHex(int bytes) {

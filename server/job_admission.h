@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/bake/bake_plan.h"
@@ -30,23 +31,38 @@ struct AdmissionLimits {
 // characters, no spaces) or the priority (within [-1000, 1000]).
 absl::Status CheckSubmitRequest(const pdsm::v1::SubmitBakeRequest& request);
 
-// Loads and plans `scene` (meshes from `assets`); `label` prefixes errors. `limits` null:
-// none are checked.
-absl::StatusOr<BakePlan> PlanJobScene(const pdsm::v1::Scene& scene, const std::string& label,
-                                      const CoordinatorAssets& assets,
-                                      const AdmissionLimits* limits);
+// Loads `scene` (meshes from `assets`) and plans each of its lights as the local bake does
+// (the scene baking that light alone), in scene order; `label` prefixes errors. `limits`
+// null: none are checked; else each light within them, and the tiles of all the lights
+// together within max_job_tiles (the job store's unit).
+absl::StatusOr<std::vector<BakePlan>> PlanJobLights(const pdsm::v1::Scene& scene,
+                                                    const std::string& label,
+                                                    const CoordinatorAssets& assets,
+                                                    const AdmissionLimits* limits);
 
-// The record of a new job: a fresh random id, QUEUED, sizes from the plan, the scene
-// serialized.
+// The record of a new job: a fresh random id, QUEUED, its tiles and samples summed over the
+// lights (`plans`, one per light in scene order; width, height and samples the first's), the
+// scene serialized.
 absl::StatusOr<JobRecord> NewJobRecord(const pdsm::v1::SubmitBakeRequest& request,
-                                       const BakePlan& plan, int64_t now_unix_ms);
+                                       const std::vector<BakePlan>& plans, int64_t now_unix_ms);
 
 // The effective bake settings (EffectiveBakeParams, core/scene/scene_loader.h) of a job's
-// stored scene, read from its serialized bytes without parsing the meshes. DATA_LOSS when the
-// bytes are not a scene; INVALID_ARGUMENT (prefixed with `label`) for bake fields the loader
-// refuses.
+// stored scene (of its first light), read from its serialized bytes without parsing the
+// meshes. DATA_LOSS when the bytes are not a scene; INVALID_ARGUMENT (prefixed with `label`)
+// for bake fields the loader refuses.
 absl::StatusOr<pdsm::v1::BakeParams> JobBakeParams(const std::string& serialized_scene,
                                                    const std::string& label);
+
+// Each light of a job's stored scene, in scene order, as its plan sizes it, from the same
+// partial read as JobBakeParams (no meshes, no planning) and with its errors.
+struct JobLightSize {
+  std::string name;  // "" for the light of a one-light scene that has none
+  int width = 0, height = 0, samples = 0;
+  int tiles = 0;              // of its tile grid
+  pdsm::v1::BakeParams bake;  // its effective bake settings (EffectiveBakeParams)
+};
+absl::StatusOr<std::vector<JobLightSize>> JobLightSizes(const std::string& serialized_scene,
+                                                        const std::string& label);
 
 // `bytes` random bytes in lowercase hex (std::random_device).
 std::string RandomHex(int bytes);

@@ -261,14 +261,16 @@ grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>* JobsService::FetchPdsm(
   return new FetchReactor(coordinator_->PdsmPath(request->job_id()));
 }
 
-grpc::ServerUnaryReactor* JobsService::ListFinishedTiles(grpc::CallbackServerContext* context,
-                                                         const pdsm::v1::GetJobRequest* request,
-                                                         pdsm::v1::FinishedTiles* response) {
+grpc::ServerUnaryReactor* JobsService::ListFinishedTiles(
+    grpc::CallbackServerContext* context, const pdsm::v1::ListFinishedTilesRequest* request,
+    pdsm::v1::FinishedTiles* response) {
   if (grpc::Status s = auth_->Check(context, Audience::kClient); !s.ok()) {
     return Answer(context, s);
   }
   if (absl::Status s = CheckJobId(request->job_id()); !s.ok()) return Answer(context, s);
-  absl::StatusOr<std::vector<int>> tiles = coordinator_->FinishedTiles(request->job_id());
+  if (absl::Status s = CheckLightName(request->light()); !s.ok()) return Answer(context, s);
+  absl::StatusOr<std::vector<int>> tiles =
+      coordinator_->FinishedTiles(request->job_id(), request->light());
   if (!tiles.ok()) return Answer(context, tiles.status());
   response->mutable_tile_indices()->Assign(tiles->begin(), tiles->end());
   return Answer(context, grpc::Status::OK);
@@ -280,6 +282,7 @@ grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>* JobsService::FetchTile(
     return new RefusedStream<grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>>(s);
   }
   absl::Status valid = CheckJobId(request->job_id());
+  if (valid.ok()) valid = CheckLightName(request->light());
   if (valid.ok() && request->tile_index() < 0) {
     valid = absl::InvalidArgumentError(
         absl::StrCat("tile_index: must be >= 0 (got ", request->tile_index(), ")"));
@@ -287,7 +290,8 @@ grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>* JobsService::FetchTile(
   if (!valid.ok()) {
     return new RefusedStream<grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>>(ToGrpcStatus(valid));
   }
-  return new FetchReactor(coordinator_->FinishedTilePath(request->job_id(), request->tile_index()));
+  return new FetchReactor(
+      coordinator_->FinishedTilePath(request->job_id(), request->light(), request->tile_index()));
 }
 
 grpc::ServerUnaryReactor* JobsService::QueryAttenuation(
@@ -297,6 +301,7 @@ grpc::ServerUnaryReactor* JobsService::QueryAttenuation(
     return Answer(context, s);
   }
   if (absl::Status s = CheckJobId(request->job_id()); !s.ok()) return Answer(context, s);
+  if (absl::Status s = CheckLightName(request->light()); !s.ok()) return Answer(context, s);
   if (request->points_size() > kMaxQueryPoints) {
     return Answer(context, absl::ResourceExhaustedError(
                                absl::StrCat("points: at most ", kMaxQueryPoints, " per call")));
@@ -311,9 +316,11 @@ grpc::ServerUnaryReactor* JobsService::QueryAttenuation(
     }
     points.emplace_back(p.x(), p.y(), p.z());
   }
-  absl::StatusOr<std::vector<double>> values = coordinator_->Query(request->job_id(), points);
-  if (!values.ok()) return Answer(context, values.status());
-  response->mutable_attenuation()->Assign(values->begin(), values->end());
+  absl::StatusOr<QueryAnswer> answer =
+      coordinator_->Query(request->job_id(), request->light(), points);
+  if (!answer.ok()) return Answer(context, answer.status());
+  response->mutable_attenuation()->Assign(answer->attenuation.begin(), answer->attenuation.end());
+  response->mutable_lights()->Assign(answer->lights.begin(), answer->lights.end());
   return Answer(context, grpc::Status::OK);
 }
 

@@ -45,7 +45,7 @@ class JobsService final : public pdsm::v1::PdsmJobs::CallbackService {
   grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>* FetchPdsm(
       grpc::CallbackServerContext* context, const pdsm::v1::GetJobRequest* request) override;
   grpc::ServerUnaryReactor* ListFinishedTiles(grpc::CallbackServerContext* context,
-                                              const pdsm::v1::GetJobRequest* request,
+                                              const pdsm::v1::ListFinishedTilesRequest* request,
                                               pdsm::v1::FinishedTiles* response) override;
   grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>* FetchTile(
       grpc::CallbackServerContext* context, const pdsm::v1::FetchTileRequest* request) override;

@@ -5,26 +5,30 @@
 
 namespace pdsm {
 
-absl::StatusOr<std::vector<double>> QueryCache::Query(const std::string& job_id,
-                                                      const std::string& pdsm_path,
-                                                      const std::vector<glm::dvec3>& points_world) {
-  std::shared_ptr<const PdsmImage> image;
+absl::StatusOr<QueryAnswer> QueryCache::Query(const std::string& job_id,
+                                              const std::string& pdsm_path, std::string_view light,
+                                              const std::vector<glm::dvec3>& points_world) {
+  std::shared_ptr<const Lights> lights;
   {
     absl::MutexLock lock(&mu_);
-    if (job_id_ == job_id) image = image_;
+    if (job_id_ == job_id && light_ == light) lights = lights_;
   }
-  if (!image) {
-    absl::StatusOr<PdsmImage> read = ReadPdsm(pdsm_path);
+  if (!lights) {
+    absl::StatusOr<Lights> read = ReadPdsmLights(pdsm_path, light);
     if (!read.ok()) return read.status();
-    image = std::make_shared<const PdsmImage>(*std::move(read));
+    lights = std::make_shared<const Lights>(*std::move(read));
     absl::MutexLock lock(&mu_);
     job_id_ = job_id;
-    image_ = image;
+    light_ = std::string(light);
+    lights_ = lights;
   }
-  std::vector<double> out;
-  out.reserve(points_world.size());
-  for (const glm::dvec3& p : points_world) out.push_back(QueryAttenuation(*image, p));
-  return out;
+  QueryAnswer answer;
+  for (const PdsmImage& image : *lights) answer.lights.push_back(image.header.light_name);
+  answer.attenuation.reserve(points_world.size() * lights->size());
+  for (const glm::dvec3& p : points_world) {
+    for (const PdsmImage& image : *lights) answer.attenuation.push_back(QueryAttenuation(image, p));
+  }
+  return answer;
 }
 
 }  // namespace pdsm

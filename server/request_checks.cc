@@ -19,6 +19,21 @@ absl::Status CheckJobId(absl::string_view id) {
   return absl::OkStatus();
 }
 
+absl::Status CheckLightName(absl::string_view name) {
+  constexpr size_t kMaxLightNameBytes = 64;
+  if (name.size() > kMaxLightNameBytes) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("light: at most ", kMaxLightNameBytes, " characters (got ", name.size(), ")"));
+  }
+  for (const char c : name) {
+    if (!absl::ascii_isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-' && c != '.') {
+      return absl::InvalidArgumentError(
+          "light: only letters, digits, '_', '-' and '.' are allowed");
+    }
+  }
+  return absl::OkStatus();
+}
+
 absl::Status CheckWorkerId(absl::string_view id) {
   if (id.empty() || id.size() > kMaxWorkerIdBytes) {
     return absl::InvalidArgumentError(absl::StrCat("worker_id: must have 1 to ", kMaxWorkerIdBytes,

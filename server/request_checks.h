@@ -23,6 +23,10 @@ inline constexpr size_t kMaxReasonBytes = 4096;
 // [0-9A-Za-z_-] (the coordinator's ids are 16 hex digits). The message does not repeat it.
 absl::Status CheckJobId(absl::string_view id);
 
+// INVALID_ARGUMENT "light: ..." unless `name` is empty or what a scene's light name may be
+// (docs/scene_format.md): 1 to 64 characters of [A-Za-z0-9_.-]. The message does not repeat it.
+absl::Status CheckLightName(absl::string_view name);
+
 // INVALID_ARGUMENT "worker_id: ..." unless `id` has 1 to kMaxWorkerIdBytes printable ASCII
 // characters (pdsm-worker sends host-pid-suffix): it is logged and counted as given.
 absl::Status CheckWorkerId(absl::string_view id);

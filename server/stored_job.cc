@@ -1,5 +1,6 @@
 #include "server/stored_job.h"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 
@@ -42,36 +43,71 @@ std::string JobPaths::Tile(int tile_index) const {
   return (std::filesystem::path(tiles) / absl::StrCat(tile_index, ".tile")).string();
 }
 
+// One light's engine job's output: its calls go to the job with the light they are for. It
+// holds the job: the engine may call it after the coordinator has let the job go.
+class StoredJob::Light final : public JobOutput {
+ public:
+  Light(std::shared_ptr<StoredJob> job, const JobLight* light)
+      : job_(std::move(job)), light_(light) {}
+  void Started() override { job_->Started(); }
+  absl::Status StoreTile(const PdsmTile& tile) override { return job_->StoreTile(*light_, tile); }
+  absl::Status Finish() override { return job_->LightFinished(); }
+  void Ended(JobEnd end, const absl::Status& status, const JobProgress& progress) override {
+    job_->LightEnded(*light_, end, status, progress);
+  }
+
+ private:
+  const std::shared_ptr<StoredJob> job_;
+  const JobLight* const light_;  // of *job_
+};
+
 StoredJob::StoredJob(JobStore* store, const std::string& data_dir, JobRecord record,
-                     pdsm::v1::Scene scene, std::shared_ptr<const BakePlan> plan,
-                     std::function<void(const std::string&)> on_ended, FileSystem* fs)
+                     pdsm::v1::Scene scene, std::vector<std::shared_ptr<const BakePlan>> plans,
+                     std::function<void(const std::string&)> on_ended,
+                     std::function<void(const absl::Status&)> end_lights, FileSystem* fs)
     : store_(store),
       record_(std::move(record)),
       scene_(std::move(scene)),
-      plan_(std::move(plan)),
-      fingerprint_(PlanFingerprint(*plan_)),
+      lights_(MakeJobLights(record_.job_id, std::move(plans))),
       paths_(data_dir, record_.job_id),
       on_ended_(std::move(on_ended)),
-      fs_(fs) {}
+      end_lights_(std::move(end_lights)),
+      fs_(fs),
+      light_ends_(lights_.size()) {}
 
-std::vector<int> StoredJob::FinishedTiles() const {
+StoredJob::~StoredJob() = default;
+
+std::optional<JobProgress> StoredJob::LightEndProgress(int light) const {
+  absl::MutexLock lock(&mu_);
+  return light_ends_.at(light);
+}
+
+std::shared_ptr<JobOutput> StoredJob::LightOutput(int light) {
+  return std::make_shared<Light>(shared_from_this(), &lights_.at(light));
+}
+
+std::vector<int> StoredJob::FinishedTiles(int light) const {
+  const JobLight& l = lights_.at(light);
   std::vector<int> done;
   std::error_code ec;
-  for (const TileRect& rect : plan_->tiles) {
-    if (std::filesystem::exists(paths_.Tile(rect.index), ec)) done.push_back(rect.index);
+  for (const TileRect& rect : l.plan->tiles) {
+    if (std::filesystem::exists(paths_.Tile(l.tile_offset + rect.index), ec)) {
+      done.push_back(rect.index);
+    }
   }
   return done;
 }
 
 void StoredJob::Started() {
+  if (started_.exchange(true)) return;  // the first light's first task
   if (absl::Status s = store_->SetState(record_.job_id, pdsm::v1::RUNNING, "", UnixNowMs());
       !s.ok()) {
     spdlog::error("job {}: cannot record RUNNING: {}", record_.job_id, std::string(s.message()));
   }
 }
 
-absl::Status StoredJob::StoreTile(const PdsmTile& tile) {
-  const int index = plan_->TileIndexAt(tile.x0, tile.y0);
+absl::Status StoredJob::StoreTile(const JobLight& light, const PdsmTile& tile) {
+  const int index = light.tile_offset + light.plan->TileIndexAt(tile.x0, tile.y0);
   std::error_code ec;
   std::filesystem::create_directories(paths_.tiles, ec);
   if (absl::Status s = WriteTileFile(paths_.Tile(index), tile, fs_); !s.ok()) return s;
@@ -83,16 +119,44 @@ absl::Status StoredJob::StoreTile(const PdsmTile& tile) {
   return absl::OkStatus();
 }
 
-absl::Status StoredJob::Finish() {
+absl::Status StoredJob::LightFinished() {
+  {
+    absl::MutexLock lock(&mu_);
+    if (++lights_finished_ < static_cast<int>(lights_.size())) return absl::OkStatus();
+  }
+  return WriteFile();
+}
+
+absl::Status StoredJob::WriteFile() {
   std::error_code ec;
   std::filesystem::create_directories(paths_.dir, ec);
-  absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
-      PdsmWriter::Create(paths_.pdsm, plan_->header, fs_);
+  const auto write_light = [&](const JobLight& light, PdsmWriter* writer) -> absl::Status {
+    for (const TileRect& rect : light.plan->tiles) {
+      absl::StatusOr<PdsmTile> tile = ReadTileFile(paths_.Tile(light.tile_offset + rect.index));
+      if (!tile.ok()) return tile.status();
+      if (absl::Status s = writer->WriteTile(*tile); !s.ok()) return s;
+    }
+    return writer->Finish();
+  };
+  if (lights_.size() == 1) {
+    absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
+        PdsmWriter::Create(paths_.pdsm, lights_.front().plan->header, fs_);
+    if (!writer.ok()) return writer.status();
+    return write_light(lights_.front(), writer->get());
+  }
+  // As the local bake writes it (worker/local_bake.cc): the same parts, the same window.
+  int max_width = 1, max_height = 1;
+  for (const JobLight& light : lights_) {
+    max_width = std::max(max_width, light.plan->geometry().width);
+    max_height = std::max(max_height, light.plan->geometry().height);
+  }
+  absl::StatusOr<std::unique_ptr<PdsmLightsWriter>> writer = PdsmLightsWriter::Create(
+      paths_.pdsm, static_cast<int>(lights_.size()), max_width, max_height, fs_);
   if (!writer.ok()) return writer.status();
-  for (const TileRect& rect : plan_->tiles) {
-    absl::StatusOr<PdsmTile> tile = ReadTileFile(paths_.Tile(rect.index));
-    if (!tile.ok()) return tile.status();
-    if (absl::Status s = (*writer)->WriteTile(*tile); !s.ok()) return s;
+  for (const JobLight& light : lights_) {
+    absl::StatusOr<PdsmWriter*> part = (*writer)->BeginLight(light.plan->header);
+    if (!part.ok()) return part.status();
+    if (absl::Status s = write_light(light, *part); !s.ok()) return s;
   }
   return (*writer)->Finish();
 }
@@ -116,7 +180,36 @@ bool StoredJob::RecordEnd(JobEnd end, const absl::Status& status) {
   return s.ok();
 }
 
-void StoredJob::Ended(JobEnd end, const absl::Status& status, const JobProgress& progress) {
+void StoredJob::LightEnded(const JobLight& light, JobEnd end, const absl::Status& status,
+                           const JobProgress& progress) {
+  bool first_failure = false, last = false;
+  std::pair<JobEnd, absl::Status> job_end{JobEnd::kSucceeded, absl::OkStatus()};
+  int tiles_total = 0;
+  {
+    absl::MutexLock lock(&mu_);
+    light_ends_.at(light.index) = progress;
+    tiles_total_ += progress.tiles_total;
+    if (end != JobEnd::kSucceeded && !first_failure_) {
+      // The job's error names the light when there are several.
+      first_failure_.emplace(
+          end, lights_.size() == 1
+                   ? status
+                   : absl::Status(status.code(),
+                                  absl::StrCat("light \"", light.name, "\": ", status.message())));
+      first_failure = true;
+    }
+    last = ++lights_ended_ == static_cast<int>(lights_.size());
+    if (first_failure_) job_end = *first_failure_;
+    tiles_total = tiles_total_;
+  }
+  // The other lights cannot make the job succeed now: end them (each comes back here).
+  if (first_failure && end == JobEnd::kFailed && end_lights_ && lights_.size() > 1) {
+    end_lights_(job_end.second);
+  }
+  if (last) Ended(job_end.first, job_end.second, tiles_total);
+}
+
+void StoredJob::Ended(JobEnd end, const absl::Status& status, int tiles_total) {
   const bool recorded = RecordEnd(end, status);
   const std::string& id = record_.job_id;
   std::error_code ec;
@@ -126,7 +219,7 @@ void StoredJob::Ended(JobEnd end, const absl::Status& status, const JobProgress&
       if (on_ended_) on_ended_(id);
       return;
     }
-    spdlog::info("job {}: succeeded, {} tiles, PDSM {}", id, progress.tiles_total, paths_.pdsm);
+    spdlog::info("job {}: succeeded, {} tiles, PDSM {}", id, tiles_total, paths_.pdsm);
   } else if (end == JobEnd::kFailed) {
     spdlog::error("job {}: failed: {}", id, std::string(status.message()));
   } else {

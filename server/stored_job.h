@@ -1,10 +1,15 @@
-// A coordinator's job while it runs, and where its results go (a JobOutput,
-// core/pipeline/bake_engine.h). Under DATA_DIR/jobs/<id>/:
-//   tiles/<index>.tile  each finished tile (core/pipeline/tile_file.h), durable once its row
-//                       is in the job store (MarkTileDone), so a restart resumes the job with
-//                       only its missing tiles;
-//   pdsm.exr            the PDSM, written from the tile files when every tile is stored.
+// A coordinator's job while it runs, and where its results go: one JobOutput
+// (core/pipeline/bake_engine.h) per light of the job (server/job_lights.h), each its light's
+// engine job's. Under DATA_DIR/jobs/<id>/:
+//   tiles/<index>.tile  each finished tile (core/pipeline/tile_file.h) by its index among the
+//                       job's tiles, durable once its row is in the job store (MarkTileDone),
+//                       so a restart resumes the job with only its missing tiles;
+//   pdsm.exr            the PDSM, written from the tile files when every light's tiles are
+//                       stored: for one light the single-part file, for several the multipart
+//                       file the local bake writes (PdsmLightsWriter), byte for byte.
 // The job's states (RUNNING, SUCCEEDED, FAILED, CANCELLED) go to the job store as they come.
+// The job ends when every light's engine job has ended: SUCCEEDED when all succeeded, else
+// as the first that did not (a light that fails ends the others through `end_lights`).
 //
 // Thread-safe: the engine calls the JobOutput methods from its executor, the coordinator the
 // accessors from its gRPC threads.
@@ -14,13 +19,18 @@
 #include <atomic>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "absl/base/thread_annotations.h"
+#include "absl/synchronization/mutex.h"
 #include "core/bake/bake_plan.h"
 #include "core/pipeline/bake_engine.h"
 #include "core/util/file_system.h"
 #include "pdsm/v1/scene.pb.h"
+#include "server/job_lights.h"
 #include "server/job_store.h"
 
 namespace pdsm {
@@ -34,45 +44,74 @@ struct JobPaths {
   std::string Tile(int tile_index) const;
 };
 
-class StoredJob final : public JobOutput {
+class StoredJob : public std::enable_shared_from_this<StoredJob> {
  public:
-  // `store` outlives this. `on_ended(job_id)` runs at the end of Ended(). `fs`: where tile
-  // files and the PDSM are written (null: the real file system).
+  // Made with std::make_shared (LightOutput). `store` outlives this. `plans`: one per light, in
+  // scene order. `on_ended(job_id)` runs at the end of the job's end. `end_lights(status)` ends the
+  // engine jobs of the job's other lights (kFailed with `status`) when one light failed; it is
+  // called without any lock of this held. `fs`: where tile files and the PDSM are written (null:
+  // the real file system).
   StoredJob(JobStore* store, const std::string& data_dir, JobRecord record, pdsm::v1::Scene scene,
-            std::shared_ptr<const BakePlan> plan, std::function<void(const std::string&)> on_ended,
+            std::vector<std::shared_ptr<const BakePlan>> plans,
+            std::function<void(const std::string&)> on_ended,
+            std::function<void(const absl::Status&)> end_lights = nullptr,
             FileSystem* fs = nullptr);
+  ~StoredJob();
 
   const JobRecord& record() const { return record_; }  // as it was when the job was activated
   const pdsm::v1::Scene& scene() const { return scene_; }
-  const std::shared_ptr<const BakePlan>& plan() const { return plan_; }
-  const std::string& fingerprint() const { return fingerprint_; }
+  const std::vector<JobLight>& lights() const { return lights_; }
+  // The first light's plan fingerprint (GetJobScene's; each task carries its own light's).
+  const std::string& fingerprint() const { return lights_.front().fingerprint; }
   const JobPaths& paths() const { return paths_; }
   bool ended() const { return ended_; }
 
-  // The tiles whose files are complete (written under a temporary name, then renamed),
-  // ascending.
-  std::vector<int> FinishedTiles() const;
+  // Where light `light`'s engine job stores its results; it holds this job. REQUIRES: this
+  // is owned by a shared_ptr, light < lights().size().
+  std::shared_ptr<JobOutput> LightOutput(int light);
 
-  // Writes the job's end state to the store now, without waiting for Ended(): a cancel's
-  // answer then already says CANCELLED. Ended() writes it again (the same values). False (and
-  // logged) when the store refused it.
+  // Light `light`'s progress as its engine job ended; nullopt while it runs.
+  std::optional<JobProgress> LightEndProgress(int light) const;
+
+  // Light `light`'s tiles (its own indices) whose files are complete (written under a
+  // temporary name, then renamed), ascending.
+  std::vector<int> FinishedTiles(int light) const;
+
+  // Writes the job's end state to the store now, without waiting for the end of every light: a
+  // cancel's answer then already says CANCELLED. The end writes it again (the same values).
+  // False (and logged) when the store refused it.
   bool RecordEnd(JobEnd end, const absl::Status& status);
 
-  void Started() override;
-  absl::Status StoreTile(const PdsmTile& tile) override;
-  absl::Status Finish() override;
-  void Ended(JobEnd end, const absl::Status& status, const JobProgress& progress) override;
-
  private:
+  class Light;  // the JobOutput of one light
+  void Started();
+  absl::Status StoreTile(const JobLight& light, const PdsmTile& tile);
+  // The light's every tile is stored; the last light to get here writes the file.
+  absl::Status LightFinished();
+  absl::Status WriteFile();
+  void LightEnded(const JobLight& light, JobEnd end, const absl::Status& status,
+                  const JobProgress& progress);
+  // Once, when the last light has ended.
+  void Ended(JobEnd end, const absl::Status& status, int tiles_total);
+
   JobStore* const store_;
   const JobRecord record_;
   const pdsm::v1::Scene scene_;
-  const std::shared_ptr<const BakePlan> plan_;
-  const std::string fingerprint_;
+  const std::vector<JobLight> lights_;
   const JobPaths paths_;
   const std::function<void(const std::string&)> on_ended_;
+  const std::function<void(const absl::Status&)> end_lights_;
   FileSystem* const fs_;
+  std::atomic<bool> started_{false};
   std::atomic<bool> ended_{false};  // set by RecordEnd: tiles finishing later are not recorded
+
+  mutable absl::Mutex mu_;
+  std::vector<std::optional<JobProgress>> light_ends_ ABSL_GUARDED_BY(mu_);  // by light
+  int lights_finished_ ABSL_GUARDED_BY(mu_) = 0;
+  int lights_ended_ ABSL_GUARDED_BY(mu_) = 0;
+  int tiles_total_ ABSL_GUARDED_BY(mu_) = 0;  // of the lights ended so far
+  // The first light's end that was not kSucceeded.
+  std::optional<std::pair<JobEnd, absl::Status>> first_failure_ ABSL_GUARDED_BY(mu_);
 };
 
 }  // namespace pdsm

@@ -54,9 +54,10 @@ class StoredJobTest : public ::testing::Test {
     ASSERT_TRUE(store_->CreateJob(record, nullptr).ok());
     record_ = record;
   }
-  std::unique_ptr<StoredJob> Job(FileSystem* fs) {
-    return std::make_unique<StoredJob>(store_.get(), dir_.path().string(), record_,
-                                       pdsm::v1::Scene(), plan_, nullptr, fs);
+  std::shared_ptr<StoredJob> Job(FileSystem* fs) {
+    return std::make_shared<StoredJob>(
+        store_.get(), dir_.path().string(), record_, pdsm::v1::Scene(),
+        std::vector<std::shared_ptr<const BakePlan>>{plan_}, nullptr, nullptr, fs);
   }
 
   TempDir dir_;
@@ -68,9 +69,9 @@ class StoredJobTest : public ::testing::Test {
 TEST_F(StoredJobTest, TileFileIsWholeOrAsBefore) {
   const JobPaths paths(dir_.path().string(), record_.job_id);
   std::filesystem::create_directories(paths.tiles);
-  ASSERT_TRUE(Job(nullptr)->StoreTile(Tile(*plan_, 1, 0.25f)).ok());
+  ASSERT_TRUE(Job(nullptr)->LightOutput(0)->StoreTile(Tile(*plan_, 1, 0.25f)).ok());
   testing::ExpectWriteFailuresLeaveTargetIntact(paths.Tile(1), paths.tiles, [&](FileSystem* fs) {
-    return Job(fs)->StoreTile(Tile(*plan_, 1, 0.75f));
+    return Job(fs)->LightOutput(0)->StoreTile(Tile(*plan_, 1, 0.75f));
   });
   absl::StatusOr<std::vector<int>> done = store_->DoneTiles(record_.job_id);
   ASSERT_TRUE(done.ok());
@@ -80,28 +81,28 @@ TEST_F(StoredJobTest, TileFileIsWholeOrAsBefore) {
 TEST_F(StoredJobTest, PdsmIsWholeOrAsBefore) {
   const JobPaths paths(dir_.path().string(), record_.job_id);
   for (const TileRect& r : plan_->tiles) {
-    ASSERT_TRUE(Job(nullptr)->StoreTile(Tile(*plan_, r.index, 0.5f)).ok());
+    ASSERT_TRUE(Job(nullptr)->LightOutput(0)->StoreTile(Tile(*plan_, r.index, 0.5f)).ok());
   }
   testing::WriteText(paths.pdsm, "a PDSM of an earlier run");
-  testing::ExpectWriteFailuresLeaveTargetIntact(paths.pdsm, paths.dir,
-                                                [&](FileSystem* fs) { return Job(fs)->Finish(); });
+  testing::ExpectWriteFailuresLeaveTargetIntact(
+      paths.pdsm, paths.dir, [&](FileSystem* fs) { return Job(fs)->LightOutput(0)->Finish(); });
 }
 
 TEST_F(StoredJobTest, EndStatesReachTheStoreAndTheTilesGo) {
   const JobPaths paths(dir_.path().string(), record_.job_id);
-  std::unique_ptr<StoredJob> job = Job(nullptr);
-  job->Started();
+  std::shared_ptr<StoredJob> job = Job(nullptr);
+  job->LightOutput(0)->Started();
   EXPECT_EQ(store_->GetJob(record_.job_id)->state, pdsm::v1::RUNNING);
-  ASSERT_TRUE(job->StoreTile(Tile(*plan_, 0, 1.0f)).ok());
-  EXPECT_EQ(job->FinishedTiles(), std::vector<int>{0});
-  job->Ended(JobEnd::kFailed, absl::InternalError("gl broke"), JobProgress{});
+  ASSERT_TRUE(job->LightOutput(0)->StoreTile(Tile(*plan_, 0, 1.0f)).ok());
+  EXPECT_EQ(job->FinishedTiles(0), std::vector<int>{0});
+  job->LightOutput(0)->Ended(JobEnd::kFailed, absl::InternalError("gl broke"), JobProgress{});
   absl::StatusOr<JobRecord> record = store_->GetJob(record_.job_id);
   EXPECT_EQ(record->state, pdsm::v1::FAILED);
   EXPECT_EQ(record->error, "gl broke");
   EXPECT_FALSE(std::filesystem::exists(paths.tiles));
   EXPECT_TRUE(job->ended());
   // A tile finishing after the end is not recorded as done.
-  ASSERT_TRUE(job->StoreTile(Tile(*plan_, 1, 1.0f)).ok());
+  ASSERT_TRUE(job->LightOutput(0)->StoreTile(Tile(*plan_, 1, 1.0f)).ok());
   EXPECT_EQ(*store_->DoneTiles(record_.job_id), std::vector<int>{0});
 }
 

@@ -11,6 +11,7 @@
 #include "absl/strings/str_cat.h"
 #include "core/assets/mesh_asset.h"
 #include "core/bake/plan_fingerprint.h"
+#include "core/scene/scene.h"
 #include "core/scene/scene_loader.h"
 #include "core/util/backoff.h"
 #include "core/util/work_queue.h"
@@ -94,19 +95,20 @@ absl::Status RemoteWorker::Run(const std::atomic<bool>& stop) {
 // ---- Job contexts ----------------------------------------------------------------------
 
 absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::Context(
-    const std::string& job_id) {
+    const std::string& job_id, const std::string& light) {
   absl::MutexLock lock(&jobs_mu_);
-  auto it = jobs_.find(job_id);
+  const std::pair<std::string, std::string> key(job_id, light);
+  auto it = jobs_.find(key);
   if (it != jobs_.end()) return it->second;
-  absl::StatusOr<std::shared_ptr<const JobContext>> context = LoadContext(job_id);
+  absl::StatusOr<std::shared_ptr<const JobContext>> context = LoadContext(job_id, light);
   if (!context.ok()) return context.status();
   if (jobs_.size() >= kCachedJobs) jobs_.erase(jobs_.begin());  // threads keep their copies
-  jobs_[job_id] = *context;
+  jobs_[key] = *context;
   return context;
 }
 
-absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::LoadContext(
-    const std::string& job_id) {
+absl::StatusOr<std::shared_ptr<const Scene>> RemoteWorker::JobScene(const std::string& job_id) {
+  if (scene_ && scene_job_ == job_id) return scene_;
   absl::StatusOr<pdsm::v1::GetJobSceneResponse> scene = client_->JobScene(job_id);
   if (!scene.ok()) return scene.status();
   const MeshAssetResolver resolver =
@@ -124,14 +126,41 @@ absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::Lo
   absl::StatusOr<Scene> loaded =
       SceneFromProto(scene->scene(), absl::StrCat("job ", job_id), "", resolver);
   if (!loaded.ok()) return loaded.status();
-  auto context = std::make_shared<JobContext>();
-  absl::StatusOr<BakePlan> plan = PlanBake(*loaded);
+  auto shared = std::make_shared<const Scene>(*std::move(loaded));
+  // Kept for the job's other lights only: a one-light job's is planned once.
+  if (shared->LightCount() > 1) {
+    scene_ = shared;
+    scene_job_ = job_id;
+  }
+  return shared;
+}
+
+absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::LoadContext(
+    const std::string& job_id, const std::string& light) {
+  absl::StatusOr<std::shared_ptr<const Scene>> scene = JobScene(job_id);
+  if (!scene.ok()) return scene.status();
+  // The light as the coordinator planned it: the scene as it stands for its only light, else
+  // the scene baking the named one.
+  absl::StatusOr<BakePlan> plan;
+  if (light.empty() && (*scene)->LightCount() == 1) {
+    plan = PlanBake(**scene);
+  } else {
+    const int index = light.empty() ? -1 : FindLight(**scene, light);
+    if (index < 0) {
+      return absl::InvalidArgumentError(absl::StrCat("job ", job_id, ": the task's light \"", light,
+                                                     "\" is not one of the scene's ",
+                                                     (*scene)->LightCount(), " lights"));
+    }
+    plan = PlanBake(ForLight(**scene, index));
+  }
   if (!plan.ok()) return plan.status();
+  auto context = std::make_shared<JobContext>();
   context->plan = *std::move(plan);
   // Compared with each task's (ThreadLoop): a mismatch makes the job incompatible here.
   context->fingerprint = PlanFingerprint(context->plan) + options_.test_fingerprint_salt;
   context->groups = std::make_unique<GroupCache>(context->plan);
-  spdlog::info("job {}: planned, {} tiles, {} samples", job_id, context->plan.tiles.size(),
+  spdlog::info("job {}{}: planned, {} tiles, {} samples", job_id,
+               light.empty() ? "" : absl::StrCat(" light ", light), context->plan.tiles.size(),
                context->plan.samples.size());
   return std::shared_ptr<const JobContext>(std::move(context));
 }
@@ -168,7 +197,7 @@ void RemoteWorker::KeepLeases(const std::atomic<bool>& stop) {
 // ---- Tasks -----------------------------------------------------------------------------
 
 void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
-  std::string runner_job;
+  std::pair<std::string, std::string> runner_job;  // (job id, light) of `runner`
   std::shared_ptr<const JobContext> context;
   std::unique_ptr<TaskRunner> runner;
   const auto stopping = [&] { return Stopping(stop); };
@@ -215,10 +244,12 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
       leases_.erase(task.lease_id());
     };
 
-    if (runner_job != task.job_id()) {
+    const std::pair<std::string, std::string> task_job(task.job_id(), task.light());
+    if (runner_job != task_job) {
       runner.reset();
-      runner_job.clear();
-      absl::StatusOr<std::shared_ptr<const JobContext>> loaded = Context(task.job_id());
+      runner_job = {};
+      absl::StatusOr<std::shared_ptr<const JobContext>> loaded =
+          Context(task.job_id(), task.light());
       if (!loaded.ok()) {
         forget_lease();
         fail(loaded.status(), TaskFailure::kFailed);
@@ -245,7 +276,7 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
         continue;
       }
       runner = *std::move(created);
-      runner_job = task.job_id();
+      runner_job = task_job;
     }
 
     // The runner checks the group and its tiles against the plan (INVALID_ARGUMENT).

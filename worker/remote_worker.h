@@ -10,12 +10,14 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "absl/base/thread_annotations.h"
 #include "absl/status/status.h"
 #include "absl/synchronization/mutex.h"
 #include "core/assets/asset_store.h"
 #include "core/bake/bake_plan.h"
+#include "core/scene/scene.h"
 #include "worker/coordinator_client.h"
 #include "worker/group_cache.h"
 #include "worker/worker_metrics.h"
@@ -69,8 +71,14 @@ class RemoteWorker {
   // thread.
   bool StopIfPermanent(const absl::Status& status);
   bool Stopping(const std::atomic<bool>& stop) const { return stop || fatal_stop_; }
-  absl::StatusOr<std::shared_ptr<const JobContext>> Context(const std::string& job_id);
-  absl::StatusOr<std::shared_ptr<const JobContext>> LoadContext(const std::string& job_id)
+  // The plan of the job's light `light` (Task.light: "" for a one-light job), planned here on
+  // first use from the job's scene (fetched once per job: JobScene).
+  absl::StatusOr<std::shared_ptr<const JobContext>> Context(const std::string& job_id,
+                                                            const std::string& light);
+  absl::StatusOr<std::shared_ptr<const JobContext>> LoadContext(const std::string& job_id,
+                                                                const std::string& light)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(jobs_mu_);
+  absl::StatusOr<std::shared_ptr<const Scene>> JobScene(const std::string& job_id)
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(jobs_mu_);
 
   CoordinatorClient* client_;
@@ -78,7 +86,12 @@ class RemoteWorker {
   std::unique_ptr<AssetStore> assets_;
 
   absl::Mutex jobs_mu_;  // held while a job's context loads: one download per job
-  std::map<std::string, std::shared_ptr<const JobContext>> jobs_ ABSL_GUARDED_BY(jobs_mu_);
+  // By (job id, light name).
+  std::map<std::pair<std::string, std::string>, std::shared_ptr<const JobContext>> jobs_
+      ABSL_GUARDED_BY(jobs_mu_);
+  // The scene of the job planned last (its lights are planned one by one as tasks come).
+  std::string scene_job_ ABSL_GUARDED_BY(jobs_mu_);
+  std::shared_ptr<const Scene> scene_ ABSL_GUARDED_BY(jobs_mu_);
 
   WorkerMetrics metrics_;
   std::atomic<bool> fatal_stop_{false};

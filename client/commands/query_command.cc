@@ -2,7 +2,8 @@
 // PTS.csv`: attenuation at world points, one output line each: "x,y,z,attenuation" (nan
 // outside the PDSM frustum); a file of several lights gives one column per light in file
 // (scene) order, "x,y,z,A_1,...,A_n", or the one light `--light NAME` names. The remote form
-// evaluates on the coordinator with the same code.
+// evaluates on the coordinator with the same code, and prints the same columns.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -46,10 +47,25 @@ absl::Status QueryLocal(const QueryFlags& flags, const std::vector<QueryPoint>& 
 absl::Status QueryRemote(const QueryFlags& flags, const std::vector<QueryPoint>& points) {
   absl::StatusOr<ServiceConnection> c = Connect(flags.service);
   if (!c.ok()) return c.status();
-  for (size_t begin = 0; begin < points.size(); begin += kPointsPerCall) {
-    const size_t end = std::min(points.size(), begin + kPointsPerCall);
+  // The job's lights size the batches: each answer stays under a client's 4 MiB (8 bytes a
+  // value, one value per light).
+  size_t lights = 1;
+  if (flags.light.empty()) {
+    pdsm::v1::GetJobRequest request;
+    request.set_job_id(flags.job_id);
+    pdsm::v1::Job job;
+    if (grpc::Status s = c->stub->GetJob(c->Call().get(), request, &job); !s.ok()) {
+      return CallError("job " + flags.job_id, s, flags.service.server);
+    }
+    lights = std::max<size_t>(1, job.lights_size());
+  }
+  const size_t per_call = std::max<size_t>(1, kPointsPerCall / lights);
+  std::vector<double> attenuation;
+  for (size_t begin = 0; begin < points.size(); begin += per_call) {
+    const size_t end = std::min(points.size(), begin + per_call);
     pdsm::v1::QueryAttenuationRequest request;
     request.set_job_id(flags.job_id);
+    request.set_light(flags.light);
     for (size_t i = begin; i < end; ++i) {
       pdsm::v1::QueryPoint* p = request.add_points();
       p->set_x(points[i].world.x);
@@ -62,11 +78,17 @@ absl::Status QueryRemote(const QueryFlags& flags, const std::vector<QueryPoint>&
         !s.ok()) {
       return CallError("querying job " + flags.job_id, s, flags.service.server);
     }
-    if (static_cast<size_t>(response.attenuation_size()) != end - begin) {
-      return absl::DataLossError("the coordinator answered a different number of points");
+    // An older coordinator names no lights: one value per point.
+    const size_t columns = std::max(1, response.lights_size());
+    if (static_cast<size_t>(response.attenuation_size()) != (end - begin) * columns) {
+      return absl::DataLossError("the coordinator answered a different number of values");
     }
+    attenuation.resize(columns);
     for (size_t i = begin; i < end; ++i) {
-      PrintAttenuationLine(points[i], response.attenuation(i - begin));
+      for (size_t l = 0; l < columns; ++l) {
+        attenuation[l] = response.attenuation(static_cast<int>((i - begin) * columns + l));
+      }
+      PrintAttenuationLine(points[i], attenuation);
     }
   }
   return absl::OkStatus();
@@ -79,10 +101,6 @@ int RunQuery(const QueryFlags& flags) {
   }
   if (!flags.job_id.empty() && flags.service.server.empty()) {
     return ReportError(absl::InvalidArgumentError("--job needs --server ADDR"));
-  }
-  if (!flags.job_id.empty() && !flags.light.empty()) {
-    // A job bakes one light (the service's several-light jobs are still to come).
-    return ReportError(absl::InvalidArgumentError("--light: only with a PDSM file, not --job"));
   }
   absl::StatusOr<std::vector<QueryPoint>> points = ReadPointsCsv(flags.points_path);
   if (!points.ok()) return ReportError(points.status());

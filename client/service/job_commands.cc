@@ -41,8 +41,18 @@ void PrintJob(const pdsm::v1::Job& job) {
               job.scene_name().c_str(), pdsm::v1::JobState_Name(job.state()).c_str(),
               100 * job.progress(), job.tiles_done(), job.tiles_total());
   if (job.eta_seconds() > 0) std::printf(", ETA %.0fs", job.eta_seconds());
-  std::printf("\n  %dx%d, %d samples, priority %d, submitted %s\n", job.width(), job.height(),
-              job.samples(), job.priority(), LocalTime(job.created_unix_ms()).c_str());
+  if (job.lights_size() > 1) {
+    std::printf("\n  %d lights, priority %d, submitted %s\n", job.lights_size(), job.priority(),
+                LocalTime(job.created_unix_ms()).c_str());
+    for (const pdsm::v1::LightProgress& light : job.lights()) {
+      std::printf("  light %s: %dx%d, %d samples, %.1f%% (%d/%d tiles)\n", light.name().c_str(),
+                  light.width(), light.height(), light.samples(), 100 * light.progress(),
+                  light.tiles_done(), light.tiles_total());
+    }
+  } else {
+    std::printf("\n  %dx%d, %d samples, priority %d, submitted %s\n", job.width(), job.height(),
+                job.samples(), job.priority(), LocalTime(job.created_unix_ms()).c_str());
+  }
   if (!job.error().empty()) std::printf("  error: %s\n", job.error().c_str());
   if (job.pdsm_bytes() > 0)
     std::printf("  PDSM: %llu bytes\n", static_cast<unsigned long long>(job.pdsm_bytes()));

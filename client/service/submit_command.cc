@@ -111,13 +111,6 @@ int RunSubmit(const SubmitFlags& flags) {
   absl::StatusOr<Scene> local =
       SceneFromProto(*scene, flags.scene_path, /*base_dir=*/"", from_blobs);
   if (!local.ok()) return ReportError(local.status());
-  if (local->LightCount() > 1) {
-    // What the coordinator would answer (UNIMPLEMENTED), said before anything is uploaded.
-    return ReportError(absl::InvalidArgumentError(
-        absl::StrCat(flags.scene_path, ": lights: ", local->LightCount(),
-                     " lights; the service bakes one light per job so far: bake the scene locally "
-                     "(`pdsm bake`), or submit a scene per light")));
-  }
 
   absl::StatusOr<ServiceConnection> connection = Connect(flags.service);
   if (!connection.ok()) return ReportError(connection.status());
@@ -139,9 +132,15 @@ int RunSubmit(const SubmitFlags& flags) {
   if (!status.ok()) {
     return ReportError(CallError("submitting " + flags.scene_path, status, flags.service.server));
   }
-  std::fprintf(stderr, "submitted \"%s\": job %s, %dx%d, %d samples, %d tiles, %s\n",
-               job.scene_name().c_str(), job.job_id().c_str(), job.width(), job.height(),
-               job.samples(), job.tiles_total(), pdsm::v1::JobState_Name(job.state()).c_str());
+  if (job.lights_size() > 1) {
+    std::fprintf(stderr, "submitted \"%s\": job %s, %d lights, %d tiles, %s\n",
+                 job.scene_name().c_str(), job.job_id().c_str(), job.lights_size(),
+                 job.tiles_total(), pdsm::v1::JobState_Name(job.state()).c_str());
+  } else {
+    std::fprintf(stderr, "submitted \"%s\": job %s, %dx%d, %d samples, %d tiles, %s\n",
+                 job.scene_name().c_str(), job.job_id().c_str(), job.width(), job.height(),
+                 job.samples(), job.tiles_total(), pdsm::v1::JobState_Name(job.state()).c_str());
+  }
   std::printf("%s\n", job.job_id().c_str());
   return kExitOk;
 }

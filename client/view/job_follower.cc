@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 #include "client/view/pdsm_source.h"
 #include "core/bake/plan_fingerprint.h"
 #include "core/pipeline/tile_file.h"
@@ -27,7 +28,34 @@ absl::StatusOr<pdsm::v1::Job> FetchJob(const ServiceFlags& service, const std::s
   return job;
 }
 
-absl::StatusOr<Scene> LoadJobScene(const std::string& scene_path, const pdsm::v1::Job& job) {
+absl::StatusOr<const pdsm::v1::LightProgress*> FindJobLight(const pdsm::v1::Job& job,
+                                                            const std::string& light) {
+  if (job.lights_size() == 0 && light.empty()) return nullptr;
+  if (light.empty() && job.lights_size() == 1) return &job.lights(0);
+  std::vector<std::string> names;
+  for (const pdsm::v1::LightProgress& l : job.lights()) {
+    if (!light.empty() && l.name() == light) return &l;
+    names.push_back(l.name());
+  }
+  const std::string listed = absl::StrCat("\"", absl::StrJoin(names, "\", \""), "\"");
+  if (light.empty()) {
+    return absl::InvalidArgumentError(absl::StrCat("--job ", job.job_id(), " bakes ",
+                                                   job.lights_size(), " lights (", listed,
+                                                   "): choose one with --light NAME"));
+  }
+  return absl::InvalidArgumentError(absl::StrCat("--job ", job.job_id(), " has no light \"", light,
+                                                 "\" (its lights: ", listed, ")"));
+}
+
+absl::StatusOr<Scene> LoadJobScene(const std::string& scene_path, const pdsm::v1::Job& job,
+                                   const std::string& light) {
+  absl::StatusOr<const pdsm::v1::LightProgress*> found = FindJobLight(job, light);
+  if (!found.ok()) return found.status();
+  // Several lights: the light's own settings, laid over every light of the file (overrides
+  // replace lights' own fields); the caller keeps that light only.
+  if (job.lights_size() > 1 && (*found)->has_bake()) {
+    return LoadSceneFile(scene_path, (*found)->bake());
+  }
   if (!job.has_bake()) {
     spdlog::warn(
         "job {}: the coordinator does not report its bake settings (an older build): planning "
@@ -39,14 +67,18 @@ absl::StatusOr<Scene> LoadJobScene(const std::string& scene_path, const pdsm::v1
 }
 
 absl::Status CheckPlanMatchesJob(const BakePlan& plan, const pdsm::v1::Job& job,
-                                 const std::string& scene_path) {
-  if (job.plan_fingerprint().empty()) return absl::OkStatus();
+                                 const std::string& light, const std::string& scene_path) {
+  absl::StatusOr<const pdsm::v1::LightProgress*> found = FindJobLight(job, light);
+  if (!found.ok()) return found.status();
+  const std::string& theirs =
+      *found != nullptr ? (*found)->plan_fingerprint() : job.plan_fingerprint();
+  if (theirs.empty()) return absl::OkStatus();
   const std::string ours = PlanFingerprint(plan);
-  if (ours == job.plan_fingerprint()) return absl::OkStatus();
+  if (ours == theirs) return absl::OkStatus();
   return absl::InvalidArgumentError(absl::StrCat(
       "--job ", job.job_id(), ": ", scene_path,
       " with the job's bake settings plans another PDSM than the job's (plan fingerprint ",
-      ours.substr(0, 12), " vs ", job.plan_fingerprint().substr(0, 12),
+      ours.substr(0, 12), " vs ", theirs.substr(0, 12),
       "): give the scene file the job was submitted from, as it was then"));
 }
 
@@ -89,16 +121,18 @@ PartialPdsm AssemblePartialPdsm(const BakePlan& plan, const std::map<int, PdsmTi
 
 absl::StatusOr<std::unique_ptr<JobFollower>> JobFollower::Create(const ServiceFlags& service,
                                                                  const std::string& job_id,
+                                                                 const std::string& light,
                                                                  const BakePlan* plan) {
   absl::StatusOr<ServiceConnection> c = Connect(service);
   if (!c.ok()) return c.status();
-  return std::unique_ptr<JobFollower>(new JobFollower(service, job_id, plan, *std::move(c)));
+  return std::unique_ptr<JobFollower>(new JobFollower(service, job_id, light, plan, *std::move(c)));
 }
 
 absl::StatusOr<std::string> JobFollower::FetchTileBytes(int tile_index) {
   auto context = connection_.Call(std::chrono::minutes(10));
   pdsm::v1::FetchTileRequest request;
   request.set_job_id(job_id_);
+  request.set_light(light_);
   request.set_tile_index(tile_index);
   std::unique_ptr<grpc::ClientReader<pdsm::v1::PdsmChunk>> reader =
       connection_.stub->FetchTile(context.get(), request);
@@ -126,11 +160,15 @@ absl::StatusOr<JobSnapshot> JobFollower::Poll() {
     return CallError("job " + job_id_, s, service_.server);
   }
   const pdsm::v1::Job& job = snapshot.job;
+  absl::StatusOr<const pdsm::v1::LightProgress*> light = FindJobLight(job, light_);
+  if (!light.ok()) return light.status();
+  const int width = *light ? (*light)->width() : job.width();
+  const int height = *light ? (*light)->height() : job.height();
+  const int samples = *light ? (*light)->samples() : job.samples();
   const PdsmGeometry& g = plan_->header.geometry;
-  if (job.width() != g.width || job.height() != g.height ||
-      job.samples() != plan_->header.samples) {
+  if (width != g.width || height != g.height || samples != plan_->header.samples) {
     return absl::InvalidArgumentError(absl::StrCat(
-        "--job ", job_id_, ": the job bakes ", job.width(), "x", job.height(), " x ", job.samples(),
+        "--job ", job_id_, ": the job bakes ", width, "x", height, " x ", samples,
         " samples, the scene file plans ", g.width, "x", g.height, " x ", plan_->header.samples,
         " with the job's settings (give the scene file the job was submitted from)"));
   }
@@ -147,7 +185,7 @@ absl::StatusOr<JobSnapshot> JobFollower::Poll() {
                                  .string();
     absl::StatusOr<uint64_t> received = DownloadPdsm(connection_, service_, job_id_, temp);
     absl::StatusOr<PdsmImage> image =
-        received.ok() ? LoadPdsmFile(temp) : absl::StatusOr<PdsmImage>(received.status());
+        received.ok() ? LoadPdsmFile(temp, light_) : absl::StatusOr<PdsmImage>(received.status());
     std::error_code ec;
     std::filesystem::remove(temp, ec);
     if (!image.ok()) return image.status();
@@ -156,8 +194,11 @@ absl::StatusOr<JobSnapshot> JobFollower::Poll() {
     return snapshot;
   }
   pdsm::v1::FinishedTiles finished;
+  pdsm::v1::ListFinishedTilesRequest list;
+  list.set_job_id(job_id_);
+  list.set_light(light_);
   auto list_context = connection_.Call();
-  grpc::Status s = connection_.stub->ListFinishedTiles(list_context.get(), request, &finished);
+  grpc::Status s = connection_.stub->ListFinishedTiles(list_context.get(), list, &finished);
   // The job may end between the two calls; the next poll fetches the file.
   if (s.error_code() == grpc::StatusCode::FAILED_PRECONDITION) return snapshot;
   if (!s.ok()) return CallError("listing the tiles of job " + job_id_, s, service_.server);

@@ -37,15 +37,25 @@ struct PartialPdsm {
 // The job now (GetJob).
 absl::StatusOr<pdsm::v1::Job> FetchJob(const ServiceFlags& service, const std::string& job_id);
 
-// The scene file loaded with the job's bake settings (Job.bake), so that planning it gives the
-// job's plan whatever was overridden at submit. A job from a coordinator that reports no
-// settings (an older build) loads with the file's own, with a warning.
-absl::StatusOr<Scene> LoadJobScene(const std::string& scene_path, const pdsm::v1::Job& job);
+// The job's light named `light` (Job.lights), as the viewer selects it: "" is the job's only
+// light. Null for a job that lists no lights (an older coordinator) when `light` is "";
+// INVALID_ARGUMENT naming the job's lights when there is no such light or "" for several.
+absl::StatusOr<const pdsm::v1::LightProgress*> FindJobLight(const pdsm::v1::Job& job,
+                                                            const std::string& light);
 
-// INVALID_ARGUMENT when the job reports a plan fingerprint and `plan` has another one: the
-// scene file is not the one the job was submitted from (or was edited since).
+// The scene file loaded with the bake settings of the job's light `light` (its
+// LightProgress.bake, or Job.bake for a one-light job), so that planning that light gives the
+// job's plan of it whatever was overridden at submit; the caller then takes that light
+// (OneLight). A job from a coordinator that reports no settings (an older build) loads with
+// the file's own, with a warning.
+absl::StatusOr<Scene> LoadJobScene(const std::string& scene_path, const pdsm::v1::Job& job,
+                                   const std::string& light);
+
+// INVALID_ARGUMENT when the job reports a plan fingerprint for the light and `plan` has
+// another one: the scene file is not the one the job was submitted from (or was edited
+// since).
 absl::Status CheckPlanMatchesJob(const BakePlan& plan, const pdsm::v1::Job& job,
-                                 const std::string& scene_path);
+                                 const std::string& light, const std::string& scene_path);
 
 // The plan's header with every tile pending.
 PartialPdsm EmptyPartialPdsm(const BakePlan& plan);
@@ -59,10 +69,12 @@ struct JobSnapshot {
 
 class JobFollower {
  public:
-  // REQUIRES: `plan` is the plan of the job's scene (see above). Connects; INVALID_ARGUMENT
-  // when the job's size or samples differ from the plan's.
+  // REQUIRES: `plan` is the plan of the job's light `light` ("" for a one-light job; see
+  // above). Connects; Poll answers INVALID_ARGUMENT when the light's size or samples differ
+  // from the plan's.
   static absl::StatusOr<std::unique_ptr<JobFollower>> Create(const ServiceFlags& service,
                                                              const std::string& job_id,
+                                                             const std::string& light,
                                                              const BakePlan* plan);
 
   // One step: the job's state, and the PDSM if it gained tiles or finished. The final PDSM
@@ -78,14 +90,19 @@ class JobFollower {
   ~JobFollower();
 
  private:
-  JobFollower(const ServiceFlags& service, const std::string& job_id, const BakePlan* plan,
-              ServiceConnection connection)
-      : service_(service), job_id_(job_id), plan_(plan), connection_(std::move(connection)) {}
+  JobFollower(const ServiceFlags& service, const std::string& job_id, const std::string& light,
+              const BakePlan* plan, ServiceConnection connection)
+      : service_(service),
+        job_id_(job_id),
+        light_(light),
+        plan_(plan),
+        connection_(std::move(connection)) {}
   // One finished tile's file bytes (FetchTile).
   absl::StatusOr<std::string> FetchTileBytes(int tile_index);
 
   const ServiceFlags service_;
   const std::string job_id_;
+  const std::string light_;
   const BakePlan* plan_;
   ServiceConnection connection_;
   std::map<int, PdsmTile> tiles_;  // Poll's own state (one caller at a time)

@@ -17,9 +17,11 @@ namespace pdsm::view {
 absl::StatusOr<PdsmImage> LoadPdsmFile(const std::string& path, const std::string& light = "");
 
 // Waits for `job_id` with WatchJob, printing a progress line on stderr, then downloads its
-// PDSM (FetchPdsm) into a temporary file and reads it. FAILED_PRECONDITION when the job
-// failed or was cancelled; the coordinator's errors as `pdsm fetch` reports them.
-absl::StatusOr<PdsmImage> FetchJobPdsm(const ServiceFlags& service, const std::string& job_id);
+// PDSM (FetchPdsm) into a temporary file and reads its light `light` (as LoadPdsmFile).
+// FAILED_PRECONDITION when the job failed or was cancelled; the coordinator's errors as
+// `pdsm fetch` reports them.
+absl::StatusOr<PdsmImage> FetchJobPdsm(const ServiceFlags& service, const std::string& job_id,
+                                       const std::string& light = "");
 
 }  // namespace pdsm::view
 

@@ -44,12 +44,15 @@ absl::StatusOr<DynamicObject> MakeDynamicObject(const DynamicObjectSpec& spec, s
 absl::Status StartFromPlan(const ViewOptions& options, const pdsm::v1::Job& job, ViewScene* view) {
   absl::StatusOr<BakePlan> plan = PlanBake(view->scene);
   if (!plan.ok()) return plan.status();
-  if (absl::Status s = CheckPlanMatchesJob(*plan, job, options.scene_path); !s.ok()) return s;
+  if (absl::Status s = CheckPlanMatchesJob(*plan, job, options.light, options.scene_path);
+      !s.ok()) {
+    return s;
+  }
   view->plan = std::make_shared<const BakePlan>(*std::move(plan));
   PartialPdsm partial = EmptyPartialPdsm(*view->plan);
   if (options.headless) {
     absl::StatusOr<std::unique_ptr<JobFollower>> follower =
-        JobFollower::Create(options.service, options.job_id, view->plan.get());
+        JobFollower::Create(options.service, options.job_id, options.light, view->plan.get());
     if (!follower.ok()) return follower.status();
     absl::StatusOr<JobSnapshot> snapshot = (*follower)->Poll();
     if (!snapshot.ok()) return snapshot.status();
@@ -74,8 +77,9 @@ absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
     if (!fetched.ok()) return fetched.status();
     job = *std::move(fetched);
   }
-  absl::StatusOr<Scene> scene = options.job_id.empty() ? LoadSceneFile(options.scene_path)
-                                                       : LoadJobScene(options.scene_path, job);
+  absl::StatusOr<Scene> scene = options.job_id.empty()
+                                    ? LoadSceneFile(options.scene_path)
+                                    : LoadJobScene(options.scene_path, job, options.light);
   if (scene.ok()) scene = OneLight(*std::move(scene), options.light, "pdsm-view", "--light");
   if (!scene.ok()) return scene.status();
   view.scene = *std::move(scene);
@@ -83,9 +87,9 @@ absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
     // Shown while it runs: the geometry from the local plan, tiles as they finish.
     if (absl::Status s = StartFromPlan(options, job, &view); !s.ok()) return s;
   } else {
-    absl::StatusOr<PdsmImage> pdsm = options.job_id.empty()
-                                         ? LoadPdsmFile(options.pdsm_path, options.light)
-                                         : FetchJobPdsm(options.service, options.job_id);
+    absl::StatusOr<PdsmImage> pdsm =
+        options.job_id.empty() ? LoadPdsmFile(options.pdsm_path, options.light)
+                               : FetchJobPdsm(options.service, options.job_id, options.light);
     if (!pdsm.ok()) return pdsm.status();
     view.pdsm = *std::move(pdsm);
   }

@@ -204,7 +204,7 @@ absl::Status RunWindow(const ViewOptions& options, ViewScene& scene) {
   pdsm::v1::Job job;
   if (scene.plan != nullptr) {
     absl::StatusOr<std::unique_ptr<JobFollower>> f =
-        JobFollower::Create(options.service, options.job_id, scene.plan.get());
+        JobFollower::Create(options.service, options.job_id, options.light, scene.plan.get());
     if (!f.ok()) return f.status();
     follower = *std::move(f);
     follower->Start(/*interval_ms=*/300);

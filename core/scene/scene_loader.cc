@@ -122,10 +122,10 @@ absl::StatusOr<pdsm::v1::BakeParams> EffectiveBakeParams(const pdsm::v1::BakePar
 }
 
 absl::StatusOr<pdsm::v1::BakeParams> EffectiveBakeParams(const pdsm::v1::Scene& scene,
-                                                         const std::string& label) {
-  const pdsm::v1::Light& light = scene.lights_size() > 0 ? scene.lights(0) : scene.light();
-  return EffectiveBakeParams(internal::MergedBakeParams(scene.bake(), light.bake()),
-                             light.has_sun(), label);
+                                                         const std::string& label, int light) {
+  const pdsm::v1::Light& l = scene.lights_size() > 0 ? scene.lights(light) : scene.light();
+  return EffectiveBakeParams(internal::MergedBakeParams(scene.bake(), l.bake()), l.has_sun(),
+                             label);
 }
 
 std::string ResolveMeshPath(const std::string& scene_path, const std::string& mesh_path) {

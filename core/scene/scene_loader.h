@@ -39,10 +39,11 @@ absl::StatusOr<pdsm::v1::Scene> ParseSceneFile(const std::string& path,
 absl::StatusOr<pdsm::v1::BakeParams> EffectiveBakeParams(const pdsm::v1::BakeParams& bake, bool sun,
                                                          const std::string& label);
 
-// The same for the first light of `scene` (`light`, or `lights[0]`): the scene's bake with
-// that light's own bake fields laid over it, resolved for its shape. Meshes are not looked at.
+// The same for light `light` of `scene` (`light` for a one-light scene, else `lights[light]`):
+// the scene's bake with that light's own bake fields laid over it, resolved for its shape.
+// Meshes are not looked at. REQUIRES: light < max(1, lights_size()).
 absl::StatusOr<pdsm::v1::BakeParams> EffectiveBakeParams(const pdsm::v1::Scene& scene,
-                                                         const std::string& label);
+                                                         const std::string& label, int light = 0);
 
 // The file a scene's `meshes[i].path` names: an absolute `mesh_path` as is, a relative one
 // against the folder of `scene_path` (the working directory for a bare file name), normalized

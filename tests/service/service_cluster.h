@@ -355,6 +355,19 @@ inline grpc::Status HealthCheck(ServiceCluster& cluster, const std::string& serv
   return status;
 }
 
+inline bool Ended(const pdsm::v1::Job& job) {
+  return job.state() == pdsm::v1::SUCCEEDED || job.state() == pdsm::v1::FAILED ||
+         job.state() == pdsm::v1::CANCELLED;
+}
+
+// Fetches a finished job (`pdsm fetch`) and returns the file's bytes.
+inline std::string FetchBytes(ServiceCluster& cluster, const std::string& job_id) {
+  const std::string out = cluster.dir().File(job_id + ".exr");
+  CommandResult r = cluster.Pdsm("fetch " + job_id + " -o " + out);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return ReadBytes(out);
+}
+
 // The local bake of a scene, as bytes: what every distributed bake must equal.
 inline std::string LocalBakeBytes(const TempDir& dir, const std::string& scene_path) {
   const std::string out = dir.File("local.exr");

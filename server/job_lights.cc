@@ -1,0 +1,66 @@
+#include "server/job_lights.h"
+
+#include <charconv>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "core/bake/plan_fingerprint.h"
+
+namespace pdsm {
+
+std::vector<JobLight> MakeJobLights(const std::string& job_id,
+                                    std::vector<std::shared_ptr<const BakePlan>> plans) {
+  std::vector<JobLight> lights;
+  lights.reserve(plans.size());
+  const int count = static_cast<int>(plans.size());
+  int offset = 0;
+  for (int i = 0; i < count; ++i) {
+    JobLight light;
+    light.index = i;
+    light.name = plans[i]->header.light_name;
+    light.fingerprint = PlanFingerprint(*plans[i]);
+    light.plan = std::move(plans[i]);
+    light.tile_offset = offset;
+    light.engine_id = EngineJobId(job_id, i, count);
+    offset += light.tile_count();
+    lights.push_back(std::move(light));
+  }
+  return lights;
+}
+
+std::string EngineJobId(const std::string& job_id, int light, int light_count) {
+  if (light_count == 1) return job_id;
+  return absl::StrFormat("%s/%05d", job_id, light);
+}
+
+std::optional<EngineJobOf> ParseEngineJobId(std::string_view engine_id) {
+  const size_t slash = engine_id.find('/');
+  if (slash == std::string_view::npos) return EngineJobOf{std::string(engine_id), 0};
+  const std::string_view digits = engine_id.substr(slash + 1);
+  int light = -1;
+  const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), light);
+  if (error != std::errc() || end != digits.data() + digits.size() || light < 0) {
+    return std::nullopt;
+  }
+  return EngineJobOf{std::string(engine_id.substr(0, slash)), light};
+}
+
+absl::StatusOr<int> FindJobLight(const std::vector<JobLight>& lights, std::string_view name,
+                                 const std::string& job_id) {
+  if (name.empty() && lights.size() == 1) return 0;
+  std::vector<std::string> names;
+  for (const JobLight& light : lights) {
+    if (!name.empty() && light.name == name) return light.index;
+    names.push_back(light.name);
+  }
+  const std::string listed = absl::StrCat("\"", absl::StrJoin(names, "\", \""), "\"");
+  if (name.empty()) {
+    return absl::FailedPreconditionError(absl::StrFormat(
+        "job %s has %d lights (%s): name one (light)", job_id, lights.size(), listed));
+  }
+  return absl::NotFoundError(
+      absl::StrFormat("job %s has no light \"%s\"; its lights: %s", job_id, name, listed));
+}
+
+}  // namespace pdsm
