@@ -150,11 +150,11 @@ absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<in
     spec.samples_per_task = options_.samples_per_task > 0
                                 ? options_.samples_per_task
                                 : std::clamp((light.plan->header.samples + 7) / 8, 1, 64);
-    for (int tile : done_tiles) {
-      if (tile >= light.tile_offset && tile < light.tile_offset + light.tile_count()) {
-        spec.done_tiles.push_back(tile - light.tile_offset);
-      }
-    }
+    // The light's range of the done tiles (ascending: JobStore::DoneTiles), in its own indices.
+    const auto first = std::lower_bound(done_tiles.begin(), done_tiles.end(), light.tile_offset);
+    const auto last =
+        std::lower_bound(first, done_tiles.end(), light.tile_offset + light.tile_count());
+    for (auto it = first; it != last; ++it) spec.done_tiles.push_back(*it - light.tile_offset);
     spec.started = record.state == pdsm::v1::RUNNING;
     spec.output = job->LightOutput(light.index);
     if (absl::Status added = engine_.AddJob(std::move(spec)); !added.ok()) {

@@ -130,7 +130,7 @@ class Coordinator {
   // otherwise planned from the record's scene.
   // Hands the job's lights to the engine, one engine job each (server/job_lights.h).
   // `plans`: the job's plans when the caller has them (a new job); otherwise planned from the
-  // record's scene. `done_tiles`: the job's (not a light's) tiles stored already.
+  // record's scene. `done_tiles`: the job's (not a light's) tiles stored already, ascending.
   absl::Status Activate(const JobRecord& record, const std::vector<int>& done_tiles,
                         std::optional<std::vector<BakePlan>> plans);
   // Ends every light of the job still in the engine as failed with `why`.
