@@ -83,7 +83,8 @@ using GetProcAddressFn = GlProc (*)(const char* name);
   X(PFNGLFRAMEBUFFERTEXTURELAYERPROC, FramebufferTextureLayer) \
   X(PFNGLBLITFRAMEBUFFERPROC, BlitFramebuffer)                 \
   X(PFNGLDRAWARRAYSPROC, DrawArrays)                           \
-  X(PFNGLFINISHPROC, Finish)
+  X(PFNGLFINISHPROC, Finish)                                   \
+  X(PFNGLFLUSHPROC, Flush)
 
 // Plain table of function pointers; copyable, and valid only while a context made by the same
 // driver is current (GL entry points dispatch on the current context). Thread-compatible.
