@@ -29,37 +29,83 @@ TileEvents EmptyTileEvents(const TileRect& tile) {
   return out;
 }
 
-// Scan-converts every ray of one block through one sample's shadow map.
-void ScanBlock(const BakePlan& plan, const ShadowMapView& view, const BlockScan& b,
-               const glm::dvec2& sample, const TileWindows* windows, const TileRect& tile,
-               std::vector<std::vector<Event>>* pixel_events, TaskStats* stats) {
+// Depths of the shadow maps a task holds at once (16 MiB): a chunk of samples is rendered,
+// then scanned; a map larger than this is a chunk of its own.
+constexpr int64_t kScanMapTexels = int64_t{1} << 22;
+
+// A rendered shadow map of the task's current chunk of samples.
+struct ChunkMap {
+  glm::dvec2 sample;
+  std::vector<float> depth;
+  ShadowMapWindow window;
+};
+
+// Which block of the tile each pixel's ray belongs to (-1: none, the ray is all lit), so that
+// the tile is scanned pixel by pixel in row-major order and its lists written in place.
+std::vector<int> BlockOfPixel(const PreparedTile& tile) {
+  std::vector<int> block_of(static_cast<size_t>(tile.rect.width) * tile.rect.height, -1);
+  for (size_t b = 0; b < tile.blocks.size(); ++b) {
+    const TileRect& r = tile.blocks[b].rect;
+    for (int y = r.y0; y < r.y0 + r.height; ++y) {
+      for (int x = r.x0; x < r.x0 + r.width; ++x) {
+        block_of[static_cast<size_t>(y - tile.rect.y0) * tile.rect.width + (x - tile.rect.x0)] =
+            static_cast<int>(b);
+      }
+    }
+  }
+  return block_of;
+}
+
+// The tile's event lists for the chunk's samples: each pixel's ray scan-converted through
+// every map of the chunk in turn, its events normalized where they were appended. Pixel-major,
+// so each pixel's events are sorted while in cache and no list is kept per pixel.
+TileEvents ScanTile(const BakePlan& plan, const PreparedTile& tile,
+                    const std::vector<ChunkMap>& maps, size_t map_count, TaskStats* stats) {
   const PdsmGeometry& g = plan.geometry();
+  const TileRect& rect = tile.rect;
+  const std::vector<int> block_of = BlockOfPixel(tile);
+  const TileWindows* windows = tile.windows ? &*tile.windows : nullptr;
+  TileEvents out = EmptyTileEvents(rect);
+  std::vector<ShadowMapView> views;
+  for (size_t m = 0; m < map_count; ++m) {
+    views.push_back(ShadowMapView{maps[m].depth.data(), plan.lattice, maps[m].window});
+  }
   int64_t walked = 0, segments = 0;
-  for (int y = b.rect.y0; y < b.rect.y0 + b.rect.height; ++y) {
+  for (int y = rect.y0; y < rect.y0 + rect.height; ++y) {
     const double t = g.PixelCenterT(y);
-    for (int x = b.rect.x0; x < b.rect.x0 + b.rect.width; ++x) {
-      const double s = g.PixelCenterS(x);
-      const size_t p = static_cast<size_t>(y - tile.y0) * tile.width + (x - tile.x0);
-      std::vector<Event>* events = &(*pixel_events)[p];
-      if (windows == nullptr) {
-        walked +=
-            ScanConvertRay(view, RayForSample(plan, s, t, sample, b.z_begin), g.projection, events);
-        ++segments;
-        continue;
+    for (int x = rect.x0; x < rect.x0 + rect.width; ++x) {
+      const size_t p = static_cast<size_t>(y - rect.y0) * rect.width + (x - rect.x0);
+      const size_t first = out.events.size();
+      if (const int b = block_of[p]; b >= 0) {
+        const BlockScan& block = tile.blocks[b];
+        const double s = g.PixelCenterS(x);
+        for (size_t m = 0; m < map_count; ++m) {
+          const glm::dvec2& sample = maps[m].sample;
+          if (windows == nullptr) {
+            walked += ScanConvertRay(views[m], RayForSample(plan, s, t, sample, block.z_begin),
+                                     g.projection, &out.events);
+            ++segments;
+            continue;
+          }
+          // Surfaces only: each depth window is one closed piece of the ray.
+          for (const DepthWindow& w : windows->Pixel(p)) {
+            const double lo = std::max(w.lo, block.z_begin);
+            const double hi = std::min(w.hi, block.z_end);
+            if (!(lo < hi)) continue;
+            walked += ScanConvertRay(views[m], RayForSample(plan, s, t, sample, lo, hi),
+                                     g.projection, &out.events, SegmentEnd::kClose);
+            ++segments;
+          }
+        }
+        stats->events += static_cast<int64_t>(out.events.size() - first);
+        NormalizeEventsFrom(&out.events, first);
       }
-      // Surfaces only: each depth window is one closed piece of the ray.
-      for (const DepthWindow& w : windows->Pixel(p)) {
-        const double lo = std::max(w.lo, b.z_begin);
-        const double hi = std::min(w.hi, b.z_end);
-        if (!(lo < hi)) continue;
-        walked += ScanConvertRay(view, RayForSample(plan, s, t, sample, lo, hi), g.projection,
-                                 events, SegmentEnd::kClose);
-        ++segments;
-      }
+      out.offsets[p + 1] = out.events.size();
     }
   }
   stats->texels_walked += walked;
   stats->ray_segments += segments;
+  return out;
 }
 
 }  // namespace
@@ -144,67 +190,69 @@ absl::StatusOr<std::vector<TileEvents>> TaskRunner::Run(const BakeTask& task, Ta
                                                         const std::function<bool()>& cancelled) {
   if (absl::Status s = Prepare(task); !s.ok()) return s;
   std::vector<TileEvents> results;
-  std::vector<std::vector<std::vector<Event>>> pixel_events;  // per tile, per pixel
   const PreparedGroup& group = *group_;
   for (const PreparedTile& tile : group.prepared) {
     results.push_back(EmptyTileEvents(tile.rect));
-    pixel_events.emplace_back(tile.blocks.empty() ? 0 : results.back().PixelCount());
     // Counted once per tile, at the batch that starts its samples.
     if (!tile.has_casters && task.sample_begin == 0) ++stats->tiles_skipped;
   }
   if (task.sample_begin >= task.sample_end || group.empty()) return results;
 
-  std::vector<float> depth;
+  // The batch's samples in chunks whose maps fit kScanMapTexels together (one map at least):
+  // each chunk's maps are rendered, then every ray is scanned through all of them at once.
   ShadowMapCamera camera = BakeCamera(plan_);
-  for (int k = task.sample_begin; k < task.sample_end; ++k) {
-    if (cancelled && cancelled()) {
-      return absl::CancelledError(
-          absl::StrFormat("tile group %d: task cancelled", task.group_index));
+  std::vector<ChunkMap> maps;
+  bool first_chunk = true;
+  for (int k = task.sample_begin; k < task.sample_end;) {
+    size_t map_count = 0;
+    int64_t chunk_texels = 0;
+    for (; k < task.sample_end; ++k) {
+      const glm::dvec2& sample = plan_.samples.at(k);
+      const ShadowMapWindow window = GroupWindow(plan_, group, sample);
+      const int64_t texels = int64_t{window.width} * window.height;
+      if (texels > kMaxShadowMapTexels) {
+        return absl::ResourceExhaustedError(absl::StrFormat(
+            "tile group %d, sample %d: its shadow map would need %dx%d texels (limit %d): "
+            "lower shadowMapResolution or tileSize",
+            task.group_index, k, window.width, window.height, kMaxShadowMapTexels));
+      }
+      if (map_count > 0 && chunk_texels + texels > kScanMapTexels) break;
+      if (cancelled && cancelled()) {
+        return absl::CancelledError(
+            absl::StrFormat("tile group %d: task cancelled", task.group_index));
+      }
+      if (maps.size() <= map_count) maps.emplace_back();
+      ChunkMap& map = maps[map_count];
+      map.sample = sample;
+      map.window = window;
+      camera.sample = sample;
+      camera.window = window;
+      const std::vector<DrawRange> visible = VisibleClusters(plan_, group, sample, window);
+      auto render_start = std::chrono::steady_clock::now();
+      if (absl::Status s = renderer_->Render(camera, visible, &map.depth); !s.ok()) return s;
+      stats->shadow_map_seconds += SecondsSince(render_start);
+      stats->shadow_maps += 1;
+      stats->shadow_map_texels += texels;
+      for (const DrawRange& r : visible) stats->triangles_submitted += r.triangle_count;
+      chunk_texels += texels;
+      ++map_count;
     }
-    const glm::dvec2& sample = plan_.samples.at(k);
-    camera.sample = sample;
-    camera.window = GroupWindow(plan_, group, sample);
-    const int64_t texels = int64_t{camera.window.width} * camera.window.height;
-    if (texels > kMaxShadowMapTexels) {
-      return absl::ResourceExhaustedError(absl::StrFormat(
-          "tile group %d, sample %d: its shadow map would need %dx%d texels (limit %d): "
-          "lower shadowMapResolution or tileSize",
-          task.group_index, k, camera.window.width, camera.window.height, kMaxShadowMapTexels));
-    }
-    const std::vector<DrawRange> visible = VisibleClusters(plan_, group, sample, camera.window);
-    auto render_start = std::chrono::steady_clock::now();
-    if (absl::Status s = renderer_->Render(camera, visible, &depth); !s.ok()) return s;
-    stats->shadow_map_seconds += SecondsSince(render_start);
-    stats->shadow_maps += 1;
-    stats->shadow_map_texels += texels;
-    for (const DrawRange& r : visible) stats->triangles_submitted += r.triangle_count;
 
     auto scan_start = std::chrono::steady_clock::now();
-    const ShadowMapView view{depth.data(), plan_.lattice, camera.window};
     for (size_t i = 0; i < group.prepared.size(); ++i) {
       const PreparedTile& tile = group.prepared[i];
-      for (const BlockScan& b : tile.blocks) {
-        ScanBlock(plan_, view, b, sample, tile.windows ? &*tile.windows : nullptr, tile.rect,
-                  &pixel_events[i], stats);
+      if (tile.blocks.empty()) continue;  // all lit: its offsets stay zero
+      TileEvents chunk = ScanTile(plan_, tile, maps, map_count, stats);
+      if (first_chunk) {
+        results[i] = std::move(chunk);
+      } else {
+        const TileEvents parts[2] = {std::move(results[i]), std::move(chunk)};
+        results[i] = MergeTileEvents(parts);
       }
     }
     stats->scan_seconds += SecondsSince(scan_start);
+    first_chunk = false;
   }
-
-  auto sort_start = std::chrono::steady_clock::now();
-  for (size_t i = 0; i < results.size(); ++i) {
-    TileEvents& result = results[i];
-    for (size_t p = 0; p < pixel_events[i].size(); ++p) {
-      std::vector<Event>& events = pixel_events[i][p];
-      stats->events += static_cast<int64_t>(events.size());
-      NormalizeEvents(&events);
-      result.events.insert(result.events.end(), events.begin(), events.end());
-      result.offsets[p + 1] = result.events.size();
-      std::vector<Event>().swap(events);
-    }
-    // A tile without blocks keeps its all-zero offsets.
-  }
-  stats->scan_seconds += SecondsSince(sort_start);
   return results;
 }
 

@@ -33,6 +33,10 @@ struct TileEvents {
 // Sorts by depth, adds the counts of equal depths and drops zero sums, in place.
 void NormalizeEvents(std::vector<Event>* events);
 
+// The same for the events from index `first` on (one pixel's, appended after other pixels'
+// lists): those before are untouched. REQUIRES: first <= events->size().
+void NormalizeEventsFrom(std::vector<Event>* events, size_t first);
+
 // Merges normalized lists into one normalized list. The result depends only on the multiset
 // of inputs, never on their order.
 std::vector<Event> MergeEventLists(std::span<const std::span<const Event>> lists);
