@@ -45,6 +45,9 @@ EngineOptions MakeEngineOptions(const CoordinatorOptions& options, WorkQueue* po
   e.scheduler.lease_id_base = (std::stoull(RandomHex(4), nullptr, 16) << 32) | 1;
   e.executor = [pool](std::function<void()> work) { pool->Post(std::move(work)); };
   e.now_ms = SteadyNowMs;
+  e.spill_dir = options.data_dir;
+  e.event_memory_budget_bytes = options.event_memory_budget_bytes;
+  e.fs = options.fs;
   return e;
 }
 

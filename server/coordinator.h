@@ -55,7 +55,10 @@ struct CoordinatorOptions {
   // that even a one-group job is at least 8 tasks the farm's workers share.
   int samples_per_task = 0;
   int64_t lease_ms = 30'000;
-  int max_open_tiles = 64;  // bounds the memory of partial results
+  int max_open_tiles = 64;  // tiles whose partial results may be open at once
+  // Partial results (running event lists) held in memory before they move to a scratch file
+  // in data_dir (core/pipeline/event_spill.h). Changes no byte of any PDSM.
+  int64_t event_memory_budget_bytes = kDefaultEventMemoryBudget;
   int max_task_failures = 3;
   int max_worker_failures = 3;
   int assembly_threads = 1;

@@ -37,6 +37,7 @@ struct Flags {
   std::string log_level = "info";
   std::string log_format = "text";  // --log-format: kLogFormatNames
   double lease_seconds = 30;
+  int64_t event_memory_mib = kDefaultEventMemoryBudget >> 20;
   int max_message_bytes = kDefaultMaxMessageBytes;
   CoordinatorOptions options;
 };
@@ -83,6 +84,7 @@ int Run(Flags& flags, const sigset_t& signals) {
   // One named logger per process: every line says which component wrote it.
   SetUpProcessLog("coordinator", flags.log_level, flags.log_format);
   flags.options.lease_ms = static_cast<int64_t>(flags.lease_seconds * 1000);
+  flags.options.event_memory_budget_bytes = flags.event_memory_mib << 20;
   absl::StatusOr<std::string> client_token =
       OptionalToken("--client-token-file", flags.client_token_file);
   absl::StatusOr<std::string> worker_token =
@@ -227,7 +229,12 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.1, 3600.0))
       ->capture_default_str();
   app.add_option("--max-open-tiles", o.max_open_tiles,
-                 "Tiles whose partial results may be held in memory at once")
+                 "Tiles whose partial results may be open at once")
+      ->check(CLI::Range(1, 1 << 20))
+      ->capture_default_str();
+  app.add_option("--event-memory-mib", flags.event_memory_mib,
+                 "Partial results kept in memory before they move to a scratch file in the data "
+                 "dir (the PDSM does not change)")
       ->check(CLI::Range(1, 1 << 20))
       ->capture_default_str();
   app.add_option("--max-task-failures", o.max_task_failures,

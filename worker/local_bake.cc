@@ -152,6 +152,9 @@ absl::StatusOr<BakeSummary> BakePlanned(
   engine_options.scheduler.max_open_tiles = (threads + 1) * LargestGroup(*plan);
   engine_options.executor = [](std::function<void()> work) { work(); };
   engine_options.task_failure_ends_job = true;
+  engine_options.spill_dir = ParentDir(options.output_path);
+  engine_options.event_memory_budget_bytes = options.event_memory_budget_bytes;
+  engine_options.fs = options.fs;
   BakeEngine engine(std::move(engine_options));
   EngineJob job;
   job.job_id = kJobId;
@@ -208,6 +211,7 @@ absl::StatusOr<BakeSummary> BakePlanned(
   summary.tasks = progress.tasks_done;
   summary.tile_samples_total = progress.tile_samples_total;
   summary.assembly = progress.assembly;
+  summary.spilled_bytes = progress.spilled_bytes;
   for (const auto& w : workers) summary.tasks_stats.Add(w->stats());
   summary.tasks_stats.tiles_skipped += progress.tiles_without_task;
   summary.light_name = plan->header.light_name;
@@ -227,6 +231,7 @@ void AddLight(const BakeSummary& light, BakeSummary* total) {
   total->tile_samples_total += light.tile_samples_total;
   total->tasks_stats.Add(light.tasks_stats);
   total->assembly.Add(light.assembly);
+  total->spilled_bytes += light.spilled_bytes;
 }
 
 }  // namespace

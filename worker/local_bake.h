@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "core/pipeline/bake_engine.h"
 #include "core/pipeline/tile_assembly.h"
 #include "core/scene/scene.h"
 #include "core/util/file_system.h"
@@ -34,6 +35,10 @@ struct LocalBakeOptions {
   // Called from worker threads, serialized, after each task.
   std::function<void(const BakeProgress&)> on_progress;
   FileSystem* fs = nullptr;  // where the PDSM and the preview are written; null: the real one
+  // Running event lists held in memory before they move to a scratch file in the output's
+  // folder (core/pipeline/event_spill.h): the bake's memory stays flat in the samples.
+  // Changes no byte of the PDSM.
+  int64_t event_memory_budget_bytes = kDefaultEventMemoryBudget;
 };
 
 struct BakeSummary {
@@ -49,6 +54,7 @@ struct BakeSummary {
   int64_t tile_samples_total = 0;  // light samples summed over tiles (adaptive bakes: < max)
   TaskStats tasks_stats;           // summed over threads (thread-seconds)
   AssemblyStats assembly;
+  int64_t spilled_bytes = 0;  // event lists moved to the scratch file (then read back once)
   uint64_t file_bytes = 0;
   // A bake of several lights: each light's own summary, in scene order (their counts summed
   // above; no file_bytes). Empty for one light.

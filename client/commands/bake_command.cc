@@ -30,6 +30,7 @@ struct BakeFlags {
   bool no_preview = false;
   OverrideFlags overrides;
   int threads = 0, samples_per_task = 0;
+  int64_t event_memory_mib = kDefaultEventMemoryBudget >> 20;
   std::optional<double> target_error;
 };
 
@@ -67,7 +68,7 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags,
       "baked \"%s\": %s, %d tiles (%d all lit), %lld tasks\n"
       "  time %.2fs; shadow maps %.2f thread-s (%lld maps, %.1f Mtexels), "
       "scan conversion %.2f thread-s, merge+compress %.3f thread-s\n"
-      "  events %lld -> %lld merged -> %lld consolidated -> %lld vertices\n"
+      "  events %lld -> %lld merged -> %lld consolidated -> %lld vertices%s\n"
       "  scan: %lld ray segments, %.1f Mtexels walked; %lld tiles skipped (no caster)\n",
       scene.name.c_str(), what.c_str(), s.tiles, s.tiles_all_lit, static_cast<long long>(s.tasks),
       s.seconds, s.tasks_stats.shadow_map_seconds,
@@ -76,6 +77,10 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags,
       static_cast<long long>(s.assembly.merged_events),
       static_cast<long long>(s.assembly.consolidated_events),
       static_cast<long long>(s.assembly.vertices),
+      s.spilled_bytes > 0 ? absl::StrCat("; ", HumanBytes(s.spilled_bytes),
+                                         " of event lists went through a scratch file")
+                                .c_str()
+                          : "",
       static_cast<long long>(s.tasks_stats.ray_segments), s.tasks_stats.texels_walked / 1e6,
       static_cast<long long>(s.tasks_stats.tiles_skipped));
   // The limit of the design is one map per sample drawing every caster (bench/
@@ -257,6 +262,7 @@ int RunBake(const BakeFlags& flags) {
   }
   options.threads = flags.threads;
   options.samples_per_task = flags.samples_per_task;
+  options.event_memory_budget_bytes = flags.event_memory_mib << 20;
   ProgressReporter progress("bake " + scene->name);
   options.on_progress = [&progress](const BakeProgress& p) {
     progress.Update(p.tasks_done, p.tasks_total, p.seconds);
@@ -307,6 +313,10 @@ void RegisterBakeCommand(CLI::App& app, int* exit_code) {
       ->check(CLI::Range(1, 1024));
   cmd->add_option("--samples-per-task", flags->samples_per_task,
                   "Light samples per task (default: all); does not change the result")
+      ->check(CLI::Range(1, 1 << 20));
+  cmd->add_option("--event-memory-mib", flags->event_memory_mib,
+                  "Event lists kept in memory before they move to a scratch file beside OUT "
+                  "(default 16); memory stays flat in the samples, the result does not change")
       ->check(CLI::Range(1, 1 << 20));
   cmd->add_option("--preview", flags->preview_path,
                   "Camera view PNG (default: OUT with .png); the map from the light goes beside "

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <utility>
 
+#include "absl/cleanup/cleanup.h"
 #include "absl/strings/str_cat.h"
 
 namespace pdsm {
@@ -61,20 +63,35 @@ int TileCount(const JobSpec& spec) {
 }  // namespace
 
 // An open group: its current stage and, per tile of that stage, the batches merged so far
-// and (adaptive bakes) the tile's earlier stages.
+// and (adaptive bakes) the tile's earlier stages. Results merge into it under its own mutex,
+// outside the engine's; the report that brings the group's last result of a stage, or the
+// last merge still running then, completes the stage. Its bytes in memory are counted in the
+// engine's event_memory_bytes_ for as long as it lives.
 struct BakeEngine::OpenGroup {
-  int stage = 0;
-  std::map<int, StageAccumulator> tiles;
-  std::map<int, TileStageState> states;
+  OpenGroup(int stage, std::atomic<int64_t>* engine_bytes)
+      : stage(stage), engine_bytes(engine_bytes) {}
+  ~OpenGroup() { engine_bytes->fetch_sub(memory_bytes, std::memory_order_relaxed); }
+  OpenGroup(const OpenGroup&) = delete;
+  OpenGroup& operator=(const OpenGroup&) = delete;
+
+  const int stage;
+  std::atomic<int64_t>* const engine_bytes;
+  absl::Mutex mu;
+  std::map<int, StageAccumulator> tiles ABSL_GUARDED_BY(mu);
+  std::map<int, TileStageState> states ABSL_GUARDED_BY(mu);
+  int64_t memory_bytes ABSL_GUARDED_BY(mu) = 0;     // of `tiles`, in engine_bytes too
+  int merging ABSL_GUARDED_BY(mu) = 0;              // reports merging into it now
+  bool stage_complete ABSL_GUARDED_BY(mu) = false;  // the stage's last result has come
 };
 
-// A job in progress. Every field but `spec` and `ended` is guarded by BakeEngine::mu_ (the
-// annotation cannot name another object's mutex); `ended` is also read without it, to drop
-// heavy work early.
+// A job in progress. Every field but `spec`, `spill` and `ended` is guarded by
+// BakeEngine::mu_ (the annotation cannot name another object's mutex); `ended` is also read
+// without it, to drop heavy work early.
 struct BakeEngine::Job {
   EngineJob spec;
-  std::map<int, OpenGroup> groups;  // by group index, from a group's first result to its end
-  int direct_left = 0;              // tiles no caster reaches, not stored yet
+  std::unique_ptr<EventSpill> spill;   // null: lists stay in memory
+  std::map<int, OpenGroupPtr> groups;  // by group index, from a group's first result to its end
+  int direct_left = 0;                 // tiles no caster reaches, not stored yet
   JobProgress progress;
   int output_calls = 0;  // JobOutput calls in flight
   struct DeferredEnd {
@@ -120,6 +137,9 @@ absl::Status BakeEngine::AddJob(EngineJob spec) {
   p.added_ms = options_.now_ms();
   p.started = spec.started;
   job->spec = std::move(spec);
+  if (!options_.spill_dir.empty()) {
+    job->spill = std::make_unique<EventSpill>(options_.spill_dir, options_.fs);
+  }
   bool complete = false;
   {
     absl::MutexLock lock(&mu_);
@@ -150,8 +170,8 @@ void BakeEngine::StoreUnreachedTiles(const JobPtr& job, const std::vector<int>& 
     const TileRect& r = plan.tiles[t];
     TileEvents none{.tile_index = t, .x0 = r.x0, .y0 = r.y0, .width = r.width, .height = r.height};
     none.offsets.assign(none.PixelCount() + 1, 0);
-    std::vector<TileEvents> ranges;
-    for (size_t k = 0; k < StageRanges(plan.header, 0).size(); ++k) ranges.push_back(none);
+    std::vector<RangeParts> ranges;
+    for (size_t k = 0; k < StageRanges(plan.header, 0).size(); ++k) ranges.push_back({none});
     StageVerdict verdict = JudgeStage(plan.header, TileStageState{}, std::move(ranges));
     const int64_t samples = verdict.tile_samples > 0 ? verdict.tile_samples : plan.header.samples;
     if (!StoreTile(job, t, std::move(verdict))) return;
@@ -208,8 +228,9 @@ std::optional<TaskLease> BakeEngine::FindLease(uint64_t lease_id) const {
 bool BakeEngine::Report(const std::string& worker_id, uint64_t lease_id,
                         std::vector<TileEvents> events) {
   JobPtr job;
+  OpenGroupPtr group;
   int group_index = 0;
-  std::optional<OpenGroup> complete_group;
+  ResultOutcome outcome;
   std::optional<JobFailure> failure;
   {
     absl::MutexLock lock(&mu_);
@@ -223,7 +244,7 @@ bool BakeEngine::Report(const std::string& worker_id, uint64_t lease_id,
       if (failure) job = FindJob(failure->job_id);
     }
     if (!failure) {
-      const ResultOutcome outcome = scheduler_.Complete(worker_id, lease_id, now);
+      outcome = scheduler_.Complete(worker_id, lease_id, now);
       if (outcome.kind == ResultOutcome::kDropped) return false;
       job = FindJob(outcome.job_id);
       if (!job) return false;  // cannot happen: an ended job's leases are gone
@@ -236,14 +257,13 @@ bool BakeEngine::Report(const std::string& worker_id, uint64_t lease_id,
       p.samples_done += int64_t{outcome.sample_end - outcome.sample_begin} *
                         static_cast<int64_t>(outcome.tiles.size());
       group_index = outcome.group_index;
-      OpenGroup& group = job->groups[group_index];
-      for (size_t i = 0; i < outcome.tiles.size(); ++i) {
-        auto [it, added] =
-            group.tiles.try_emplace(outcome.tiles[i], job->spec.plan->header, group.stage);
-        it->second.Add(outcome.sample_begin, std::move(events[i]));
-      }
+      OpenGroupPtr& slot = job->groups[group_index];
+      if (!slot) slot = std::make_shared<OpenGroup>(0, &event_memory_bytes_);
+      group = slot;
+      absl::MutexLock group_lock(&group->mu);
+      ++group->merging;
       if (outcome.kind == ResultOutcome::kStageComplete) {
-        complete_group = std::move(group);
+        group->stage_complete = true;
         job->groups.erase(group_index);
       }
     }
@@ -253,30 +273,94 @@ bool BakeEngine::Report(const std::string& worker_id, uint64_t lease_id,
     if (job) End(job, JobEnd::kFailed, absl::AbortedError(failure->reason));
     return false;
   }
-  if (complete_group) {
-    options_.executor([this, job, group_index, g = std::move(*complete_group)]() mutable {
-      CompleteStage(job, group_index, std::move(g));
-    });
+  const absl::Status merged =
+      MergeResult(*job, *group, outcome.sample_begin, outcome.tiles, std::move(events));
+  bool complete = false;
+  {
+    absl::MutexLock group_lock(&group->mu);
+    complete = --group->merging == 0 && group->stage_complete;
+  }
+  if (!merged.ok()) {
+    End(job, JobEnd::kFailed, merged);
+  } else if (complete) {
+    options_.executor([this, job, group_index, group] { CompleteStage(job, group_index, group); });
   }
   return true;
 }
 
-void BakeEngine::CompleteStage(const JobPtr& job, int group_index, OpenGroup group) {
+absl::Status BakeEngine::MergeResult(Job& job, OpenGroup& group, int sample_begin,
+                                     const std::vector<int>& tiles,
+                                     std::vector<TileEvents> events) {
+  if (job.ended) return absl::OkStatus();  // nobody will read the lists
+  absl::MutexLock lock(&group.mu);
+  int64_t grown = 0;
+  for (size_t i = 0; i < tiles.size(); ++i) {
+    auto [it, added] = group.tiles.try_emplace(tiles[i], job.spec.plan->header, group.stage);
+    grown += it->second.Add(sample_begin, std::move(events[i]));
+  }
+  group.memory_bytes += grown;
+  const int64_t held = event_memory_bytes_.fetch_add(grown, std::memory_order_relaxed) + grown;
+  if (!job.spill || held <= options_.event_memory_budget_bytes) return absl::OkStatus();
+  // Over budget: this group's lists go to the scratch file. Its batches arrive together (a
+  // task covers the whole group), so its lists are the ones growing.
+  int64_t spilled = 0;
+  absl::Status status;
+  for (auto& [tile, accumulator] : group.tiles) {
+    const int64_t before = accumulator.MemoryBytes();
+    status = accumulator.Spill(job.spill.get());
+    if (!status.ok()) break;
+    spilled += before - accumulator.MemoryBytes();
+  }
+  group.memory_bytes -= spilled;
+  event_memory_bytes_.fetch_sub(spilled, std::memory_order_relaxed);
+  if (!status.ok()) {
+    return absl::Status(status.code(),
+                        absl::StrCat("moving event lists out of memory: ", status.message()));
+  }
+  return absl::OkStatus();
+}
+
+void BakeEngine::CompleteStage(const JobPtr& job, int group_index, const OpenGroupPtr& group) {
   if (job->ended) return;  // cancelled or failed while queued
   const PdsmHeader& header = job->spec.plan->header;
-  OpenGroup next;
-  next.stage = group.stage + 1;
+  auto next = std::make_shared<OpenGroup>(group->stage + 1, &event_memory_bytes_);
   std::vector<int> next_tiles;
-  for (auto& [tile, accumulator] : group.tiles) {
+  // The lists leave the group (no merge is left to touch it), so that storing tiles, which
+  // takes the engine's lock, never runs under the group's. The engine's count drops as each
+  // tile's lists are taken, and for the rest if this ends early.
+  std::map<int, StageAccumulator> tiles;
+  std::map<int, TileStageState> states;
+  int64_t held = 0;
+  {
+    absl::MutexLock group_lock(&group->mu);
+    tiles.swap(group->tiles);
+    states.swap(group->states);
+    held = std::exchange(group->memory_bytes, 0);
+  }
+  absl::Cleanup release_rest = [&] {
+    event_memory_bytes_.fetch_sub(held, std::memory_order_relaxed);
+  };
+  for (auto& [tile, accumulator] : tiles) {
     TileStageState state;
-    state.stage = group.stage;
-    if (auto it = group.states.find(tile); it != group.states.end()) state = std::move(it->second);
-    StageVerdict verdict = JudgeStage(header, std::move(state), accumulator.TakeRanges());
+    state.stage = group->stage;
+    if (auto it = states.find(tile); it != states.end()) state = std::move(it->second);
+    const int64_t tile_bytes = accumulator.MemoryBytes();
+    absl::StatusOr<std::vector<RangeParts>> ranges = accumulator.TakeRanges(job->spill.get());
+    held -= tile_bytes;
+    event_memory_bytes_.fetch_sub(tile_bytes, std::memory_order_relaxed);
+    if (!ranges.ok()) {
+      return End(job, JobEnd::kFailed,
+                 absl::Status(ranges.status().code(),
+                              absl::StrCat("tile ", tile, ": reading its event lists back: ",
+                                           ranges.status().message())));
+    }
+    StageVerdict verdict = JudgeStage(header, std::move(state), *std::move(ranges));
     if (verdict.done) {
       if (!StoreTile(job, tile, std::move(verdict))) return;
     } else {
       next_tiles.push_back(tile);
-      next.states[tile] = std::move(verdict.next);
+      absl::MutexLock next_lock(&next->mu);
+      next->states[tile] = std::move(verdict.next);
     }
   }
   bool complete = false, queued = true;
@@ -324,6 +408,8 @@ bool BakeEngine::StoreTile(const JobPtr& job, int tile_index, StageVerdict verdi
   p.samples_done += verdict.samples_skipped;
   p.tile_samples_total +=
       verdict.tile_samples > 0 ? verdict.tile_samples : job->spec.plan->header.samples;
+  // Every spill of a tile's lists comes before it is stored, so the last tile's count is final.
+  if (job->spill) p.spilled_bytes = job->spill->bytes_written();
   p.assembly.Add(stats);
   return true;
 }

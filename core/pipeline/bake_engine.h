@@ -38,13 +38,19 @@
 #include "core/bake/bake_plan.h"
 #include "core/events/event.h"
 #include "core/pdsm/pdsm_image.h"
+#include "core/pipeline/event_spill.h"
 #include "core/pipeline/scheduler.h"
 #include "core/pipeline/stage_rule.h"
 #include "core/pipeline/tile_assembly.h"
+#include "core/util/file_system.h"
 
 namespace pdsm {
 
 enum class JobEnd { kSucceeded, kFailed, kCancelled };
+
+// EngineOptions::event_memory_budget_bytes unless set: enough for the lists of a few tiles of
+// a deep penumbra, small next to the fixed cost of a bake process (Mesa, LLVM, the scene).
+inline constexpr int64_t kDefaultEventMemoryBudget = int64_t{16} << 20;
 
 // Where a job stands. Samples are counted over tiles (a tile of n samples counts n).
 struct JobProgress {
@@ -60,6 +66,7 @@ struct JobProgress {
   int64_t samples_at_add = 0;      // samples_done when AddJob ran (a resumed job starts > 0)
   int64_t added_ms = 0;            // now_ms() at AddJob: with the two above, this run's rate
   int64_t tile_samples_total = 0;  // samples behind the stored tiles (adaptive: < maximum)
+  int64_t spilled_bytes = 0;       // running event lists moved to the scratch file
   AssemblyStats assembly;
 };
 
@@ -95,6 +102,12 @@ struct EngineOptions {
   bool task_failure_ends_job = false;
   // Milliseconds on any monotonic scale: lease deadlines and rates. Default: a steady clock.
   std::function<int64_t()> now_ms;
+  // Running event lists (event_spill.h) held in memory, over every job, before a group's are
+  // moved to a scratch file in `spill_dir`; "" keeps them all in memory (memory then grows
+  // with the samples). Spilling changes no byte of any tile.
+  std::string spill_dir;
+  int64_t event_memory_budget_bytes = kDefaultEventMemoryBudget;
+  FileSystem* fs = nullptr;  // for the scratch files; null: FileSystem::Default()
 };
 
 // A job to run.
@@ -141,7 +154,8 @@ class BakeEngine {
   std::optional<TaskLease> FindLease(uint64_t lease_id) const;
 
   // A worker's events for its lease: one TileEvents per tile of the lease, in its order. Each
-  // is merged into its tile's running lists at once (memory does not grow with the batches).
+  // is merged into its tile's running lists at once, outside the engine's lock (under its
+  // group's), and the group's lists move to the scratch file when the memory budget is spent.
   // REQUIRES: each fits its tile (the coordinator checks a remote worker's with
   // rpc/tile_events_codec.h). False when the result was dropped (late after expiry,
   // duplicate, job ended; a result with the wrong number of tiles counts as the task's
@@ -182,7 +196,11 @@ class BakeEngine {
   using JobPtr = std::shared_ptr<Job>;
 
   struct OpenGroup;
-  void CompleteStage(const JobPtr& job, int group_index, OpenGroup group);
+  using OpenGroupPtr = std::shared_ptr<OpenGroup>;
+  // Merges a result's tiles into the group's running lists; spills them past the budget.
+  absl::Status MergeResult(Job& job, OpenGroup& group, int sample_begin,
+                           const std::vector<int>& tiles, std::vector<TileEvents> events);
+  void CompleteStage(const JobPtr& job, int group_index, const OpenGroupPtr& group);
   // False when the job ended (the store failed, or it was ended meanwhile).
   bool StoreTile(const JobPtr& job, int tile_index, StageVerdict verdict);
   // Stores the tiles no caster reaches (plan.tile_has_casters) all lit, without a task.
@@ -200,6 +218,7 @@ class BakeEngine {
 
   const EngineOptions options_;
   const int64_t started_ms_;
+  std::atomic<int64_t> event_memory_bytes_{0};  // running lists in memory, every open group
 
   mutable absl::Mutex mu_;
   absl::CondVar changed_;  // signalled when work may have become available or a job ended

@@ -12,6 +12,7 @@
 
 #include "absl/synchronization/notification.h"
 #include "core/pdsm/attenuation_function.h"
+#include "core/util/fault_injecting_file_system.h"
 #include "core/util/work_queue.h"
 #include "tests/test_support.h"
 
@@ -231,6 +232,78 @@ TEST(BakeEngine, TilesDoNotDependOnBatchesOrArrivalOrder) {
       EXPECT_EQ(results[r].at(t).offsets, results[0].at(t).offsets) << "run " << r;
     }
   }
+}
+
+TEST(BakeEngine, SpillingPastTheBudgetChangesNoTileWhateverTheThreads) {
+  // Groups of 3 tiles, 48 samples in batches of 2: with a budget of 1 byte every result
+  // spills its group's lists, so each tile is merged back from up to 24 runs. Four threads
+  // report at once (merges run outside the engine's lock) and the stage completes on the pool.
+  const auto plan = SmallPlan(6, 48, 0, 0, /*group_size=*/3);
+  std::map<int, PdsmTile> in_memory;
+  {
+    auto output = std::make_shared<RecordingOutput>();
+    BakeEngine engine(InlineOptions());
+    ASSERT_TRUE(engine.AddJob(Job(plan, output, 2)).ok());
+    RunAll(engine, *plan, 7u);
+    ASSERT_EQ(output->end(), JobEnd::kSucceeded);
+    EXPECT_EQ(output->progress().spilled_bytes, 0);
+    in_memory = output->tiles();
+  }
+  for (int round = 0; round < 3; ++round) {
+    auto output = std::make_shared<RecordingOutput>();
+    WorkQueue pool(2);
+    EngineOptions options = InlineOptions();
+    options.executor = [&pool](std::function<void()> work) { pool.Post(std::move(work)); };
+    options.spill_dir = ::testing::TempDir();
+    options.event_memory_budget_bytes = 1;
+    BakeEngine engine(std::move(options));
+    ASSERT_TRUE(engine.AddJob(Job(plan, output, 2)).ok());
+    std::vector<std::thread> workers;
+    for (int w = 0; w < 4; ++w) {
+      workers.emplace_back([&, w] {
+        const std::string id = "w" + std::to_string(w);
+        while (std::optional<TaskLease> lease = engine.Lease(id, absl::Milliseconds(200))) {
+          engine.Report(id, lease->lease_id, LeaseEvents(*plan, *lease));
+        }
+      });
+    }
+    for (std::thread& t : workers) t.join();
+    output->ended_note_.WaitForNotification();
+    pool.Wait();
+    ASSERT_EQ(output->end(), JobEnd::kSucceeded) << output->status();
+    EXPECT_GT(output->progress().spilled_bytes, 0);
+    const std::map<int, PdsmTile> tiles = output->tiles();
+    ASSERT_EQ(tiles.size(), in_memory.size());
+    for (const auto& [t, tile] : in_memory) {
+      EXPECT_EQ(tiles.at(t).vertices, tile.vertices) << "round " << round << " tile " << t;
+      EXPECT_EQ(tiles.at(t).offsets, tile.offsets) << "round " << round << " tile " << t;
+    }
+  }
+}
+
+TEST(BakeEngine, AFailedSpillFailsTheJobNamingTheScratchFile) {
+  const auto plan = SmallPlan(2, 8, 0, 0, /*group_size=*/2);
+  auto output = std::make_shared<RecordingOutput>();
+  FaultInjectingFileSystem fs;
+  fs.SetDiskFullAfter(0);
+  EngineOptions options = InlineOptions();
+  options.spill_dir = ::testing::TempDir();
+  options.event_memory_budget_bytes = 1;
+  options.fs = &fs;
+  BakeEngine engine(std::move(options));
+  ASSERT_TRUE(engine.AddJob(Job(plan, output, 2)).ok());
+  const std::optional<TaskLease> first = engine.Lease("w");
+  ASSERT_TRUE(first);
+  EXPECT_TRUE(engine.Report("w", first->lease_id, LeaseEvents(*plan, *first)))
+      << "taken, then the spill fails";
+  EXPECT_FALSE(engine.Lease("w")) << "the job ended";
+  ASSERT_EQ(output->ended(), 1);
+  EXPECT_EQ(output->end(), JobEnd::kFailed);
+  EXPECT_EQ(output->status().code(), absl::StatusCode::kResourceExhausted) << output->status();
+  EXPECT_NE(output->status().message().find("moving event lists out of memory"), std::string::npos)
+      << output->status();
+  EXPECT_NE(output->status().message().find("scratch file"), std::string::npos) << output->status();
+  EXPECT_EQ(output->finished(), 0);
 }
 
 TEST(BakeEngine, AdaptiveTileTakesStagesUntilItConverges) {

@@ -16,38 +16,83 @@ std::vector<SampleRange> StageRanges(const PdsmHeader& header, int stage) {
 StageAccumulator::StageAccumulator(const PdsmHeader& header, int stage)
     : ranges_(StageRanges(header, stage)), merged_(ranges_.size()) {}
 
-void StageAccumulator::Add(int sample_begin, TileEvents events) {
+int64_t StageAccumulator::Add(int sample_begin, TileEvents events) {
   for (size_t r = 0; r < ranges_.size(); ++r) {
     if (sample_begin < ranges_[r].begin || sample_begin >= ranges_[r].end) continue;
-    if (!merged_[r]) {
-      merged_[r] = std::move(events);
-    } else {
-      const TileEvents parts[2] = {*std::move(merged_[r]), std::move(events)};
-      merged_[r] = MergeTileEvents(parts);
+    if (shape_.PixelCount() == 0) {
+      shape_.tile_index = events.tile_index;
+      shape_.x0 = events.x0;
+      shape_.y0 = events.y0;
+      shape_.width = events.width;
+      shape_.height = events.height;
     }
-    return;
+    std::optional<TileEvents>& merged = merged_[r].merged;
+    const int64_t before = merged ? TileEventsBytes(*merged) : 0;
+    if (!merged) {
+      merged = std::move(events);
+    } else {
+      const TileEvents parts[2] = {*std::move(merged), std::move(events)};
+      merged = MergeTileEvents(parts);
+    }
+    const int64_t change = TileEventsBytes(*merged) - before;
+    memory_bytes_ += change;
+    return change;
   }
+  return 0;
 }
 
-std::vector<TileEvents> StageAccumulator::TakeRanges() {
-  std::vector<TileEvents> out;
-  out.reserve(merged_.size());
-  for (std::optional<TileEvents>& m : merged_) out.push_back(m ? *std::move(m) : TileEvents{});
-  merged_.assign(ranges_.size(), std::nullopt);
+absl::Status StageAccumulator::Spill(EventSpill* spill) {
+  std::vector<std::optional<SpilledRun>> written(merged_.size());
+  for (size_t r = 0; r < merged_.size(); ++r) {
+    const std::optional<TileEvents>& merged = merged_[r].merged;
+    if (!merged || merged->events.empty()) continue;  // nothing a run would add
+    absl::StatusOr<SpilledRun> run = spill->Write(*merged);
+    if (!run.ok()) return run.status();
+    written[r] = *run;
+  }
+  for (size_t r = 0; r < merged_.size(); ++r) {
+    if (!written[r]) continue;
+    merged_[r].runs.push_back(*written[r]);
+    memory_bytes_ -= TileEventsBytes(*merged_[r].merged);
+    merged_[r].merged.reset();
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<std::vector<RangeParts>> StageAccumulator::TakeRanges(EventSpill* spill) {
+  std::vector<RangeParts> out(merged_.size());
+  for (size_t r = 0; r < merged_.size(); ++r) {
+    Range& range = merged_[r];
+    if (range.merged) out[r].push_back(*std::move(range.merged));
+    for (const SpilledRun& run : range.runs) {
+      absl::StatusOr<TileEvents> read = spill->ReadAndRelease(run, shape_);
+      if (!read.ok()) return read.status();
+      out[r].push_back(*std::move(read));
+    }
+    if (out[r].empty()) out[r].emplace_back();  // no batch: as TakeRanges always gave
+  }
+  merged_.assign(ranges_.size(), Range{});
+  memory_bytes_ = 0;
   return out;
 }
 
 StageVerdict JudgeStage(const PdsmHeader& header, TileStageState state,
-                        std::vector<TileEvents> range_results) {
+                        std::vector<RangeParts> ranges) {
   StageVerdict verdict;
   if (!header.adaptive()) {
     verdict.done = true;
-    verdict.events = std::move(range_results);
+    verdict.events = std::move(ranges.at(0));
     return verdict;
   }
-  const std::vector<SampleRange> ranges = StageRanges(header, state.stage);
-  const int samples = ranges.back().end;
-  if (JudgeAdaptiveStage(header, ranges, std::move(range_results), &state.earlier)) {
+  // The adaptive rule compares ranges' merged lists.
+  std::vector<TileEvents> range_results;
+  range_results.reserve(ranges.size());
+  for (RangeParts& parts : ranges) {
+    range_results.push_back(parts.size() == 1 ? std::move(parts.front()) : MergeTileEvents(parts));
+  }
+  const std::vector<SampleRange> stage_ranges = StageRanges(header, state.stage);
+  const int samples = stage_ranges.back().end;
+  if (JudgeAdaptiveStage(header, stage_ranges, std::move(range_results), &state.earlier)) {
     verdict.done = true;
     verdict.events = std::move(state.earlier);
     verdict.tile_samples = samples;

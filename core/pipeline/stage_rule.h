@@ -13,9 +13,12 @@
 #include <optional>
 #include <vector>
 
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
 #include "core/bake/adaptive_sampling.h"
 #include "core/events/event.h"
 #include "core/pdsm/pdsm_image.h"
+#include "core/pipeline/event_spill.h"
 
 namespace pdsm {
 
@@ -23,23 +26,46 @@ namespace pdsm {
 // AdaptiveStageRanges for an adaptive one.
 std::vector<SampleRange> StageRanges(const PdsmHeader& header, int stage);
 
+// The events of one range of a stage for one tile: any number of parts that cover the range's
+// samples exactly once between them (MergeTileEvents makes them one).
+using RangeParts = std::vector<TileEvents>;
+
 // One tile's batches of its current stage, merged as they arrive: one merged list per range of
-// the stage, whatever the number of batches, so memory does not grow with the samples. The
-// merge is exact integer addition, so the lists do not depend on the batches or their order.
+// the stage, whatever the number of batches. The merge is exact integer addition, so the lists
+// do not depend on the batches or their order. The lists grow with the samples (nearly every
+// event of a penumbra has a depth of its own): the engine moves them to an EventSpill as runs
+// when its memory budget is spent, and TakeRanges merges the runs back, to the same lists.
 // Not thread-safe.
 class StageAccumulator {
  public:
   StageAccumulator(const PdsmHeader& header, int stage);
 
+  // Merges a batch in. Returns the change in MemoryBytes().
   // REQUIRES: `sample_begin` lies in a range of the stage; `events` are of this tile.
-  void Add(int sample_begin, TileEvents events);
+  int64_t Add(int sample_begin, TileEvents events);
 
-  // The merged events of each range, in range order. REQUIRES: every range got a batch.
-  std::vector<TileEvents> TakeRanges();
+  // The bytes its lists hold in memory (TileEventsBytes).
+  int64_t MemoryBytes() const { return memory_bytes_; }
+
+  // Moves the lists held in memory to `spill` as one run per range; MemoryBytes() becomes 0.
+  // On error nothing moved.
+  absl::Status Spill(EventSpill* spill);
+
+  // The events of each range, in range order: its lists in memory and its runs (read back
+  // and released), unmerged; the tile's assembly merges them pixel by pixel, so a tile's
+  // merged lists are never all in memory at once. REQUIRES: every range got a batch; `spill`
+  // is the one Spill wrote to (may be null when Spill was never called). Errors: the spill's.
+  absl::StatusOr<std::vector<RangeParts>> TakeRanges(EventSpill* spill);
 
  private:
+  struct Range {
+    std::optional<TileEvents> merged;  // in memory
+    std::vector<SpilledRun> runs;      // in the spill
+  };
   std::vector<SampleRange> ranges_;
-  std::vector<std::optional<TileEvents>> merged_;
+  std::vector<Range> merged_;
+  TileEvents shape_;  // the tile's index and rectangle, without lists
+  int64_t memory_bytes_ = 0;
 };
 
 // An open tile between stages.
@@ -50,8 +76,8 @@ struct TileStageState {
 
 struct StageVerdict {
   bool done = false;
-  // done: the events to assemble (they cover the tile's samples exactly once) and the tile's
-  // sample count for AssemblePlanTile: 0 for a fixed-count bake (the header's count).
+  // done: the events to assemble, in parts (they cover the tile's samples exactly once) and the
+  // tile's sample count for AssemblePlanTile: 0 for a fixed-count bake (the header's count).
   std::vector<TileEvents> events;
   int tile_samples = 0;
   // Samples a converged adaptive tile will never take (header.samples - its samples); 0
@@ -61,10 +87,10 @@ struct StageVerdict {
   TileStageState next;
 };
 
-// REQUIRES: `range_results` are the merged events of every range of stage `state.stage`
+// REQUIRES: `ranges` are the events of every range of stage `state.stage`
 // (StageAccumulator::TakeRanges) of one tile.
 StageVerdict JudgeStage(const PdsmHeader& header, TileStageState state,
-                        std::vector<TileEvents> range_results);
+                        std::vector<RangeParts> ranges);
 
 }  // namespace pdsm
 

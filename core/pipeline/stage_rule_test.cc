@@ -2,7 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <random>
+
 #include "core/bake/adaptive_sampling.h"
+#include "core/util/fault_injecting_file_system.h"
 
 namespace pdsm {
 namespace {
@@ -25,6 +29,15 @@ PdsmHeader Header(int samples, double tolerance = 0, int min_samples = 0) {
   return h;
 }
 
+// Each range's parts merged into one list.
+std::vector<TileEvents> Merged(absl::StatusOr<std::vector<RangeParts>> ranges) {
+  EXPECT_TRUE(ranges.ok()) << ranges.status();
+  std::vector<TileEvents> out;
+  if (!ranges.ok()) return out;
+  for (const RangeParts& parts : *ranges) out.push_back(MergeTileEvents(parts));
+  return out;
+}
+
 TEST(StageAccumulator, MergesBatchesOfARangeWhateverTheirOrder) {
   StageAccumulator a(Header(8), 0), b(Header(8), 0);
   a.Add(4, Shadowed(4, 8, 3));
@@ -33,7 +46,8 @@ TEST(StageAccumulator, MergesBatchesOfARangeWhateverTheirOrder) {
   b.Add(6, Shadowed(6, 8, 3));
   b.Add(2, Shadowed(2, 4, 2));
   b.Add(4, Shadowed(4, 6, 3));
-  const std::vector<TileEvents> ra = a.TakeRanges(), rb = b.TakeRanges();
+  const std::vector<TileEvents> ra = Merged(a.TakeRanges(nullptr)),
+                                rb = Merged(b.TakeRanges(nullptr));
   ASSERT_EQ(ra.size(), 1u);
   ASSERT_EQ(rb.size(), 1u);
   EXPECT_EQ(ra[0].events, rb[0].events);
@@ -44,7 +58,7 @@ TEST(StageAccumulator, AdaptivePilotKeepsItsTwoHalvesApart) {
   StageAccumulator acc(Header(64, 0.01, 4), 0);  // ranges [0, 2) and [2, 4)
   acc.Add(2, Shadowed(2, 4, 5));
   acc.Add(0, Shadowed(0, 2, 2));
-  const std::vector<TileEvents> ranges = acc.TakeRanges();
+  const std::vector<TileEvents> ranges = Merged(acc.TakeRanges(nullptr));
   ASSERT_EQ(ranges.size(), 2u);
   EXPECT_EQ(ranges[0].events.front(), (Event{2.0f, 2}));
   EXPECT_EQ(ranges[1].events.front(), (Event{5.0f, 2}));
@@ -54,7 +68,7 @@ TEST(JudgeStage, FixedCountStageIsTheTile) {
   StageAccumulator acc(Header(8), 0);
   acc.Add(4, Shadowed(4, 8, 3));
   acc.Add(0, Shadowed(0, 4, 2));
-  const StageVerdict v = JudgeStage(Header(8), {}, acc.TakeRanges());
+  const StageVerdict v = JudgeStage(Header(8), {}, *acc.TakeRanges(nullptr));
   ASSERT_TRUE(v.done);
   EXPECT_EQ(v.tile_samples, 0);
   EXPECT_EQ(v.samples_skipped, 0);
@@ -66,7 +80,7 @@ TEST(JudgeStage, AdaptivePilotThatAgreesIsDone) {
   StageAccumulator acc(Header(64, 0.01, 4), 0);
   acc.Add(2, Shadowed(2, 4, 2));
   acc.Add(0, Shadowed(0, 2, 2));
-  const StageVerdict v = JudgeStage(Header(64, 0.01, 4), {}, acc.TakeRanges());
+  const StageVerdict v = JudgeStage(Header(64, 0.01, 4), {}, *acc.TakeRanges(nullptr));
   ASSERT_TRUE(v.done);
   EXPECT_EQ(v.tile_samples, 4);
   EXPECT_EQ(v.samples_skipped, 60);
@@ -78,7 +92,7 @@ TEST(JudgeStage, AdaptivePilotThatDisagreesGoesOnWithItsEventsKept) {
   StageAccumulator pilot(Header(64, 0.01, 4), 0);
   pilot.Add(0, Shadowed(0, 2, 2));
   pilot.Add(2, Shadowed(2, 4, 5));  // the second half sees another shadow
-  const StageVerdict v = JudgeStage(Header(64, 0.01, 4), {}, pilot.TakeRanges());
+  const StageVerdict v = JudgeStage(Header(64, 0.01, 4), {}, *pilot.TakeRanges(nullptr));
   ASSERT_FALSE(v.done);
   EXPECT_EQ(v.next.stage, 1);
   ASSERT_EQ(v.next.earlier.size(), 1u);
@@ -92,7 +106,7 @@ TEST(JudgeStage, AdaptivePilotThatDisagreesGoesOnWithItsEventsKept) {
   StageAccumulator stage1(Header(64, 0.01, 4), 1);
   stage1.Add(6, Shadowed(6, 8, 2));
   stage1.Add(4, Shadowed(4, 6, 5));
-  const StageVerdict w = JudgeStage(Header(64, 0.01, 4), v.next, stage1.TakeRanges());
+  const StageVerdict w = JudgeStage(Header(64, 0.01, 4), v.next, *stage1.TakeRanges(nullptr));
   EXPECT_TRUE(w.done);  // the same mix as the first four: A_8 = A_4
   EXPECT_EQ(w.tile_samples, 8);
 }
@@ -101,10 +115,109 @@ TEST(JudgeStage, LastAdaptiveStageIsDoneWhateverTheEstimate) {
   StageAccumulator acc(Header(2, 1e-9, 2), 0);
   acc.Add(0, Shadowed(0, 1, 2));
   acc.Add(1, Shadowed(1, 2, 6));
-  const StageVerdict v = JudgeStage(Header(2, 1e-9, 2), {}, acc.TakeRanges());
+  const StageVerdict v = JudgeStage(Header(2, 1e-9, 2), {}, *acc.TakeRanges(nullptr));
   EXPECT_TRUE(v.done);
   EXPECT_EQ(v.tile_samples, 2);
   EXPECT_EQ(v.samples_skipped, 0);
+}
+
+// A tile of `pixels` pixels, each with a few events at random depths for samples [begin, end).
+TileEvents RandomBatch(std::mt19937_64& rng, int width, int height) {
+  TileEvents out{.tile_index = 3, .x0 = 16, .y0 = 8, .width = width, .height = height};
+  std::uniform_real_distribution<float> depth(1.0f, 9.0f);
+  std::uniform_int_distribution<int> count(0, 5);
+  out.offsets.push_back(0);
+  for (int p = 0; p < width * height; ++p) {
+    std::vector<Event> pixel;
+    for (int k = count(rng); k > 0; --k) pixel.push_back({depth(rng), k % 2 ? 1 : -1});
+    NormalizeEvents(&pixel);
+    out.events.insert(out.events.end(), pixel.begin(), pixel.end());
+    out.offsets.push_back(out.events.size());
+  }
+  return out;
+}
+
+TEST(StageAccumulator, SpilledRunsMergeBackToTheSameLists) {
+  const std::string dir = ::testing::TempDir();
+  std::mt19937_64 rng(11);
+  for (int trial = 0; trial < 20; ++trial) {
+    StageAccumulator memory(Header(64), 0), spilled(Header(64), 0);
+    EventSpill spill(dir);
+    for (int batch = 0; batch < 16; ++batch) {
+      const TileEvents events = RandomBatch(rng, 4, 3);
+      memory.Add(batch * 4, events);
+      spilled.Add(batch * 4, events);
+      if ((batch + trial) % 3 == 0) {
+        ASSERT_TRUE(spilled.Spill(&spill).ok());
+        EXPECT_EQ(spilled.MemoryBytes(), 0);
+      }
+    }
+    EXPECT_GT(spill.bytes_written(), 0);
+    const std::vector<TileEvents> a = Merged(memory.TakeRanges(nullptr));
+    const std::vector<TileEvents> b = Merged(spilled.TakeRanges(&spill));
+    ASSERT_EQ(a.size(), 1u);
+    ASSERT_EQ(b.size(), 1u);
+    EXPECT_EQ(b[0].tile_index, 3);
+    EXPECT_EQ(b[0].x0, 16);
+    EXPECT_EQ(b[0].height, 3);
+    EXPECT_EQ(a[0].offsets, b[0].offsets) << "trial " << trial;
+    EXPECT_EQ(a[0].events, b[0].events) << "trial " << trial;
+  }
+}
+
+TEST(StageAccumulator, AFailedSpillKeepsTheListsAndNamesTheFolder) {
+  FaultInjectingFileSystem fs;
+  EventSpill spill(::testing::TempDir(), &fs);
+  std::mt19937_64 rng(5);
+  StageAccumulator acc(Header(8), 0), reference(Header(8), 0);
+  TileEvents batch = RandomBatch(rng, 8, 8);
+  while (batch.events.empty()) batch = RandomBatch(rng, 8, 8);
+  acc.Add(0, batch);
+  reference.Add(0, batch);
+  fs.SetDiskFullAfter(16);
+  const absl::Status full = acc.Spill(&spill);
+  EXPECT_EQ(full.code(), absl::StatusCode::kResourceExhausted) << full;
+  EXPECT_NE(full.message().find("scratch file"), std::string::npos) << full;
+  EXPECT_GT(acc.MemoryBytes(), 0);
+  fs.Reset();
+  fs.FailNth(FileOp::kCreate, 1, EACCES);
+  EventSpill unwritable(::testing::TempDir(), &fs);
+  EXPECT_EQ(acc.Spill(&unwritable).code(), absl::StatusCode::kPermissionDenied);
+  // The lists are whole: a spill that works now gives back the same events.
+  ASSERT_TRUE(acc.Spill(&unwritable).ok());
+  EXPECT_EQ(Merged(acc.TakeRanges(&unwritable))[0].events,
+            Merged(reference.TakeRanges(nullptr))[0].events);
+}
+
+TEST(EventSpill, LeavesNoFileBehind) {
+  const std::filesystem::path dir =
+      std::filesystem::path(::testing::TempDir()) / "spill_leaves_nothing";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  {
+    EventSpill spill(dir.string());
+    std::mt19937_64 rng(3);
+    TileEvents batch = RandomBatch(rng, 8, 8);
+    const absl::StatusOr<SpilledRun> run = spill.Write(batch);
+    ASSERT_TRUE(run.ok()) << run.status();
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir),
+                            std::filesystem::directory_iterator()),
+              0)
+        << "the scratch file has no name";
+    const absl::StatusOr<TileEvents> back = spill.ReadAndRelease(*run, batch);
+    ASSERT_TRUE(back.ok()) << back.status();
+    EXPECT_EQ(back->events, batch.events);
+    EXPECT_EQ(back->offsets, batch.offsets);
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(EventSpill, MissingFolderIsNotFoundNamingIt) {
+  EventSpill spill("/nonexistent-pdsm-folder/x");
+  std::mt19937_64 rng(3);
+  const absl::StatusOr<SpilledRun> run = spill.Write(RandomBatch(rng, 2, 2));
+  EXPECT_EQ(run.status().code(), absl::StatusCode::kNotFound);
+  EXPECT_NE(run.status().message().find("/nonexistent-pdsm-folder/x"), std::string::npos);
 }
 
 }  // namespace

@@ -27,19 +27,25 @@ PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> part
 PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts, int tile_samples,
                       AssemblyStats* stats, const TileWindows* windows) {
   const auto start = std::chrono::steady_clock::now();
-  const TileEvents merged = MergeTileEvents(parts);
+  static const TileEvents kNoTile;
+  const TileEvents& shape = parts.empty() ? kNoTile : parts.front();
   PdsmTile tile;
-  tile.x0 = merged.x0;
-  tile.y0 = merged.y0;
-  tile.width = merged.width;
-  tile.height = merged.height;
+  tile.x0 = shape.x0;
+  tile.y0 = shape.y0;
+  tile.width = shape.width;
+  tile.height = shape.height;
   tile.samples = tile_samples;
-  tile.offsets.assign(merged.PixelCount() + 1, 0);
+  tile.offsets.assign(shape.PixelCount() + 1, 0);
   // Compression's perpendicular metric measures depth in units of the baked depth range.
   const PdsmGeometry& g = header.geometry;
   const double depth_scale = std::max(g.z_far - g.z_near, 1e-30);
-  for (size_t p = 0; p < merged.PixelCount(); ++p) {
-    const std::vector<Event> events = ConsolidateEvents(merged.Pixel(p));
+  // Merged pixel by pixel: a tile's merged lists (tens of MiB at thousands of samples) are
+  // never all in memory.
+  std::vector<std::span<const Event>> pixel_parts(parts.size());
+  for (size_t p = 0; p < shape.PixelCount(); ++p) {
+    for (size_t k = 0; k < parts.size(); ++k) pixel_parts[k] = parts[k].Pixel(p);
+    const std::vector<Event> merged = MergeEventLists(pixel_parts);
+    const std::vector<Event> events = ConsolidateEvents(merged);
     std::vector<Vertex> compressed;
     if (windows != nullptr) {
       compressed = SurfaceFunction(events, windows->Pixel(p), tile_samples, header.epsilon,
@@ -51,7 +57,7 @@ PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> part
     }
     tile.vertices.insert(tile.vertices.end(), compressed.begin(), compressed.end());
     tile.offsets[p + 1] = tile.vertices.size();
-    stats->merged_events += static_cast<int64_t>(merged.Pixel(p).size());
+    stats->merged_events += static_cast<int64_t>(merged.size());
     stats->consolidated_events += static_cast<int64_t>(events.size());
   }
   stats->vertices += static_cast<int64_t>(tile.vertices.size());

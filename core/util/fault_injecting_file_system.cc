@@ -64,6 +64,33 @@ class FaultInjectingFileSystem::File final : public WritableFile {
   std::unique_ptr<WritableFile> file_;
 };
 
+// A real scratch file whose writes go through the owner's checks first (reads are never
+// broken: the data was written).
+class FaultInjectingFileSystem::Scratch final : public ScratchFile {
+ public:
+  Scratch(FaultInjectingFileSystem* owner, std::unique_ptr<ScratchFile> file)
+      : owner_(owner), file_(std::move(file)) {}
+
+  absl::Status WriteAt(uint64_t offset, absl::string_view data) override {
+    if (absl::Status s = owner_->Check(FileOp::kWrite, label()); !s.ok()) return s;
+    const uint64_t fits = owner_->Reserve(data.size());
+    if (fits < data.size()) {
+      file_->WriteAt(offset, data.substr(0, fits)).IgnoreError();
+      return ErrnoStatus(ENOSPC, absl::StrCat("cannot write ", label(), " (injected)"));
+    }
+    return file_->WriteAt(offset, data);
+  }
+  absl::Status ReadAt(uint64_t offset, size_t size, char* out) override {
+    return file_->ReadAt(offset, size, out);
+  }
+  void Release(uint64_t offset, uint64_t size) override { file_->Release(offset, size); }
+  const std::string& label() const override { return file_->label(); }
+
+ private:
+  FaultInjectingFileSystem* const owner_;
+  std::unique_ptr<ScratchFile> file_;
+};
+
 FaultInjectingFileSystem::FaultInjectingFileSystem(FileSystem* target)
     : FileSystemWrapper(target) {}
 
@@ -129,6 +156,14 @@ absl::StatusOr<std::unique_ptr<WritableFile>> FaultInjectingFileSystem::NewTempF
   absl::StatusOr<std::unique_ptr<WritableFile>> file = FileSystemWrapper::NewTempFile(target);
   if (!file.ok()) return file.status();
   return std::make_unique<File>(this, *std::move(file));
+}
+
+absl::StatusOr<std::unique_ptr<ScratchFile>> FaultInjectingFileSystem::NewScratchFile(
+    const std::string& dir) {
+  if (absl::Status s = Check(FileOp::kCreate, dir); !s.ok()) return s;
+  absl::StatusOr<std::unique_ptr<ScratchFile>> file = FileSystemWrapper::NewScratchFile(dir);
+  if (!file.ok()) return file.status();
+  return std::make_unique<Scratch>(this, *std::move(file));
 }
 
 absl::Status FaultInjectingFileSystem::RenameFile(const std::string& from, const std::string& to) {

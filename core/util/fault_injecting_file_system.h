@@ -26,8 +26,8 @@
 namespace pdsm {
 
 enum class FileOp {
-  kCreate,   // FileSystem::NewTempFile
-  kWrite,    // WritableFile::WriteAt
+  kCreate,   // FileSystem::NewTempFile, FileSystem::NewScratchFile
+  kWrite,    // WritableFile::WriteAt, ScratchFile::WriteAt
   kFlush,    // WritableFile::Flush
   kSync,     // WritableFile::Sync
   kClose,    // WritableFile::Close
@@ -61,11 +61,13 @@ class FaultInjectingFileSystem final : public FileSystemWrapper {
   uint64_t bytes_written() const;
 
   absl::StatusOr<std::unique_ptr<WritableFile>> NewTempFile(const std::string& target) override;
+  absl::StatusOr<std::unique_ptr<ScratchFile>> NewScratchFile(const std::string& dir) override;
   absl::Status RenameFile(const std::string& from, const std::string& to) override;
   absl::Status SyncDir(const std::string& dir) override;
 
  private:
   class File;
+  class Scratch;
 
   // Counts a call of `op`; the injected error if this is the armed one, else OK.
   absl::Status Check(FileOp op, const std::string& name);

@@ -94,6 +94,55 @@ class PosixWritableFile final : public WritableFile {
   uint64_t buffer_offset_ = 0;
 };
 
+class PosixScratchFile final : public ScratchFile {
+ public:
+  PosixScratchFile(int fd, std::string label) : fd_(fd), label_(std::move(label)) {}
+  ~PosixScratchFile() override { ::close(fd_); }
+
+  absl::Status WriteAt(uint64_t offset, absl::string_view data) override {
+    while (!data.empty()) {
+      const ssize_t n = ::pwrite(fd_, data.data(), data.size(), static_cast<off_t>(offset));
+      if (n < 0) {
+        if (errno == EINTR) continue;
+        return LastErrnoStatus("cannot write", label_);
+      }
+      data.remove_prefix(static_cast<size_t>(n));
+      offset += static_cast<uint64_t>(n);
+    }
+    return absl::OkStatus();
+  }
+
+  absl::Status ReadAt(uint64_t offset, size_t size, char* out) override {
+    while (size > 0) {
+      const ssize_t n = ::pread(fd_, out, size, static_cast<off_t>(offset));
+      if (n < 0) {
+        if (errno == EINTR) continue;
+        return LastErrnoStatus("cannot read", label_);
+      }
+      if (n == 0) {
+        return absl::DataLossError(absl::StrCat(label_, ": ends at byte ", offset, ", ", size,
+                                                " bytes before what was written there"));
+      }
+      out += n;
+      size -= static_cast<size_t>(n);
+      offset += static_cast<uint64_t>(n);
+    }
+    return absl::OkStatus();
+  }
+
+  void Release(uint64_t offset, uint64_t size) override {
+    // Best effort: a file system without holes keeps the blocks until the file is closed.
+    ::fallocate(fd_, FALLOC_FL_PUNCH_HOLE | FALLOC_FL_KEEP_SIZE, static_cast<off_t>(offset),
+                static_cast<off_t>(size));
+  }
+
+  const std::string& label() const override { return label_; }
+
+ private:
+  const int fd_;
+  const std::string label_;
+};
+
 // Six letters and digits, as mkstemp's XXXXXX.
 std::string RandomSuffix() {
   static constexpr char kChars[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789";
@@ -168,6 +217,31 @@ class PosixFileSystem final : public FileSystem {
       return std::make_unique<PosixWritableFile>(fd, lock_fd, std::move(name));
     }
     return absl::AlreadyExistsError(absl::StrCat("no free temporary name for ", target));
+  }
+
+  absl::StatusOr<std::unique_ptr<ScratchFile>> NewScratchFile(const std::string& dir) override {
+    const std::string folder = dir.empty() ? "." : dir;
+    std::string label = absl::StrCat(folder, " (scratch file)");
+    // O_TMPFILE: a file that never had a name. Where the file system lacks it, a named one
+    // is unlinked at once (only a crash in between can leave it, under a temporary name that
+    // RemoveStaleTempFiles sweeps).
+    int fd = ::open(folder.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
+    if (fd < 0 && (errno == EOPNOTSUPP || errno == EISDIR || errno == EINVAL)) {
+      for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
+        const std::string name = absl::StrCat(folder, "/pdsm-scratch.tmp-", RandomSuffix());
+        fd = ::open(name.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+        if (fd >= 0) {
+          ::unlink(name.c_str());
+        } else if (errno != EEXIST) {
+          break;
+        }
+      }
+    }
+    if (fd < 0) {
+      const int error_number = errno;
+      return ErrnoStatus(error_number, absl::StrCat("cannot create a scratch file in ", folder));
+    }
+    return std::make_unique<PosixScratchFile>(fd, std::move(label));
   }
 
   int RemoveStaleTempFiles(const std::string& dir) override {

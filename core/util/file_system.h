@@ -47,6 +47,29 @@ class WritableFile {
   virtual const std::string& path() const = 0;
 };
 
+// A file for the process's own scratch data (a bake's event runs that do not fit in memory):
+// it has no name, so nothing is left to remove however the process ends (SIGKILL included),
+// and its blocks go back to the file system when it is destroyed. Thread-safe: reads and
+// writes at offsets (pread, pwrite) need no lock. Every error names the file's folder.
+class ScratchFile {
+ public:
+  ScratchFile() = default;
+  ScratchFile(const ScratchFile&) = delete;
+  ScratchFile& operator=(const ScratchFile&) = delete;
+  virtual ~ScratchFile() = default;
+
+  // Writes `data` at byte `offset`, unbuffered.
+  virtual absl::Status WriteAt(uint64_t offset, absl::string_view data) = 0;
+  // Reads `size` bytes at `offset` into `out`. DATA_LOSS when the file ends first.
+  virtual absl::Status ReadAt(uint64_t offset, size_t size, char* out) = 0;
+  // Bytes [offset, offset + size) are not needed again: their blocks may go back to the file
+  // system (a hole is punched where it can be; otherwise nothing happens).
+  virtual void Release(uint64_t offset, uint64_t size) = 0;
+
+  // "<folder> (scratch file)", for messages.
+  virtual const std::string& label() const = 0;
+};
+
 // Thread-safe: every method may be called from any thread (the implementations hold no
 // mutable state, or lock it).
 class FileSystem {
@@ -76,6 +99,11 @@ class FileSystem {
   // cannot be checked or removed is left. Returns how many files were removed.
   virtual int RemoveStaleTempFiles(const std::string& dir) = 0;
 
+  // A new, empty scratch file in the folder `dir` ("" is "."), readable and writable by this
+  // user only. Errors: the errno's status (NOT_FOUND when the folder does not exist,
+  // PERMISSION_DENIED when it cannot be written), naming `dir`.
+  virtual absl::StatusOr<std::unique_ptr<ScratchFile>> NewScratchFile(const std::string& dir) = 0;
+
   // rename(2): replaces `to` atomically; a reader sees the old file or the new one.
   virtual absl::Status RenameFile(const std::string& from, const std::string& to) = 0;
   // fsync of the folder `dir` ("" is "."): makes the entries renamed or created in it durable.
@@ -94,6 +122,9 @@ class FileSystemWrapper : public FileSystem {
 
   absl::StatusOr<std::unique_ptr<WritableFile>> NewTempFile(const std::string& target) override {
     return target_->NewTempFile(target);
+  }
+  absl::StatusOr<std::unique_ptr<ScratchFile>> NewScratchFile(const std::string& dir) override {
+    return target_->NewScratchFile(dir);
   }
   absl::Status RenameFile(const std::string& from, const std::string& to) override {
     return target_->RenameFile(from, to);
