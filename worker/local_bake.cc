@@ -12,6 +12,7 @@
 #include "core/bake/bake_plan.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pipeline/bake_engine.h"
+#include "core/util/malloc_arenas.h"
 #include "core/util/work_queue.h"
 #include "gl/platform/osmesa_context.h"
 #include "worker/local_output.h"
@@ -146,6 +147,7 @@ absl::StatusOr<BakeSummary> BakePlanned(
   // One GL context per thread: llvmpipe's own helper threads per context would only
   // oversubscribe the cores and cost ~27 MiB each (docs/performance.md, "GL memory").
   gl::ShareCoresBetweenContexts(threads);
+  LimitMallocArenas(threads);  // core/util/malloc_arenas.h: memory flat in the samples
   EngineOptions engine_options;
   engine_options.scheduler.lease_ms = kLocalLeaseMs;
   // Enough open groups that no thread waits while another judges a stage.

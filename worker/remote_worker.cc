@@ -14,6 +14,7 @@
 #include "core/scene/scene.h"
 #include "core/scene/scene_loader.h"
 #include "core/util/backoff.h"
+#include "core/util/malloc_arenas.h"
 #include "core/util/work_queue.h"
 #include "gl/platform/osmesa_context.h"
 #include "worker/bake_task.h"
@@ -78,6 +79,7 @@ RemoteWorker::~RemoteWorker() = default;
 absl::Status RemoteWorker::Run(const std::atomic<bool>& stop) {
   const int threads = std::max(1, options_.threads);
   gl::ShareCoresBetweenContexts(threads);  // one context per task thread, as the local bake
+  LimitMallocArenas(threads);              // core/util/malloc_arenas.h: memory flat in the samples
   WorkQueue queue(threads + 1);            // the task threads and the lease keeper
   queue.Post([&] { KeepLeases(stop); });
   for (int t = 0; t < threads; ++t) queue.Post([&] { ThreadLoop(stop); });

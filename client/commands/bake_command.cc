@@ -316,7 +316,7 @@ void RegisterBakeCommand(CLI::App& app, int* exit_code) {
       ->check(CLI::Range(1, 1 << 20));
   cmd->add_option("--event-memory-mib", flags->event_memory_mib,
                   "Event lists kept in memory before they move to a scratch file beside OUT "
-                  "(default 16); memory stays flat in the samples, the result does not change")
+                  "(default 8); memory stays flat in the samples, the result does not change")
       ->check(CLI::Range(1, 1 << 20));
   cmd->add_option("--preview", flags->preview_path,
                   "Camera view PNG (default: OUT with .png); the map from the light goes beside "

@@ -170,9 +170,12 @@ void BakeEngine::StoreUnreachedTiles(const JobPtr& job, const std::vector<int>& 
     const TileRect& r = plan.tiles[t];
     TileEvents none{.tile_index = t, .x0 = r.x0, .y0 = r.y0, .width = r.width, .height = r.height};
     none.offsets.assign(none.PixelCount() + 1, 0);
-    std::vector<RangeParts> ranges;
-    for (size_t k = 0; k < StageRanges(plan.header, 0).size(); ++k) ranges.push_back({none});
-    StageVerdict verdict = JudgeStage(plan.header, TileStageState{}, std::move(ranges));
+    std::vector<TileParts> ranges;
+    for (size_t k = 0; k < StageRanges(plan.header, 0).size(); ++k) {
+      ranges.push_back(TileParts{.in_memory = {none}, .spilled = {}, .shape = none});
+    }
+    // No run: the rule reads nothing back, so it cannot fail.
+    StageVerdict verdict = *JudgeStage(plan.header, TileStageState{}, std::move(ranges), nullptr);
     const int64_t samples = verdict.tile_samples > 0 ? verdict.tile_samples : plan.header.samples;
     if (!StoreTile(job, t, std::move(verdict))) return;
     absl::MutexLock lock(&mu_);
@@ -345,22 +348,18 @@ void BakeEngine::CompleteStage(const JobPtr& job, int group_index, const OpenGro
     state.stage = group->stage;
     if (auto it = states.find(tile); it != states.end()) state = std::move(it->second);
     const int64_t tile_bytes = accumulator.MemoryBytes();
-    absl::StatusOr<std::vector<RangeParts>> ranges = accumulator.TakeRanges(job->spill.get());
+    std::vector<TileParts> ranges = accumulator.TakeRanges();
     held -= tile_bytes;
     event_memory_bytes_.fetch_sub(tile_bytes, std::memory_order_relaxed);
-    if (!ranges.ok()) {
-      return End(job, JobEnd::kFailed,
-                 absl::Status(ranges.status().code(),
-                              absl::StrCat("tile ", tile, ": reading its event lists back: ",
-                                           ranges.status().message())));
-    }
-    StageVerdict verdict = JudgeStage(header, std::move(state), *std::move(ranges));
-    if (verdict.done) {
-      if (!StoreTile(job, tile, std::move(verdict))) return;
+    absl::StatusOr<StageVerdict> verdict =
+        JudgeStage(header, std::move(state), std::move(ranges), job->spill.get());
+    if (!verdict.ok()) return FailReadingBack(job, tile, verdict.status());
+    if (verdict->done) {
+      if (!StoreTile(job, tile, *std::move(verdict))) return;
     } else {
       next_tiles.push_back(tile);
       absl::MutexLock next_lock(&next->mu);
-      next->states[tile] = std::move(verdict.next);
+      next->states[tile] = std::move(verdict->next);
     }
   }
   bool complete = false, queued = true;
@@ -386,13 +385,24 @@ void BakeEngine::CompleteStage(const JobPtr& job, int group_index, const OpenGro
   if (complete) FinishJob(job);
 }
 
+void BakeEngine::FailReadingBack(const JobPtr& job, int tile_index, const absl::Status& status) {
+  End(job, JobEnd::kFailed,
+      absl::Status(
+          status.code(),
+          absl::StrCat("tile ", tile_index, ": reading its event lists back: ", status.message())));
+}
+
 bool BakeEngine::StoreTile(const JobPtr& job, int tile_index, StageVerdict verdict) {
   AssemblyStats stats;
-  const PdsmTile tile =
-      AssemblePlanTile(*job->spec.plan, verdict.events, verdict.tile_samples, &stats);
-  verdict.events.clear();
+  absl::StatusOr<PdsmTile> tile = AssemblePlanTile(*job->spec.plan, verdict.events,
+                                                   job->spill.get(), verdict.tile_samples, &stats);
+  verdict.events = TileParts{};
+  if (!tile.ok()) {
+    FailReadingBack(job, tile_index, tile.status());
+    return false;
+  }
   if (!BeginOutputCall(job)) return false;
-  const absl::Status stored = job->spec.output->StoreTile(tile);
+  const absl::Status stored = job->spec.output->StoreTile(*tile);
   EndOutputCall(job);
   if (!stored.ok()) {
     End(job, JobEnd::kFailed,
@@ -404,7 +414,7 @@ bool BakeEngine::StoreTile(const JobPtr& job, int tile_index, StageVerdict verdi
   if (job->ended) return false;
   JobProgress& p = job->progress;
   ++p.tiles_done;
-  if (tile.vertices.empty()) ++p.tiles_all_lit;
+  if (tile->vertices.empty()) ++p.tiles_all_lit;
   p.samples_done += verdict.samples_skipped;
   p.tile_samples_total +=
       verdict.tile_samples > 0 ? verdict.tile_samples : job->spec.plan->header.samples;

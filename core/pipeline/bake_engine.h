@@ -48,9 +48,10 @@ namespace pdsm {
 
 enum class JobEnd { kSucceeded, kFailed, kCancelled };
 
-// EngineOptions::event_memory_budget_bytes unless set: enough for the lists of a few tiles of
-// a deep penumbra, small next to the fixed cost of a bake process (Mesa, LLVM, the scene).
-inline constexpr int64_t kDefaultEventMemoryBudget = int64_t{16} << 20;
+// EngineOptions::event_memory_budget_bytes unless set: small next to the fixed cost of a bake
+// process (Mesa, LLVM, the scene: ~170 MiB for the dragon), so that its memory stays within
+// 10 % of it whatever the samples; spilling costs ~1 % of the CPU (docs/performance.md).
+inline constexpr int64_t kDefaultEventMemoryBudget = int64_t{8} << 20;
 
 // Where a job stands. Samples are counted over tiles (a tile of n samples counts n).
 struct JobProgress {
@@ -201,6 +202,8 @@ class BakeEngine {
   absl::Status MergeResult(Job& job, OpenGroup& group, int sample_begin,
                            const std::vector<int>& tiles, std::vector<TileEvents> events);
   void CompleteStage(const JobPtr& job, int group_index, const OpenGroupPtr& group);
+  // Ends the job: the tile's spilled lists could not be read back.
+  void FailReadingBack(const JobPtr& job, int tile_index, const absl::Status& status);
   // False when the job ended (the store failed, or it was ended meanwhile).
   bool StoreTile(const JobPtr& job, int tile_index, StageVerdict verdict);
   // Stores the tiles no caster reaches (plan.tile_has_casters) all lit, without a task.

@@ -1,5 +1,6 @@
 #include "core/pipeline/event_spill.h"
 
+#include <algorithm>
 #include <cstring>
 #include <utility>
 #include <vector>
@@ -87,6 +88,46 @@ absl::StatusOr<TileEvents> EventSpill::ReadAndRelease(const SpilledRun& run,
   }
   (*file)->Release(run.offset, run.bytes());
   return out;
+}
+
+absl::Status EventSpill::Read(uint64_t offset, size_t bytes, void* out) {
+  absl::StatusOr<ScratchFile*> file = File();
+  if (!file.ok()) return file.status();
+  return (*file)->ReadAt(offset, bytes, static_cast<char*>(out));
+}
+
+void EventSpill::Release(const SpilledRun& run) {
+  absl::StatusOr<ScratchFile*> file = File();
+  if (file.ok()) (*file)->Release(run.offset, run.bytes());
+}
+
+SpilledRunReader::SpilledRunReader(EventSpill* spill, const SpilledRun& run)
+    : spill_(spill), run_(run), counts_(run.pixels) {
+  status_ = spill_->Read(run_.offset, counts_.size() * sizeof(uint32_t), counts_.data());
+}
+
+std::span<const Event> SpilledRunReader::Pixel(size_t p) {
+  if (!status_.ok() || p >= counts_.size()) return {};
+  for (; next_pixel_ < p; ++next_pixel_) next_event_ += counts_[next_pixel_];
+  const uint64_t first = next_event_;
+  const uint64_t count = counts_[p];
+  if (count == 0) return {};
+  if (first + count > run_.events) {
+    status_ = absl::DataLossError(
+        absl::StrCat("a spilled run counts more events than the ", run_.events, " it holds"));
+    return {};
+  }
+  if (first < piece_first_ || first + count > piece_first_ + piece_.size()) {
+    // The next piece starts at this pixel and holds it whole.
+    const uint64_t size =
+        std::min<uint64_t>(std::max<uint64_t>(count, kPieceEvents), run_.events - first);
+    piece_.resize(size);
+    piece_first_ = first;
+    status_ = spill_->Read(run_.offset + run_.pixels * sizeof(uint32_t) + first * sizeof(Event),
+                           size * sizeof(Event), piece_.data());
+    if (!status_.ok()) return {};
+  }
+  return {piece_.data() + (first - piece_first_), count};
 }
 
 }  // namespace pdsm

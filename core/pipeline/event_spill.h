@@ -17,7 +17,9 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "absl/base/thread_annotations.h"
 #include "absl/status/statusor.h"
@@ -33,6 +35,14 @@ struct SpilledRun {
   uint64_t pixels = 0;
   uint64_t events = 0;
   uint64_t bytes() const { return pixels * sizeof(uint32_t) + events * sizeof(Event); }
+};
+
+// A tile's event lists in parts that cover its samples exactly once between them: lists in
+// memory and runs in an EventSpill. A pixel's list is the merge of its parts' lists.
+struct TileParts {
+  std::vector<TileEvents> in_memory;
+  std::vector<SpilledRun> spilled;
+  TileEvents shape;  // the tile's index and rectangle, without lists
 };
 
 // The bytes a TileEvents holds in memory (its offsets and events), as the budget counts them.
@@ -55,6 +65,12 @@ class EventSpill {
   // of a tile of that shape, and is read once. DATA_LOSS when the file does not hold it.
   absl::StatusOr<TileEvents> ReadAndRelease(const SpilledRun& run, const TileEvents& shape);
 
+  // Reads `bytes` bytes of the scratch file at `offset` (a piece of a run). DATA_LOSS when the
+  // file does not hold them.
+  absl::Status Read(uint64_t offset, size_t bytes, void* out);
+  // The run will not be read again: its blocks go back to the file system.
+  void Release(const SpilledRun& run);
+
   // Bytes written since construction (every run, released or not).
   int64_t bytes_written() const { return bytes_written_.load(std::memory_order_relaxed); }
 
@@ -67,6 +83,34 @@ class EventSpill {
   std::unique_ptr<ScratchFile> file_ ABSL_GUARDED_BY(mu_);
   std::atomic<uint64_t> end_{0};  // the next run's offset: runs are laid end to end
   std::atomic<int64_t> bytes_written_{0};
+};
+
+// Reads a run back in pixel order, a piece of at most kPieceEvents events at a time (a pixel
+// with more is read whole), so that a tile merged from many runs holds only a piece of each.
+// Not thread-safe. Errors do not stop the reading: Pixel then gives empty lists and status()
+// says what went wrong, for the caller to check once at the end.
+class SpilledRunReader {
+ public:
+  static constexpr size_t kPieceEvents = 8192;  // 64 KiB
+
+  // Reads the run's per-pixel counts (4 bytes a pixel). `spill` must outlive the reader.
+  SpilledRunReader(EventSpill* spill, const SpilledRun& run);
+
+  // The list of pixel `p`, valid until the next call. REQUIRES: p < run.pixels, ascending
+  // over calls.
+  std::span<const Event> Pixel(size_t p);
+
+  const absl::Status& status() const { return status_; }
+
+ private:
+  EventSpill* const spill_;
+  const SpilledRun run_;
+  std::vector<uint32_t> counts_;
+  size_t next_pixel_ = 0;     // the first pixel whose start is not yet in next_event_
+  uint64_t next_event_ = 0;   // index in the run of the first event of next_pixel_
+  uint64_t piece_first_ = 0;  // index in the run of piece_[0]
+  std::vector<Event> piece_;
+  absl::Status status_;
 };
 
 }  // namespace pdsm

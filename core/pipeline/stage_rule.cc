@@ -59,42 +59,51 @@ absl::Status StageAccumulator::Spill(EventSpill* spill) {
   return absl::OkStatus();
 }
 
-absl::StatusOr<std::vector<RangeParts>> StageAccumulator::TakeRanges(EventSpill* spill) {
-  std::vector<RangeParts> out(merged_.size());
+std::vector<TileParts> StageAccumulator::TakeRanges() {
+  std::vector<TileParts> out(merged_.size());
   for (size_t r = 0; r < merged_.size(); ++r) {
     Range& range = merged_[r];
-    if (range.merged) out[r].push_back(*std::move(range.merged));
-    for (const SpilledRun& run : range.runs) {
-      absl::StatusOr<TileEvents> read = spill->ReadAndRelease(run, shape_);
-      if (!read.ok()) return read.status();
-      out[r].push_back(*std::move(read));
-    }
-    if (out[r].empty()) out[r].emplace_back();  // no batch: as TakeRanges always gave
+    out[r].shape = shape_;
+    if (range.merged) out[r].in_memory.push_back(*std::move(range.merged));
+    out[r].spilled = std::move(range.runs);
   }
   merged_.assign(ranges_.size(), Range{});
   memory_bytes_ = 0;
   return out;
 }
 
-StageVerdict JudgeStage(const PdsmHeader& header, TileStageState state,
-                        std::vector<RangeParts> ranges) {
+absl::StatusOr<StageVerdict> JudgeStage(const PdsmHeader& header, TileStageState state,
+                                        std::vector<TileParts> ranges, EventSpill* spill) {
   StageVerdict verdict;
   if (!header.adaptive()) {
     verdict.done = true;
     verdict.events = std::move(ranges.at(0));
     return verdict;
   }
-  // The adaptive rule compares ranges' merged lists.
+  // The adaptive rule compares ranges' merged lists, in memory.
   std::vector<TileEvents> range_results;
   range_results.reserve(ranges.size());
-  for (RangeParts& parts : ranges) {
-    range_results.push_back(parts.size() == 1 ? std::move(parts.front()) : MergeTileEvents(parts));
+  for (TileParts& parts : ranges) {
+    for (const SpilledRun& run : parts.spilled) {
+      absl::StatusOr<TileEvents> read = spill->ReadAndRelease(run, parts.shape);
+      if (!read.ok()) return read.status();
+      parts.in_memory.push_back(*std::move(read));
+    }
+    if (parts.in_memory.empty()) {
+      range_results.push_back(parts.shape);
+      range_results.back().offsets.assign(parts.shape.PixelCount() + 1, 0);
+    } else if (parts.in_memory.size() == 1) {
+      range_results.push_back(std::move(parts.in_memory.front()));
+    } else {
+      range_results.push_back(MergeTileEvents(parts.in_memory));
+    }
   }
   const std::vector<SampleRange> stage_ranges = StageRanges(header, state.stage);
   const int samples = stage_ranges.back().end;
   if (JudgeAdaptiveStage(header, stage_ranges, std::move(range_results), &state.earlier)) {
     verdict.done = true;
-    verdict.events = std::move(state.earlier);
+    verdict.events.shape = ranges.at(0).shape;
+    verdict.events.in_memory = std::move(state.earlier);
     verdict.tile_samples = samples;
     verdict.samples_skipped = header.samples - samples;
     return verdict;

@@ -26,10 +26,6 @@ namespace pdsm {
 // AdaptiveStageRanges for an adaptive one.
 std::vector<SampleRange> StageRanges(const PdsmHeader& header, int stage);
 
-// The events of one range of a stage for one tile: any number of parts that cover the range's
-// samples exactly once between them (MergeTileEvents makes them one).
-using RangeParts = std::vector<TileEvents>;
-
 // One tile's batches of its current stage, merged as they arrive: one merged list per range of
 // the stage, whatever the number of batches. The merge is exact integer addition, so the lists
 // do not depend on the batches or their order. The lists grow with the samples (nearly every
@@ -51,11 +47,10 @@ class StageAccumulator {
   // On error nothing moved.
   absl::Status Spill(EventSpill* spill);
 
-  // The events of each range, in range order: its lists in memory and its runs (read back
-  // and released), unmerged; the tile's assembly merges them pixel by pixel, so a tile's
-  // merged lists are never all in memory at once. REQUIRES: every range got a batch; `spill`
-  // is the one Spill wrote to (may be null when Spill was never called). Errors: the spill's.
-  absl::StatusOr<std::vector<RangeParts>> TakeRanges(EventSpill* spill);
+  // The events of each range, in range order: its lists in memory and its runs in the
+  // spill, unmerged (the assembly merges them pixel by pixel, reading the runs a piece at a
+  // time, so a tile's merged lists are never all in memory). REQUIRES: every range got a batch.
+  std::vector<TileParts> TakeRanges();
 
  private:
   struct Range {
@@ -78,7 +73,7 @@ struct StageVerdict {
   bool done = false;
   // done: the events to assemble, in parts (they cover the tile's samples exactly once) and the
   // tile's sample count for AssemblePlanTile: 0 for a fixed-count bake (the header's count).
-  std::vector<TileEvents> events;
+  TileParts events;
   int tile_samples = 0;
   // Samples a converged adaptive tile will never take (header.samples - its samples); 0
   // otherwise. Progress counts them as done, so a finished job reads 1.
@@ -88,9 +83,11 @@ struct StageVerdict {
 };
 
 // REQUIRES: `ranges` are the events of every range of stage `state.stage`
-// (StageAccumulator::TakeRanges) of one tile.
-StageVerdict JudgeStage(const PdsmHeader& header, TileStageState state,
-                        std::vector<RangeParts> ranges);
+// (StageAccumulator::TakeRanges) of one tile; `spill` holds their runs (null when they have
+// none). A fixed-count stage is the tile, its parts as they are; an adaptive one reads its
+// runs back to judge the stage. Errors: the spill's.
+absl::StatusOr<StageVerdict> JudgeStage(const PdsmHeader& header, TileStageState state,
+                                        std::vector<TileParts> ranges, EventSpill* spill);
 
 }  // namespace pdsm
 

@@ -29,13 +29,26 @@ PdsmHeader Header(int samples, double tolerance = 0, int min_samples = 0) {
   return h;
 }
 
-// Each range's parts merged into one list.
-std::vector<TileEvents> Merged(absl::StatusOr<std::vector<RangeParts>> ranges) {
-  EXPECT_TRUE(ranges.ok()) << ranges.status();
+// Each range's parts merged into one list (runs read back from `spill`).
+std::vector<TileEvents> Merged(std::vector<TileParts> ranges, EventSpill* spill = nullptr) {
   std::vector<TileEvents> out;
-  if (!ranges.ok()) return out;
-  for (const RangeParts& parts : *ranges) out.push_back(MergeTileEvents(parts));
+  for (TileParts& parts : ranges) {
+    for (const SpilledRun& run : parts.spilled) {
+      absl::StatusOr<TileEvents> read = spill->ReadAndRelease(run, parts.shape);
+      EXPECT_TRUE(read.ok()) << read.status();
+      if (read.ok()) parts.in_memory.push_back(*std::move(read));
+    }
+    out.push_back(MergeTileEvents(parts.in_memory));
+  }
   return out;
+}
+
+// The verdict, which cannot fail without runs.
+StageVerdict Judge(const PdsmHeader& header, TileStageState state, std::vector<TileParts> ranges) {
+  absl::StatusOr<StageVerdict> verdict =
+      JudgeStage(header, std::move(state), std::move(ranges), nullptr);
+  EXPECT_TRUE(verdict.ok()) << verdict.status();
+  return verdict.ok() ? *std::move(verdict) : StageVerdict{};
 }
 
 TEST(StageAccumulator, MergesBatchesOfARangeWhateverTheirOrder) {
@@ -46,8 +59,7 @@ TEST(StageAccumulator, MergesBatchesOfARangeWhateverTheirOrder) {
   b.Add(6, Shadowed(6, 8, 3));
   b.Add(2, Shadowed(2, 4, 2));
   b.Add(4, Shadowed(4, 6, 3));
-  const std::vector<TileEvents> ra = Merged(a.TakeRanges(nullptr)),
-                                rb = Merged(b.TakeRanges(nullptr));
+  const std::vector<TileEvents> ra = Merged(a.TakeRanges()), rb = Merged(b.TakeRanges());
   ASSERT_EQ(ra.size(), 1u);
   ASSERT_EQ(rb.size(), 1u);
   EXPECT_EQ(ra[0].events, rb[0].events);
@@ -58,7 +70,7 @@ TEST(StageAccumulator, AdaptivePilotKeepsItsTwoHalvesApart) {
   StageAccumulator acc(Header(64, 0.01, 4), 0);  // ranges [0, 2) and [2, 4)
   acc.Add(2, Shadowed(2, 4, 5));
   acc.Add(0, Shadowed(0, 2, 2));
-  const std::vector<TileEvents> ranges = Merged(acc.TakeRanges(nullptr));
+  const std::vector<TileEvents> ranges = Merged(acc.TakeRanges());
   ASSERT_EQ(ranges.size(), 2u);
   EXPECT_EQ(ranges[0].events.front(), (Event{2.0f, 2}));
   EXPECT_EQ(ranges[1].events.front(), (Event{5.0f, 2}));
@@ -68,31 +80,31 @@ TEST(JudgeStage, FixedCountStageIsTheTile) {
   StageAccumulator acc(Header(8), 0);
   acc.Add(4, Shadowed(4, 8, 3));
   acc.Add(0, Shadowed(0, 4, 2));
-  const StageVerdict v = JudgeStage(Header(8), {}, *acc.TakeRanges(nullptr));
+  const StageVerdict v = Judge(Header(8), {}, acc.TakeRanges());
   ASSERT_TRUE(v.done);
   EXPECT_EQ(v.tile_samples, 0);
   EXPECT_EQ(v.samples_skipped, 0);
-  ASSERT_EQ(v.events.size(), 1u);
-  EXPECT_EQ(v.events[0].events.front(), (Event{2.0f, 4}));
+  ASSERT_EQ(v.events.in_memory.size(), 1u);
+  EXPECT_EQ(v.events.in_memory[0].events.front(), (Event{2.0f, 4}));
 }
 
 TEST(JudgeStage, AdaptivePilotThatAgreesIsDone) {
   StageAccumulator acc(Header(64, 0.01, 4), 0);
   acc.Add(2, Shadowed(2, 4, 2));
   acc.Add(0, Shadowed(0, 2, 2));
-  const StageVerdict v = JudgeStage(Header(64, 0.01, 4), {}, *acc.TakeRanges(nullptr));
+  const StageVerdict v = Judge(Header(64, 0.01, 4), {}, acc.TakeRanges());
   ASSERT_TRUE(v.done);
   EXPECT_EQ(v.tile_samples, 4);
   EXPECT_EQ(v.samples_skipped, 60);
-  ASSERT_EQ(v.events.size(), 1u);  // one merged list of every sample so far
-  EXPECT_EQ(v.events[0].events.front(), (Event{2.0f, 4}));
+  ASSERT_EQ(v.events.in_memory.size(), 1u);  // one merged list of every sample so far
+  EXPECT_EQ(v.events.in_memory[0].events.front(), (Event{2.0f, 4}));
 }
 
 TEST(JudgeStage, AdaptivePilotThatDisagreesGoesOnWithItsEventsKept) {
   StageAccumulator pilot(Header(64, 0.01, 4), 0);
   pilot.Add(0, Shadowed(0, 2, 2));
   pilot.Add(2, Shadowed(2, 4, 5));  // the second half sees another shadow
-  const StageVerdict v = JudgeStage(Header(64, 0.01, 4), {}, *pilot.TakeRanges(nullptr));
+  const StageVerdict v = Judge(Header(64, 0.01, 4), {}, pilot.TakeRanges());
   ASSERT_FALSE(v.done);
   EXPECT_EQ(v.next.stage, 1);
   ASSERT_EQ(v.next.earlier.size(), 1u);
@@ -106,7 +118,7 @@ TEST(JudgeStage, AdaptivePilotThatDisagreesGoesOnWithItsEventsKept) {
   StageAccumulator stage1(Header(64, 0.01, 4), 1);
   stage1.Add(6, Shadowed(6, 8, 2));
   stage1.Add(4, Shadowed(4, 6, 5));
-  const StageVerdict w = JudgeStage(Header(64, 0.01, 4), v.next, *stage1.TakeRanges(nullptr));
+  const StageVerdict w = Judge(Header(64, 0.01, 4), v.next, stage1.TakeRanges());
   EXPECT_TRUE(w.done);  // the same mix as the first four: A_8 = A_4
   EXPECT_EQ(w.tile_samples, 8);
 }
@@ -115,7 +127,7 @@ TEST(JudgeStage, LastAdaptiveStageIsDoneWhateverTheEstimate) {
   StageAccumulator acc(Header(2, 1e-9, 2), 0);
   acc.Add(0, Shadowed(0, 1, 2));
   acc.Add(1, Shadowed(1, 2, 6));
-  const StageVerdict v = JudgeStage(Header(2, 1e-9, 2), {}, *acc.TakeRanges(nullptr));
+  const StageVerdict v = Judge(Header(2, 1e-9, 2), {}, acc.TakeRanges());
   EXPECT_TRUE(v.done);
   EXPECT_EQ(v.tile_samples, 2);
   EXPECT_EQ(v.samples_skipped, 0);
@@ -153,8 +165,8 @@ TEST(StageAccumulator, SpilledRunsMergeBackToTheSameLists) {
       }
     }
     EXPECT_GT(spill.bytes_written(), 0);
-    const std::vector<TileEvents> a = Merged(memory.TakeRanges(nullptr));
-    const std::vector<TileEvents> b = Merged(spilled.TakeRanges(&spill));
+    const std::vector<TileEvents> a = Merged(memory.TakeRanges());
+    const std::vector<TileEvents> b = Merged(spilled.TakeRanges(), &spill);
     ASSERT_EQ(a.size(), 1u);
     ASSERT_EQ(b.size(), 1u);
     EXPECT_EQ(b[0].tile_index, 3);
@@ -185,8 +197,8 @@ TEST(StageAccumulator, AFailedSpillKeepsTheListsAndNamesTheFolder) {
   EXPECT_EQ(acc.Spill(&unwritable).code(), absl::StatusCode::kPermissionDenied);
   // The lists are whole: a spill that works now gives back the same events.
   ASSERT_TRUE(acc.Spill(&unwritable).ok());
-  EXPECT_EQ(Merged(acc.TakeRanges(&unwritable))[0].events,
-            Merged(reference.TakeRanges(nullptr))[0].events);
+  EXPECT_EQ(Merged(acc.TakeRanges(), &unwritable)[0].events,
+            Merged(reference.TakeRanges())[0].events);
 }
 
 TEST(EventSpill, LeavesNoFileBehind) {
@@ -210,6 +222,35 @@ TEST(EventSpill, LeavesNoFileBehind) {
     EXPECT_EQ(back->offsets, batch.offsets);
   }
   std::filesystem::remove_all(dir);
+}
+
+TEST(SpilledRunReader, ReadsEveryPixelInPiecesWhateverItsSize) {
+  // 40 pixels of 0 to 3000 events, and one of 3 pieces' worth: the reader crosses piece
+  // boundaries inside pixels and reads the big pixel whole.
+  TileEvents run_events{.tile_index = 1, .x0 = 0, .y0 = 0, .width = 41, .height = 1};
+  run_events.offsets.push_back(0);
+  std::mt19937_64 rng(9);
+  for (int p = 0; p < 41; ++p) {
+    const size_t n = p == 17 ? 3 * SpilledRunReader::kPieceEvents : rng() % 3000;
+    for (size_t k = 0; k < n; ++k) {
+      run_events.events.push_back({static_cast<float>(k), static_cast<int32_t>(p + 1)});
+    }
+    run_events.offsets.push_back(run_events.events.size());
+  }
+  EventSpill spill(::testing::TempDir());
+  const absl::StatusOr<SpilledRun> run = spill.Write(run_events);
+  ASSERT_TRUE(run.ok()) << run.status();
+  for (const int stride : {1, 3}) {
+    SpilledRunReader reader(&spill, *run);
+    for (size_t p = 0; p < 41; p += stride) {
+      const std::span<const Event> got = reader.Pixel(p);
+      const std::span<const Event> want = run_events.Pixel(p);
+      ASSERT_EQ(std::vector<Event>(got.begin(), got.end()),
+                std::vector<Event>(want.begin(), want.end()))
+          << "stride " << stride << " pixel " << p;
+    }
+    EXPECT_TRUE(reader.status().ok()) << reader.status();
+  }
 }
 
 TEST(EventSpill, MissingFolderIsNotFoundNamingIt) {

@@ -24,11 +24,15 @@ PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> part
   return tile;
 }
 
-PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts, int tile_samples,
-                      AssemblyStats* stats, const TileWindows* windows) {
+namespace {
+
+// The assembly of one tile whose pixel p's lists `parts_of(p, &lists)` gives: merged,
+// consolidated, turned into attenuation and compressed pixel by pixel, so a tile's merged
+// lists (tens of MiB at thousands of samples) are never all in memory.
+template <typename PartsOf>
+PdsmTile Assemble(const PdsmHeader& header, const TileEvents& shape, int tile_samples,
+                  AssemblyStats* stats, const TileWindows* windows, PartsOf&& parts_of) {
   const auto start = std::chrono::steady_clock::now();
-  static const TileEvents kNoTile;
-  const TileEvents& shape = parts.empty() ? kNoTile : parts.front();
   PdsmTile tile;
   tile.x0 = shape.x0;
   tile.y0 = shape.y0;
@@ -39,12 +43,10 @@ PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> part
   // Compression's perpendicular metric measures depth in units of the baked depth range.
   const PdsmGeometry& g = header.geometry;
   const double depth_scale = std::max(g.z_far - g.z_near, 1e-30);
-  // Merged pixel by pixel: a tile's merged lists (tens of MiB at thousands of samples) are
-  // never all in memory.
-  std::vector<std::span<const Event>> pixel_parts(parts.size());
+  std::vector<std::span<const Event>> lists;
   for (size_t p = 0; p < shape.PixelCount(); ++p) {
-    for (size_t k = 0; k < parts.size(); ++k) pixel_parts[k] = parts[k].Pixel(p);
-    const std::vector<Event> merged = MergeEventLists(pixel_parts);
+    parts_of(p, &lists);
+    const std::vector<Event> merged = MergeEventLists(lists);
     const std::vector<Event> events = ConsolidateEvents(merged);
     std::vector<Vertex> compressed;
     if (windows != nullptr) {
@@ -65,15 +67,46 @@ PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> part
   return tile;
 }
 
-PdsmTile AssemblePlanTile(const BakePlan& plan, std::span<const TileEvents> parts, int tile_samples,
-                          AssemblyStats* stats) {
+}  // namespace
+
+PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts, int tile_samples,
+                      AssemblyStats* stats, const TileWindows* windows) {
+  static const TileEvents kNoTile;
+  const TileEvents& shape = parts.empty() ? kNoTile : parts.front();
+  return Assemble(header, shape, tile_samples, stats, windows,
+                  [&](size_t p, std::vector<std::span<const Event>>* lists) {
+                    lists->clear();
+                    for (const TileEvents& part : parts) lists->push_back(part.Pixel(p));
+                  });
+}
+
+absl::StatusOr<PdsmTile> AssemblePlanTile(const BakePlan& plan, const TileParts& parts,
+                                          EventSpill* spill, int tile_samples,
+                                          AssemblyStats* stats) {
   std::optional<TileWindows> windows;
   if (plan.header.surfaces_only) {
-    windows = ComputeReceiverWindows(plan, plan.tiles.at(parts.front().tile_index));
+    windows = ComputeReceiverWindows(plan, plan.tiles.at(parts.shape.tile_index));
   }
-  const TileWindows* tile_windows = windows ? &*windows : nullptr;
-  return tile_samples > 0 ? AssembleTile(plan.header, parts, tile_samples, stats, tile_windows)
-                          : AssembleTile(plan.header, parts, stats, tile_windows);
+  std::vector<SpilledRunReader> readers;
+  readers.reserve(parts.spilled.size());
+  for (const SpilledRun& run : parts.spilled) readers.emplace_back(spill, run);
+  const int samples = tile_samples > 0 ? tile_samples : plan.header.samples;
+  PdsmTile tile = Assemble(plan.header, parts.shape, samples, stats, windows ? &*windows : nullptr,
+                           [&](size_t p, std::vector<std::span<const Event>>* lists) {
+                             lists->clear();
+                             for (const TileEvents& part : parts.in_memory) {
+                               lists->push_back(part.Pixel(p));
+                             }
+                             for (SpilledRunReader& reader : readers) {
+                               lists->push_back(reader.Pixel(p));
+                             }
+                           });
+  for (const SpilledRunReader& reader : readers) {
+    if (!reader.status().ok()) return reader.status();
+  }
+  for (const SpilledRun& run : parts.spilled) spill->Release(run);
+  tile.samples = tile_samples;  // 0 for a fixed-count bake: the header's count
+  return tile;
 }
 
 }  // namespace pdsm

@@ -7,10 +7,12 @@
 #include <cstdint>
 #include <span>
 
+#include "absl/status/statusor.h"
 #include "core/bake/bake_plan.h"
 #include "core/bake/receiver_windows.h"
 #include "core/events/event.h"
 #include "core/pdsm/pdsm_image.h"
+#include "core/pipeline/event_spill.h"
 
 namespace pdsm {
 
@@ -34,10 +36,13 @@ PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> part
                       AssemblyStats* stats, const TileWindows* windows = nullptr);
 
 // The tile of `plan` the local bake and the coordinator both assemble: with its receiver
-// windows when the bake is surfaces-only, as an adaptive tile when `tile_samples` > 0.
-// REQUIRES: `parts` non-empty, all of tile parts.front().tile_index.
-PdsmTile AssemblePlanTile(const BakePlan& plan, std::span<const TileEvents> parts, int tile_samples,
-                          AssemblyStats* stats);
+// windows when the bake is surfaces-only, as an adaptive tile when `tile_samples` > 0. The
+// parts' runs are read back from `spill` a piece at a time and released.
+// REQUIRES: `parts` cover the tile's samples exactly once; `spill` non-null when they have
+// runs. Errors: the spill's, reading the runs back.
+absl::StatusOr<PdsmTile> AssemblePlanTile(const BakePlan& plan, const TileParts& parts,
+                                          EventSpill* spill, int tile_samples,
+                                          AssemblyStats* stats);
 
 }  // namespace pdsm
 
