@@ -48,6 +48,12 @@ elif [[ $# -gt 0 ]]; then
   exit 2
 fi
 
+# Opt-in, never by default nor in CI: Blender (Cycles) for the benchmark that anchors pdsm to a
+# path tracer (bench/cycles_compare.py; docs/accuracy.md, "An independent anchor").
+if [[ "${PDSM_WITH_BLENDER:-0}" == 1 ]]; then
+  test_packages+=(blender)
+fi
+
 export DEBIAN_FRONTEND=noninteractive
 if [[ "${PDSM_SKIP_APT_UPDATE:-0}" != 1 ]]; then
   apt-get update -q
