@@ -25,7 +25,9 @@
 #include "absl/strings/str_cat.h"
 #include "core/bake/bake_plan.h"
 #include "core/scene/scene_loader.h"
+#include "core/util/malloc_arenas.h"
 #include "core/util/work_queue.h"
+#include "gl/platform/osmesa_context.h"
 #include "worker/bake_task.h"
 #include "worker/local_bake.h"
 #include "worker/shadow_map_renderer.h"
@@ -163,6 +165,10 @@ int Run(int argc, char** argv) {
   absl::StatusOr<BakePlan> plan = PlanBake(*scene);
   if (!plan.ok()) return std::fprintf(stderr, "%s\n", plan.status().ToString().c_str()), 1;
   const int threads = o.threads > 0 ? o.threads : CoreCount();
+  // As the bake sets them, before the limit makes the process's first context and arenas:
+  // both runs then see the same llvmpipe threads and malloc arenas as `pdsm bake`.
+  gl::ShareCoresBetweenContexts(threads);
+  LimitMallocArenas(threads);
   const ShadowMapWindow full = FullWindow(*plan);
   std::printf("%s: PDSM %dx%d, %d samples, shadow maps %dx%d, %zu casters, %d threads\n",
               scene->name.c_str(), scene->bake.width, scene->bake.height, scene->bake.samples,
