@@ -110,6 +110,43 @@ TEST_F(PlatesAccuracy, FreeSpacePointsMatchExactReference) {
   EXPECT_LT(e.p95, 0.02);
 }
 
+// Issue #15: compression keeps exact plateaus, so a point whose neighbourhood is all umbra reads
+// exactly 1 and one whose neighbourhood is all lit exactly 0 (before, the umbra read 0.9965 on
+// average: epsilon lifted it). The neighbourhood (the point and 0.25 units around it, more than
+// two PDSM pixels) is what the bilinear lookup blends.
+TEST_F(PlatesAccuracy, UmbraReadsExactlyOneAndLitGroundExactlyZero) {
+  ASSERT_NE(pdsm_, nullptr);
+  const std::vector<glm::dvec3> grid = GroundGrid(6.0, 120, 0.0);
+  const glm::dvec3 offsets[] = {
+      {0, 0, 0}, {0.25, 0, 0}, {-0.25, 0, 0}, {0, 0, 0.25}, {0, 0, -0.25}};
+  std::vector<glm::dvec3> probes;
+  for (const glm::dvec3& p : grid) {
+    for (const glm::dvec3& o : offsets) probes.push_back(p + o);
+  }
+  absl::StatusOr<std::vector<double>> exact = ExactAttenuation(*scene_, probes);
+  ASSERT_TRUE(exact.ok()) << exact.status();
+  int umbra = 0, lit = 0;
+  for (size_t k = 0; k < grid.size(); ++k) {
+    const auto around = exact->begin() + static_cast<ptrdiff_t>(k * std::size(offsets));
+    const bool all_umbra =
+        std::all_of(around, around + std::size(offsets), [](double a) { return a == 1.0; });
+    const bool all_lit =
+        std::all_of(around, around + std::size(offsets), [](double a) { return a == 0.0; });
+    if (!all_umbra && !all_lit) continue;
+    const double baked = QueryAttenuation(*pdsm_, grid[k]);
+    if (all_umbra) {
+      ++umbra;
+      EXPECT_EQ(baked, 1.0) << "umbra point " << grid[k].x << ", " << grid[k].z;
+    } else {
+      ++lit;
+      EXPECT_EQ(baked, 0.0) << "lit point " << grid[k].x << ", " << grid[k].z;
+    }
+  }
+  std::printf("exact plateaus: %d umbra points, %d lit points\n", umbra, lit);
+  EXPECT_GE(umbra, 20);  // 25: the casters are small under a large light, its umbra too
+  EXPECT_GE(lit, 4000);  // 7357
+}
+
 TEST_F(PlatesAccuracy, CasterSurfacesDoNotShadowThemselves) {
   ASSERT_NE(pdsm_, nullptr);
   // The top of the triangle plate at y = 2 (light above): lit except under the upper plate.

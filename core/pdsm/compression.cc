@@ -38,16 +38,17 @@ class LineCone {
   double origin_z() const { return z0_; }
   double origin_a() const { return a0_; }
 
-  // Narrows the cone to lines passing within tolerance of (z, a), z > origin; false (and no
-  // change) when that would leave no line.
-  bool Admit(double z, double a) {
+  // Narrows the cone to lines passing within tolerance of (z, a), z > origin (exactly through
+  // it when `exact`); false (and no change) when that would leave no line.
+  bool Admit(double z, double a, bool exact = false) {
+    const double tolerance = exact ? 0.0 : tolerance_;
     double lo, hi;
     const double dz = z - z0_;
     if (metric_ == CompressionMetric::kVertical) {
       // The window is clipped to [0, 1] so the line never leaves the range of attenuation;
       // clamping a segment's end afterwards would bend it and break the bound.
-      lo = (std::max(a - tolerance_, 0.0) - a0_) / dz;
-      hi = (std::min(a + tolerance_, 1.0) - a0_) / dz;
+      lo = (std::max(a - tolerance, 0.0) - a0_) / dz;
+      hi = (std::min(a + tolerance, 1.0) - a0_) / dz;
     } else {
       const double dzn = dz * inv_scale_;
       const double da = a - a0_;
@@ -56,9 +57,9 @@ class LineCone {
       // As for kVertical, the line must stay in [0, 1] at every vertex it covers.
       lo = std::max(std::atan2(0.0 - a0_, dzn), -kSteepest);
       hi = std::min(std::atan2(1.0 - a0_, dzn), kSteepest);
-      if (dist > tolerance_) {
+      if (dist > tolerance) {
         const double angle = std::clamp(std::atan2(da, dzn), -kSteepest, kSteepest);
-        const double half = std::asin(tolerance_ / dist);
+        const double half = std::asin(tolerance / dist);
         lo = std::max(lo, angle - half);
         hi = std::min(hi, angle + half);
       }
@@ -87,6 +88,17 @@ class LineCone {
   double lo_ = -kInf, hi_ = kInf;
 };
 
+// Exact plateaus (issue #15): a stretch where A is exactly 0 (fully lit) or exactly 1 (umbra)
+// is bounded by vertices of that exact value; those are kept as they are, so that the stretch
+// stays exact instead of being lifted or lowered by up to epsilon. A vertex inside a plateau
+// (its neighbours of the same value) is not needed: the segment between the plateau's ends,
+// both exact, is flat.
+bool Pinned(std::span<const Vertex> function, size_t i) {
+  const float a = function[i].a;
+  if (a != 0.0f && a != 1.0f) return false;
+  return i == 0 || i + 1 == function.size() || function[i - 1].a != a || function[i + 1].a != a;
+}
+
 }  // namespace
 
 std::vector<Vertex> CompressFunction(std::span<const Vertex> function, double epsilon,
@@ -98,17 +110,21 @@ std::vector<Vertex> CompressFunction(std::span<const Vertex> function, double ep
   cone.Reset(function[0].z, function[0].a);
   size_t last_admitted = 0;   // index of the last input vertex the current segment covers
   size_t first_at_depth = 0;  // first input vertex at the depth of function[i]
+  // A pinned vertex ends its segment with its own value: the cone holds only lines through it.
   auto emit_segment_end = [&](size_t index) {
     const double z = function[index].z;
-    const double a = cone.ValueAt(z);
-    out.push_back(Vertex{function[index].z, static_cast<float>(a)});
-    cone.Reset(z, out.back().a);
+    const float a =
+        Pinned(function, index) ? function[index].a : static_cast<float>(cone.ValueAt(z));
+    out.push_back(Vertex{function[index].z, a});
+    cone.Reset(z, a);
   };
   for (size_t i = 1; i < function.size();) {
     const Vertex& v = function[i];
     if (static_cast<double>(v.z) == cone.origin_z()) {
-      // A jump at the origin's depth: within tolerance it is absorbed, else it stays a jump.
-      if (std::abs(v.a - cone.origin_a()) > StoredTolerance(epsilon)) {
+      // A jump at the origin's depth: within tolerance it is absorbed, else it stays a jump;
+      // a jump to an exact 0 or 1 always stays.
+      if (std::abs(v.a - cone.origin_a()) > StoredTolerance(epsilon) ||
+          (Pinned(function, i) && v.a != cone.origin_a())) {
         out.push_back(v);
         cone.Reset(v.z, v.a);
       }
@@ -128,7 +144,15 @@ std::vector<Vertex> CompressFunction(std::span<const Vertex> function, double ep
       last_admitted = i++;
       continue;
     }
-    if (cone.Admit(v.z, v.a)) {
+    if (Pinned(function, i)) {
+      // Kept exactly: the segment ends there if a line through it fits, else at the last
+      // vertex admitted, and v is retried from there (a fresh cone always admits one point).
+      if (cone.Admit(v.z, v.a, /*exact=*/true)) {
+        emit_segment_end(i);
+        last_admitted = i++;
+        continue;
+      }
+    } else if (cone.Admit(v.z, v.a)) {
       last_admitted = i++;
       continue;
     }

@@ -13,6 +13,9 @@
 //  - epsilon = 0 is lossless: only exact duplicates are removed.
 //  - Jumps larger than 2 epsilon stay jumps (two vertices at one depth); kPerpendicular
 //    keeps every jump larger than epsilon.
+//  - Exact plateaus stay exact (issue #15): every input vertex whose value is exactly 0 or 1
+//    and that bounds a stretch of that value is an output vertex with that value, so a fully
+//    lit stretch reads 0 and an umbra reads 1, not within epsilon of them.
 #ifndef PDSM_CORE_PDSM_COMPRESSION_H_
 #define PDSM_CORE_PDSM_COMPRESSION_H_
 

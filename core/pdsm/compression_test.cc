@@ -353,13 +353,14 @@ TEST(CompressFunctionTest, EpsilonOneKeepsTheBound) {
   }
 }
 
-// With epsilon = 1 and values in [0, 0.5], the flat line through the first vertex is within
+// With epsilon = 1 and values in (0, 0.5], the flat line through the first vertex is within
 // epsilon of every vertex, so the slope interval never empties: one segment, two vertices.
+// (Values are kept off exact 0: exact plateaus are kept whatever epsilon, tested below.)
 TEST(CompressFunctionTest, EpsilonOneGivesOneSegmentForValuesUpToHalf) {
   std::mt19937_64 rng(4500);
   for (int trial = 0; trial < kTrials; ++trial) {
     std::vector<Vertex> in = RandomFunction(rng, trial);
-    for (Vertex& v : in) v.a *= 0.5f;
+    for (Vertex& v : in) v.a = 0.001f + 0.499f * v.a;
     for (CompressionMetric metric :
          {CompressionMetric::kVertical, CompressionMetric::kPerpendicular}) {
       const std::vector<Vertex> out = CompressFunction(in, 1.0, metric, 1.0);
@@ -368,6 +369,42 @@ TEST(CompressFunctionTest, EpsilonOneGivesOneSegmentForValuesUpToHalf) {
       ASSERT_TRUE(VerticalBoundHolds(in, out, 1.0));
     }
   }
+}
+
+// Issue #15: the input's exact plateaus (A exactly 0: fully lit; exactly 1: umbra) read exactly
+// the same after compression, at every depth they span and whatever epsilon and metric, and
+// the bound still holds elsewhere. Functions like the bake's (events of N samples, the hidden
+// count reaching 0 and N) and random piecewise-linear ones clamped to [0, 1].
+TEST(CompressFunctionTest, ExactPlateausStayExact) {
+  int plateaus = 0;
+  for (double epsilon : kEpsilons) {
+    for (CompressionMetric metric :
+         {CompressionMetric::kVertical, CompressionMetric::kPerpendicular}) {
+      std::mt19937_64 rng(6000);
+      for (int trial = 0; trial < kTrials; ++trial) {
+        const std::vector<Vertex> in = RandomFunction(rng, trial);
+        const std::vector<Vertex> out = CompressFunction(in, epsilon, metric, 1.0);
+        ASSERT_TRUE(StructureHolds(in, out)) << "trial " << trial;
+        ASSERT_TRUE(metric == CompressionMetric::kVertical
+                        ? VerticalBoundHolds(in, out, epsilon)
+                        : PerpendicularBoundHolds(in, out, epsilon, 1.0))
+            << "epsilon " << epsilon << " trial " << trial;
+        for (size_t i = 0; i + 1 < in.size(); ++i) {
+          const float a = in[i].a;
+          if (!(a == 0.0f || a == 1.0f) || in[i + 1].a != a || !(in[i + 1].z > in[i].z)) continue;
+          ++plateaus;
+          for (double f : {0.0, 0.25, 0.5, 0.75}) {
+            const double z = in[i].z + f * (in[i + 1].z - in[i].z);
+            ASSERT_EQ(EvaluateAttenuation(out, z), a)
+                << "epsilon " << epsilon << " trial " << trial << " plateau at " << in[i].z << "..."
+                << in[i + 1].z << ", z " << z << "\ninput " << Describe(in) << "\noutput "
+                << Describe(out);
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(plateaus, 10000) << "the random functions must hold plateaus to test";
 }
 
 // A jump larger than 2 epsilon cannot be followed within epsilon by a continuous function, so
