@@ -113,9 +113,18 @@ TileEvents MergeTileEvents(std::span<const TileEvents> parts) {
   merged.width = first.width;
   merged.height = first.height;
   const size_t pixels = first.PixelCount();
+  size_t total = 0, with_events = 0;
+  const TileEvents* only = nullptr;
+  for (const TileEvents& part : parts) {
+    total += part.events.size();
+    if (!part.events.empty()) ++with_events, only = &part;
+  }
+  if (with_events <= 1) {  // nothing to merge: the one part with events, or none
+    merged.offsets = only ? only->offsets : std::vector<uint64_t>(pixels + 1, 0);
+    if (only) merged.events = only->events;
+    return merged;
+  }
   merged.offsets.assign(pixels + 1, 0);
-  size_t total = 0;
-  for (const TileEvents& part : parts) total += part.events.size();
   merged.events.reserve(total);  // an upper bound: equal depths only shrink it
   std::vector<std::span<const Event>> lists(parts.size());
   for (size_t p = 0; p < pixels; ++p) {

@@ -27,6 +27,7 @@ int64_t StageAccumulator::Add(int sample_begin, TileEvents events) {
       shape_.height = events.height;
     }
     std::optional<TileEvents>& merged = merged_[r].merged;
+    if (merged && events.events.empty()) return 0;  // a batch that shadows nothing adds nothing
     const int64_t before = merged ? TileEventsBytes(*merged) : 0;
     if (!merged) {
       merged = std::move(events);

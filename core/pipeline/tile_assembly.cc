@@ -1,5 +1,6 @@
 #include "core/pipeline/tile_assembly.h"
 
+#include <algorithm>
 #include <chrono>
 #include <optional>
 #include <vector>
@@ -46,6 +47,13 @@ PdsmTile Assemble(const PdsmHeader& header, const TileEvents& shape, int tile_sa
   std::vector<std::span<const Event>> lists;
   for (size_t p = 0; p < shape.PixelCount(); ++p) {
     parts_of(p, &lists);
+    // A ray no sample shadows holds no vertex (outside surfaces-only bakes, whose windows
+    // bracket every function): most of a large world's rays, so no list is made for them.
+    if (windows == nullptr &&
+        std::all_of(lists.begin(), lists.end(), [](const auto& l) { return l.empty(); })) {
+      tile.offsets[p + 1] = tile.vertices.size();
+      continue;
+    }
     const std::vector<Event> merged = MergeEventLists(lists);
     const std::vector<Event> events = ConsolidateEvents(merged);
     std::vector<Vertex> compressed;
@@ -83,6 +91,19 @@ PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> part
 absl::StatusOr<PdsmTile> AssemblePlanTile(const BakePlan& plan, const TileParts& parts,
                                           EventSpill* spill, int tile_samples,
                                           AssemblyStats* stats) {
+  if (!plan.header.surfaces_only && parts.spilled.empty() &&
+      std::all_of(parts.in_memory.begin(), parts.in_memory.end(),
+                  [](const TileEvents& e) { return e.events.empty(); })) {
+    // No sample shadows any of its rays (most tiles of a large world): every function empty.
+    PdsmTile tile;
+    tile.x0 = parts.shape.x0;
+    tile.y0 = parts.shape.y0;
+    tile.width = parts.shape.width;
+    tile.height = parts.shape.height;
+    tile.samples = tile_samples;
+    tile.offsets.assign(parts.shape.PixelCount() + 1, 0);
+    return tile;
+  }
   std::optional<TileWindows> windows;
   if (plan.header.surfaces_only) {
     windows = ComputeReceiverWindows(plan, plan.tiles.at(parts.shape.tile_index));
