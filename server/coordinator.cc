@@ -55,6 +55,7 @@ EngineOptions MakeEngineOptions(const CoordinatorOptions& options, WorkQueue* po
 
 Coordinator::Coordinator(const CoordinatorOptions& options)
     : options_(options),
+      query_cache_(options.query_cache_bytes),
       started_ms_(SteadyNowMs()),
       engine_(MakeEngineOptions(options, &pool_)),
       // The ticker holds one thread for good; the others assemble.

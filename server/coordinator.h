@@ -59,6 +59,8 @@ struct CoordinatorOptions {
   // Partial results (running event lists) held in memory before they move to a scratch file
   // in data_dir (core/pipeline/event_spill.h). Changes no byte of any PDSM.
   int64_t event_memory_budget_bytes = kDefaultEventMemoryBudget;
+  // QueryAttenuation's tiles kept in memory (core/pdsm/pdsm_tile_cache.h).
+  int64_t query_cache_bytes = kDefaultTileCacheBytes;
   int max_task_failures = 3;
   int max_worker_failures = 3;
   int assembly_threads = 1;

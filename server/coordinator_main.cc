@@ -38,6 +38,7 @@ struct Flags {
   std::string log_format = "text";  // --log-format: kLogFormatNames
   double lease_seconds = 30;
   int64_t event_memory_mib = kDefaultEventMemoryBudget >> 20;
+  int64_t query_cache_mib = kDefaultTileCacheBytes >> 20;
   int max_message_bytes = kDefaultMaxMessageBytes;
   CoordinatorOptions options;
 };
@@ -85,6 +86,7 @@ int Run(Flags& flags, const sigset_t& signals) {
   SetUpProcessLog("coordinator", flags.log_level, flags.log_format);
   flags.options.lease_ms = static_cast<int64_t>(flags.lease_seconds * 1000);
   flags.options.event_memory_budget_bytes = flags.event_memory_mib << 20;
+  flags.options.query_cache_bytes = flags.query_cache_mib << 20;
   absl::StatusOr<std::string> client_token =
       OptionalToken("--client-token-file", flags.client_token_file);
   absl::StatusOr<std::string> worker_token =
@@ -235,6 +237,10 @@ int main(int argc, char** argv) {
   app.add_option("--event-memory-mib", flags.event_memory_mib,
                  "Partial results kept in memory before they move to a scratch file in the data "
                  "dir (the PDSM does not change)")
+      ->check(CLI::Range(1, 1 << 20))
+      ->capture_default_str();
+  app.add_option("--query-cache-mib", flags.query_cache_mib,
+                 "Tiles of a finished PDSM kept in memory for QueryAttenuation (read on demand)")
       ->check(CLI::Range(1, 1 << 20))
       ->capture_default_str();
   app.add_option("--max-task-failures", o.max_task_failures,

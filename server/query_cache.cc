@@ -1,33 +1,41 @@
 #include "server/query_cache.h"
 
+#include <utility>
+
 #include "core/pdsm/pdsm_file.h"
-#include "core/pdsm/pdsm_query.h"
 
 namespace pdsm {
 
 absl::StatusOr<QueryAnswer> QueryCache::Query(const std::string& job_id,
                                               const std::string& pdsm_path, std::string_view light,
                                               const std::vector<glm::dvec3>& points_world) {
-  std::shared_ptr<const Lights> lights;
+  std::shared_ptr<PdsmTileCache> cache;
   {
     absl::MutexLock lock(&mu_);
-    if (job_id_ == job_id && light_ == light) lights = lights_;
+    if (job_id_ == job_id) cache = cache_;
   }
-  if (!lights) {
-    absl::StatusOr<Lights> read = ReadPdsmLights(pdsm_path, light);
-    if (!read.ok()) return read.status();
-    lights = std::make_shared<const Lights>(*std::move(read));
+  if (!cache) {
+    absl::StatusOr<PdsmReader> reader = PdsmReader::Open(pdsm_path);
+    if (!reader.ok()) return reader.status();
+    cache = std::make_shared<PdsmTileCache>(*std::move(reader), budget_bytes_);
     absl::MutexLock lock(&mu_);
     job_id_ = job_id;
-    light_ = std::string(light);
-    lights_ = lights;
+    cache_ = cache;
+  }
+  const PdsmReader& reader = cache->reader();
+  std::vector<int> parts;
+  if (light.empty()) {
+    for (int p = 0; p < reader.light_count(); ++p) parts.push_back(p);
+  } else {
+    absl::StatusOr<int> part = reader.FindLight(light);
+    if (!part.ok()) return part.status();
+    parts.push_back(*part);
   }
   QueryAnswer answer;
-  for (const PdsmImage& image : *lights) answer.lights.push_back(image.header.light_name);
-  answer.attenuation.reserve(points_world.size() * lights->size());
-  for (const glm::dvec3& p : points_world) {
-    for (const PdsmImage& image : *lights) answer.attenuation.push_back(QueryAttenuation(image, p));
-  }
+  for (const int p : parts) answer.lights.push_back(reader.headers()[p].light_name);
+  absl::StatusOr<std::vector<double>> values = AttenuationAt(*cache, parts, points_world);
+  if (!values.ok()) return values.status();
+  answer.attenuation = *std::move(values);
   return answer;
 }
 

@@ -1,5 +1,6 @@
-// QueryAttenuation's PDSM: the lights of the job queried last, kept in memory for the next
-// query of the same job and light (clients query in batches).
+// QueryAttenuation's PDSM: the file of the job queried last, open, with its tiles read on demand
+// through a bounded cache (core/pdsm/pdsm_tile_cache.h) kept for the next query of the same job
+// (clients query in batches). Memory stays within the cache's budget whatever the map's size.
 #ifndef PDSM_SERVER_QUERY_CACHE_H_
 #define PDSM_SERVER_QUERY_CACHE_H_
 
@@ -13,7 +14,7 @@
 #include "absl/base/thread_annotations.h"
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
-#include "core/pdsm/pdsm_image.h"
+#include "core/pdsm/pdsm_tile_cache.h"
 
 namespace pdsm {
 
@@ -23,22 +24,25 @@ struct QueryAnswer {
   std::vector<double> attenuation;
 };
 
-// Thread-safe; queries run in parallel, a miss reads the file outside the lock.
+// Thread-safe; queries run in parallel (they share the cache; a tile missing is read outside
+// its lock).
 class QueryCache {
  public:
+  explicit QueryCache(int64_t budget_bytes = kDefaultTileCacheBytes)
+      : budget_bytes_(budget_bytes) {}
+
   // The attenuation at each world point (NaN outside a light's frustum) from the finished
   // PDSM of `job_id` at `pdsm_path`: of the light named `light`, or of every light when it is
-  // empty. Errors of ReadPdsmLights (NOT_FOUND naming the lights for no such light).
+  // empty. Errors of PdsmReader (NOT_FOUND naming the lights for no such light).
   absl::StatusOr<QueryAnswer> Query(const std::string& job_id, const std::string& pdsm_path,
                                     std::string_view light,
                                     const std::vector<glm::dvec3>& points_world);
 
  private:
-  using Lights = std::vector<PdsmImage>;
+  const int64_t budget_bytes_;
   absl::Mutex mu_;
   std::string job_id_ ABSL_GUARDED_BY(mu_);
-  std::string light_ ABSL_GUARDED_BY(mu_);
-  std::shared_ptr<const Lights> lights_ ABSL_GUARDED_BY(mu_);
+  std::shared_ptr<PdsmTileCache> cache_ ABSL_GUARDED_BY(mu_);
 };
 
 }  // namespace pdsm

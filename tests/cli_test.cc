@@ -2,6 +2,7 @@
 // and field, no output left behind on failure, query and info output formats.
 #include <cctype>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <utility>
 
@@ -206,6 +207,46 @@ TEST(Cli, QueryTakesAHeaderRowAndStdin) {
                  dir);
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("stdin:2"), std::string::npos) << r.err;
+}
+
+// pdsm query reads tiles on demand and answers points in the order of their tiles: the output
+// still follows the input line by line, and a cache of 1 MiB (re-reading tiles) answers the
+// same as the default one.
+TEST(Cli, QueryAnswersInTheGivenOrderWhateverTheCache) {
+  TempDir dir;
+  const std::string scene = dir.File("tiny.json");
+  WriteText(scene, kGoodScene);
+  const std::string out = dir.File("tiny.exr");
+  ASSERT_EQ(RunCommand(kPdsm + " bake " + scene + " -o " + out + " --no-preview", dir).exit_code,
+            0);
+  std::string points;
+  std::vector<std::string> lines;
+  for (int k = 0; k < 400; ++k) {  // scattered over the ground, tiles far apart in a row
+    const double x = -4.5 + 9.0 * ((k * 37) % 400) / 400.0,
+                 z = -4.5 + 9.0 * ((k * 91) % 400) / 400.0;
+    lines.push_back(std::to_string(x) + ",0.2," + std::to_string(z));
+    points += lines.back() + "\n";
+  }
+  WriteText(dir.File("pts.csv"), points);
+  CommandResult big = RunCommand(kPdsm + " query " + out + " --points " + dir.File("pts.csv"), dir);
+  ASSERT_EQ(big.exit_code, 0) << big.err;
+  CommandResult small =
+      RunCommand(kPdsm + " query " + out + " --cache-mib 1 --points " + dir.File("pts.csv"), dir);
+  ASSERT_EQ(small.exit_code, 0) << small.err;
+  EXPECT_EQ(small.out, big.out);
+  std::istringstream answers(big.out);
+  std::string answer;
+  int shadowed = 0;
+  for (const std::string& line : lines) {
+    ASSERT_TRUE(std::getline(answers, answer));
+    ASSERT_EQ(answer.substr(0, line.size() + 1), line + ",");
+    if (answer.substr(line.size() + 1) != "0.000000") ++shadowed;
+  }
+  EXPECT_GT(shadowed, 10) << "some points must be in the plate's shadow";
+  CommandResult bad =
+      RunCommand(kPdsm + " query " + out + " --cache-mib 0 --points " + dir.File("pts.csv"), dir);
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--cache-mib"), std::string::npos) << bad.err;
 }
 
 TEST(Cli, NotAPdsmFileExits2) {

@@ -15,6 +15,7 @@
 #include "client/service/service_connection.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_query.h"
+#include "core/pdsm/pdsm_tile_cache.h"
 
 namespace pdsm {
 namespace {
@@ -27,19 +28,41 @@ struct QueryFlags {
   std::string points_path;
   std::string job_id;
   std::string light;
+  int64_t cache_mib = kDefaultTileCacheBytes >> 20;
   ServiceFlags service;
 };
 
+// Values per chunk of points (each chunk's points are ordered by tile): 32 MiB of answers.
+constexpr size_t kValuesPerChunk = size_t{1} << 22;
+
+// Reads only the tiles the points fall in, through a cache of --cache-mib: a map of any size
+// answers in bounded memory. Points are answered in the order of their tiles (a chunk at a
+// time) and printed in the order given.
 absl::Status QueryLocal(const QueryFlags& flags, const std::vector<QueryPoint>& points) {
-  absl::StatusOr<std::vector<PdsmImage>> read = ReadPdsmLights(flags.pdsm_path, flags.light);
-  if (!read.ok()) return read.status();
-  const std::vector<PdsmImage>& lights = *read;
-  std::vector<double> attenuation(lights.size());
-  for (const QueryPoint& point : points) {
-    for (size_t i = 0; i < lights.size(); ++i) {
-      attenuation[i] = QueryAttenuation(lights[i], point.world);
+  absl::StatusOr<PdsmReader> reader = PdsmReader::Open(flags.pdsm_path);
+  if (!reader.ok()) return reader.status();
+  std::vector<int> parts;
+  if (flags.light.empty() && reader->light_count() > 1) {
+    for (int p = 0; p < reader->light_count(); ++p) parts.push_back(p);
+  } else {
+    absl::StatusOr<int> part = reader->FindLight(flags.light);
+    if (!part.ok()) return part.status();
+    parts.push_back(*part);
+  }
+  PdsmTileCache cache(*std::move(reader), flags.cache_mib << 20);
+  const size_t chunk = std::max<size_t>(4096, kValuesPerChunk / parts.size());
+  std::vector<glm::dvec3> world;
+  for (size_t begin = 0; begin < points.size(); begin += chunk) {
+    const size_t end = std::min(points.size(), begin + chunk);
+    world.clear();
+    for (size_t i = begin; i < end; ++i) world.push_back(points[i].world);
+    absl::StatusOr<std::vector<double>> values = AttenuationAt(cache, parts, world);
+    if (!values.ok()) return values.status();
+    for (size_t i = begin; i < end; ++i) {
+      PrintAttenuationLine(
+          points[i],
+          std::span<const double>(values->data() + (i - begin) * parts.size(), parts.size()));
     }
-    PrintAttenuationLine(point, attenuation);
   }
   return absl::OkStatus();
 }
@@ -123,6 +146,10 @@ void RegisterQueryCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--light", flags->light,
                   "The one light to answer for (a file of several lights: default one column "
                   "per light, in scene order)");
+  cmd->add_option("--cache-mib", flags->cache_mib,
+                  "Tiles of the file kept in memory, MiB (default 256): only the tiles the "
+                  "points fall in are read, so any map size fits")
+      ->check(CLI::Range(1, 1 << 20));
   AddServiceFlags(cmd, &flags->service, /*required=*/false);
   cmd->callback([flags, exit_code] { *exit_code = RunQuery(*flags); });
 }

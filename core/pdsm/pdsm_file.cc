@@ -496,7 +496,10 @@ absl::StatusOr<PdsmImage> ReadPart(Imf::MultiPartInputFile& file, const std::str
 
 PdsmReader::PdsmReader(std::string path, std::unique_ptr<Imf::MultiPartInputFile> file,
                        std::vector<PdsmHeader> headers)
-    : path_(std::move(path)), file_(std::move(file)), headers_(std::move(headers)) {}
+    : path_(std::move(path)),
+      file_(std::move(file)),
+      headers_(std::move(headers)),
+      read_mu_(std::make_unique<absl::Mutex>()) {}
 PdsmReader::PdsmReader(PdsmReader&&) noexcept = default;
 PdsmReader& PdsmReader::operator=(PdsmReader&&) noexcept = default;
 PdsmReader::~PdsmReader() = default;
@@ -523,6 +526,60 @@ absl::StatusOr<PdsmImage> PdsmReader::ReadLight(int part) {
         absl::StrFormat("%s: no part %d of %d", path_, part, headers_.size()));
   }
   return ReadPart(*file_, path_, part);
+}
+
+absl::StatusOr<PdsmTile> PdsmReader::ReadTile(int part, int tile_x, int tile_y) {
+  if (part < 0 || part >= static_cast<int>(headers_.size())) {
+    return absl::OutOfRangeError(
+        absl::StrFormat("%s: no part %d of %d", path_, part, headers_.size()));
+  }
+  const PdsmHeader& header = headers_[part];
+  const PdsmGeometry& g = header.geometry;
+  const TileGrid grid{g.width, g.height, header.tile_size};
+  if (tile_x < 0 || tile_x >= grid.TilesX() || tile_y < 0 || tile_y >= grid.TilesY()) {
+    return absl::OutOfRangeError(absl::StrFormat("%s: no tile (%d, %d) in a grid of %dx%d", path_,
+                                                 tile_x, tile_y, grid.TilesX(), grid.TilesY()));
+  }
+  PdsmTile tile;
+  tile.x0 = tile_x * grid.tile_size;
+  tile.y0 = tile_y * grid.tile_size;
+  tile.width = grid.TileWidth(tile.x0);
+  tile.height = grid.TileHeight(tile.y0);
+  if (!header.tile_samples.empty()) {
+    tile.samples = header.TileSamples(static_cast<size_t>(tile_y * grid.TilesX() + tile_x));
+  }
+  const size_t pixels = static_cast<size_t>(tile.width) * tile.height;
+  DeepTileBuffers buffers;
+  buffers.Resize(pixels);
+  absl::MutexLock lock(read_mu_.get());
+  try {
+    Imf::DeepTiledInputPart exr_part(*file_, part);
+    exr_part.setFrameBuffer(buffers.FrameBuffer(tile.width));
+    exr_part.readPixelSampleCount(tile_x, tile_y);
+    tile.offsets.assign(pixels + 1, 0);
+    for (size_t p = 0; p < pixels; ++p) {
+      tile.offsets[p + 1] = tile.offsets[p] + buffers.counts[p];
+    }
+    // Checked before anything is allocated from the counts (a corrupt file's are any size).
+    if (tile.offsets.back() > kMaxVerticesPerTile) {
+      return absl::DataLossError(
+          absl::StrFormat("%s: tile (%d, %d) counts %d vertices, more than "
+                          "a tile holds (%d)",
+                          path_, tile_x, tile_y, tile.offsets.back(), kMaxVerticesPerTile));
+    }
+    tile.vertices.resize(tile.offsets.back());
+    for (size_t p = 0; p < pixels; ++p) {
+      buffers.Set(p, tile.vertices.data(), tile.offsets[p], tile.offsets[p + 1]);
+    }
+    exr_part.setFrameBuffer(buffers.FrameBuffer(tile.width));
+    exr_part.readTile(tile_x, tile_y);
+  } catch (...) {
+    return StatusFromCurrentException(path_, "cannot read");
+  }
+  if (absl::Status s = CheckTileFunctions(tile, path_); !s.ok()) {
+    return absl::DataLossError(s.message());
+  }
+  return tile;
 }
 
 absl::StatusOr<std::vector<PdsmHeader>> ReadPdsmHeaders(const std::string& path) {

@@ -13,6 +13,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
 #include "core/pdsm/pdsm_image.h"
 #include "core/util/file_system.h"
 
@@ -91,6 +92,13 @@ class PdsmReader {
   // The whole PDSM of part `part`. OUT_OF_RANGE for no such part; else errors as ReadPdsm's.
   absl::StatusOr<PdsmImage> ReadLight(int part);
 
+  // One tile of part `part`: tile (tile_x, tile_y) of its grid (header.tile_size pixels a
+  // side, the last row and column clipped), read alone: what a reader that cannot hold the
+  // whole map uses (core/pdsm/pdsm_tile_cache.h). `samples` as PdsmTile's (0: the header's).
+  // OUT_OF_RANGE for no such part or tile; DATA_LOSS for a corrupt tile (depths not nondecreasing,
+  // counts past a tile's size). Thread-safe: concurrent calls are serialized.
+  absl::StatusOr<PdsmTile> ReadTile(int part, int tile_x, int tile_y);
+
  private:
   PdsmReader(std::string path, std::unique_ptr<Imf::MultiPartInputFile> file,
              std::vector<PdsmHeader> headers);
@@ -98,6 +106,7 @@ class PdsmReader {
   std::string path_;
   std::unique_ptr<Imf::MultiPartInputFile> file_;
   std::vector<PdsmHeader> headers_;
+  std::unique_ptr<absl::Mutex> read_mu_;  // a part's frame buffer and read go together
 };
 
 // Reads one light's whole PDSM. `light` empty: the file's only light (FAILED_PRECONDITION

@@ -7,22 +7,8 @@
 namespace pdsm {
 
 double BilinearAttenuation(const PdsmImage& pdsm, const PdsmPoint& point) {
-  const PdsmGeometry& g = pdsm.header.geometry;
-  const double fx = point.px - 0.5;
-  const double fy = point.py - 0.5;
-  const double x_floor = std::floor(fx);
-  const double y_floor = std::floor(fy);
-  const double wx = fx - x_floor;
-  const double wy = fy - y_floor;
-  const int x0 = std::clamp(static_cast<int>(x_floor), 0, g.width - 1);
-  const int y0 = std::clamp(static_cast<int>(y_floor), 0, g.height - 1);
-  const int x1 = std::clamp(static_cast<int>(x_floor) + 1, 0, g.width - 1);
-  const int y1 = std::clamp(static_cast<int>(y_floor) + 1, 0, g.height - 1);
-  const double a00 = EvaluateAttenuation(pdsm.Function(x0, y0), point.z);
-  const double a10 = EvaluateAttenuation(pdsm.Function(x1, y0), point.z);
-  const double a01 = EvaluateAttenuation(pdsm.Function(x0, y1), point.z);
-  const double a11 = EvaluateAttenuation(pdsm.Function(x1, y1), point.z);
-  return (1 - wy) * ((1 - wx) * a00 + wx * a10) + wy * ((1 - wx) * a01 + wx * a11);
+  return BilinearAttenuationOf(pdsm.header.geometry, point,
+                               [&pdsm](int x, int y) { return pdsm.Function(x, y); });
 }
 
 double QueryAttenuation(const PdsmImage& pdsm, const glm::dvec3& p_world) {
