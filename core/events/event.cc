@@ -80,6 +80,16 @@ void AppendMerge(std::span<const std::span<const Event>> lists, std::vector<Even
 
 }  // namespace
 
+TileEvents TileShape(const TileEvents& events) {
+  return TileEvents{.tile_index = events.tile_index,
+                    .x0 = events.x0,
+                    .y0 = events.y0,
+                    .width = events.width,
+                    .height = events.height,
+                    .offsets = {},
+                    .events = {}};
+}
+
 void NormalizeEvents(std::vector<Event>* events) { NormalizeEventsFrom(events, 0); }
 
 void NormalizeEventsFrom(std::vector<Event>* events, size_t first) {
@@ -104,14 +114,9 @@ std::vector<Event> MergeEventLists(std::span<const std::span<const Event>> lists
 }
 
 TileEvents MergeTileEvents(std::span<const TileEvents> parts) {
-  TileEvents merged;
-  if (parts.empty()) return merged;
+  if (parts.empty()) return TileEvents{};
   const TileEvents& first = parts.front();
-  merged.tile_index = first.tile_index;
-  merged.x0 = first.x0;
-  merged.y0 = first.y0;
-  merged.width = first.width;
-  merged.height = first.height;
+  TileEvents merged = TileShape(first);
   const size_t pixels = first.PixelCount();
   size_t total = 0, with_events = 0;
   const TileEvents* only = nullptr;

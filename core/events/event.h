@@ -30,6 +30,9 @@ struct TileEvents {
   size_t PixelCount() const { return static_cast<size_t>(width) * height; }
 };
 
+// The tile's index and rectangle, without lists (offsets and events empty).
+TileEvents TileShape(const TileEvents& events);
+
 // Sorts by depth, adds the counts of equal depths and drops zero sums, in place.
 void NormalizeEvents(std::vector<Event>* events);
 

@@ -58,35 +58,24 @@ absl::StatusOr<TileEvents> EventSpill::ReadAndRelease(const SpilledRun& run,
                                             " pixels read as tile ", shape.tile_index, " of ",
                                             shape.PixelCount()));
   }
-  absl::StatusOr<ScratchFile*> file = File();
-  if (!file.ok()) return file.status();
-  TileEvents out;
-  out.tile_index = shape.tile_index;
-  out.x0 = shape.x0;
-  out.y0 = shape.y0;
-  out.width = shape.width;
-  out.height = shape.height;
-  std::vector<uint32_t> counts(run.pixels);
-  if (absl::Status s = (*file)->ReadAt(run.offset, counts.size() * sizeof(uint32_t),
-                                       reinterpret_cast<char*>(counts.data()));
-      !s.ok()) {
-    return s;
+  // The run's layout is read in one place, SpilledRunReader, a piece at a time.
+  SpilledRunReader reader(this, run);
+  TileEvents out = TileShape(shape);
+  out.offsets.reserve(run.pixels + 1);
+  out.offsets.push_back(0);
+  out.events.reserve(run.events);
+  for (size_t p = 0; p < run.pixels; ++p) {
+    const std::span<const Event> pixel = reader.Pixel(p);
+    out.events.insert(out.events.end(), pixel.begin(), pixel.end());
+    out.offsets.push_back(out.events.size());
   }
-  out.offsets.assign(run.pixels + 1, 0);
-  for (size_t p = 0; p < run.pixels; ++p) out.offsets[p + 1] = out.offsets[p] + counts[p];
-  if (out.offsets.back() != run.events) {
-    return absl::DataLossError(absl::StrCat((*file)->label(), ": a run of tile ", shape.tile_index,
-                                            " counts ", out.offsets.back(), " events where ",
-                                            run.events, " were written"));
+  if (!reader.status().ok()) return reader.status();
+  if (out.events.size() != run.events) {
+    return absl::DataLossError(absl::StrCat("a spilled run of tile ", shape.tile_index, " holds ",
+                                            out.events.size(), " events where ", run.events,
+                                            " were written"));
   }
-  out.events.resize(run.events);
-  if (absl::Status s =
-          (*file)->ReadAt(run.offset + counts.size() * sizeof(uint32_t), run.events * sizeof(Event),
-                          reinterpret_cast<char*>(out.events.data()));
-      !s.ok()) {
-    return s;
-  }
-  (*file)->Release(run.offset, run.bytes());
+  Release(run);
   return out;
 }
 

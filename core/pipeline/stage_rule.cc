@@ -19,13 +19,7 @@ StageAccumulator::StageAccumulator(const PdsmHeader& header, int stage)
 int64_t StageAccumulator::Add(int sample_begin, TileEvents events) {
   for (size_t r = 0; r < ranges_.size(); ++r) {
     if (sample_begin < ranges_[r].begin || sample_begin >= ranges_[r].end) continue;
-    if (shape_.PixelCount() == 0) {
-      shape_.tile_index = events.tile_index;
-      shape_.x0 = events.x0;
-      shape_.y0 = events.y0;
-      shape_.width = events.width;
-      shape_.height = events.height;
-    }
+    if (shape_.PixelCount() == 0) shape_ = TileShape(events);
     std::optional<TileEvents>& merged = merged_[r].merged;
     if (merged && events.events.empty()) return 0;  // a batch that shadows nothing adds nothing
     const int64_t before = merged ? TileEventsBytes(*merged) : 0;

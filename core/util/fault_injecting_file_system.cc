@@ -34,14 +34,7 @@ class FaultInjectingFileSystem::File final : public WritableFile {
       : owner_(owner), file_(std::move(file)) {}
 
   absl::Status WriteAt(uint64_t offset, absl::string_view data) override {
-    if (absl::Status s = owner_->Check(FileOp::kWrite, path()); !s.ok()) return s;
-    const uint64_t fits = owner_->Reserve(data.size());
-    if (fits < data.size()) {
-      // A full disk takes what fits, then refuses the rest.
-      file_->WriteAt(offset, data.substr(0, fits)).IgnoreError();
-      return ErrnoStatus(ENOSPC, absl::StrCat("cannot write ", path(), " (injected)"));
-    }
-    return file_->WriteAt(offset, data);
+    return owner_->Write(*file_, path(), offset, data);
   }
   absl::Status Flush() override {
     if (absl::Status s = owner_->Check(FileOp::kFlush, path()); !s.ok()) return s;
@@ -72,13 +65,7 @@ class FaultInjectingFileSystem::Scratch final : public ScratchFile {
       : owner_(owner), file_(std::move(file)) {}
 
   absl::Status WriteAt(uint64_t offset, absl::string_view data) override {
-    if (absl::Status s = owner_->Check(FileOp::kWrite, label()); !s.ok()) return s;
-    const uint64_t fits = owner_->Reserve(data.size());
-    if (fits < data.size()) {
-      file_->WriteAt(offset, data.substr(0, fits)).IgnoreError();
-      return ErrnoStatus(ENOSPC, absl::StrCat("cannot write ", label(), " (injected)"));
-    }
-    return file_->WriteAt(offset, data);
+    return owner_->Write(*file_, label(), offset, data);
   }
   absl::Status ReadAt(uint64_t offset, size_t size, char* out) override {
     return file_->ReadAt(offset, size, out);
@@ -127,6 +114,19 @@ int FaultInjectingFileSystem::failures() const {
 uint64_t FaultInjectingFileSystem::bytes_written() const {
   std::lock_guard<std::mutex> lock(mu_);
   return bytes_written_;
+}
+
+template <typename Target>
+absl::Status FaultInjectingFileSystem::Write(Target& file, const std::string& name, uint64_t offset,
+                                             absl::string_view data) {
+  if (absl::Status s = Check(FileOp::kWrite, name); !s.ok()) return s;
+  const uint64_t fits = Reserve(data.size());
+  if (fits < data.size()) {
+    // A full disk takes what fits, then refuses the rest.
+    file.WriteAt(offset, data.substr(0, fits)).IgnoreError();
+    return ErrnoStatus(ENOSPC, absl::StrCat("cannot write ", name, " (injected)"));
+  }
+  return file.WriteAt(offset, data);
 }
 
 absl::Status FaultInjectingFileSystem::Check(FileOp op, const std::string& name) {

@@ -69,6 +69,11 @@ class FaultInjectingFileSystem final : public FileSystemWrapper {
   class File;
   class Scratch;
 
+  // A write of `data` through `file` (a WritableFile or a ScratchFile), failing as armed:
+  // the injected error, or a full disk that takes what fits first.
+  template <typename Target>
+  absl::Status Write(Target& file, const std::string& name, uint64_t offset,
+                     absl::string_view data);
   // Counts a call of `op`; the injected error if this is the armed one, else OK.
   absl::Status Check(FileOp op, const std::string& name);
   // How many of `size` bytes fit before the disk is full.

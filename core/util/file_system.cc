@@ -23,6 +23,21 @@ absl::Status LastErrnoStatus(absl::string_view action, const std::string& name) 
   return ErrnoStatus(error_number, absl::StrCat(action, " ", name));
 }
 
+// pwrite(2) until every byte is written (it may write less), retrying on EINTR; errors name
+// `name`.
+absl::Status PwriteFully(int fd, uint64_t offset, absl::string_view data, const std::string& name) {
+  while (!data.empty()) {
+    const ssize_t n = ::pwrite(fd, data.data(), data.size(), static_cast<off_t>(offset));
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return LastErrnoStatus("cannot write", name);
+    }
+    data.remove_prefix(static_cast<size_t>(n));
+    offset += static_cast<uint64_t>(n);
+  }
+  return absl::OkStatus();
+}
+
 // Writes are gathered up to this size: OpenEXR writes a tile as several small pieces.
 constexpr size_t kBufferBytes = 64 * 1024;
 
@@ -75,16 +90,7 @@ class PosixWritableFile final : public WritableFile {
 
  private:
   absl::Status WriteFully(uint64_t offset, absl::string_view data) {
-    while (!data.empty()) {
-      const ssize_t n = ::pwrite(fd_, data.data(), data.size(), static_cast<off_t>(offset));
-      if (n < 0) {
-        if (errno == EINTR) continue;
-        return LastErrnoStatus("cannot write", path_);
-      }
-      data.remove_prefix(static_cast<size_t>(n));
-      offset += static_cast<uint64_t>(n);
-    }
-    return absl::OkStatus();
+    return PwriteFully(fd_, offset, data, path_);
   }
 
   int fd_;
@@ -100,16 +106,7 @@ class PosixScratchFile final : public ScratchFile {
   ~PosixScratchFile() override { ::close(fd_); }
 
   absl::Status WriteAt(uint64_t offset, absl::string_view data) override {
-    while (!data.empty()) {
-      const ssize_t n = ::pwrite(fd_, data.data(), data.size(), static_cast<off_t>(offset));
-      if (n < 0) {
-        if (errno == EINTR) continue;
-        return LastErrnoStatus("cannot write", label_);
-      }
-      data.remove_prefix(static_cast<size_t>(n));
-      offset += static_cast<uint64_t>(n);
-    }
-    return absl::OkStatus();
+    return PwriteFully(fd_, offset, data, label_);
   }
 
   absl::Status ReadAt(uint64_t offset, size_t size, char* out) override {
