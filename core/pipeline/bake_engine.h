@@ -96,6 +96,8 @@ struct EngineOptions {
   SchedulerOptions scheduler;
   // Runs heavy work: inline on the reporting thread (the local bake, whose task threads are
   // the pool) or on a pool (the coordinator, whose reporting threads are gRPC's). Required.
+  // Work it runs holds the engine: every item must have run and been destroyed before the
+  // engine is (WorkQueue::Wait or Stop, then destroy the engine).
   std::function<void(std::function<void()>)> executor;
   // A task failure that is not handed back ends its job at once, with the task's own status,
   // instead of counting towards scheduler.max_task_failures: right in one process, where every

@@ -52,6 +52,9 @@ void WorkQueue::Loop() {
       ++running_;
     }
     work();
+    // The item's captures go before it counts as done: Wait() promises that nothing posted
+    // still runs, and a capture's destructor (the last reference to a job, say) is part of it.
+    work = nullptr;
     absl::MutexLock lock(&mu_);
     --running_;
   }

@@ -31,7 +31,7 @@ class WorkQueue {
   // Queues `work`; ignored once Stop() has been called.
   void Post(std::function<void()> work);
 
-  // Blocks until every posted item has run (none queued, none running).
+  // Blocks until every posted item has run and been destroyed (none queued, none running).
   void Wait();
 
   // Drops the queued items, lets running ones finish and joins the threads. Idempotent.
