@@ -22,6 +22,8 @@ packages=(
   libglfw3-dev libembree-dev libmeshoptimizer-dev
   # the services' Prometheus /metrics endpoint (metrics/metrics_http_server.h)
   libcpp-httplib-dev
+  # the Python module for tools (python/): pybind11 and the interpreter's headers
+  pybind11-dev python3-dev
 )
 # What the test suite needs on top.
 test_packages=(
@@ -32,8 +34,9 @@ test_packages=(
   clang clang-format libclang-rt-14-dev llvm
   # the windowed pdsm-view test runs under a virtual X server; sweep.png is drawn by gnuplot
   xvfb xauth gnuplot-nox
-  # tests/deploy/check_manifests.py: parses the deployment manifests
-  python3 python3-yaml
+  # tests/deploy/check_manifests.py: parses the deployment manifests; the Python module's
+  # test and its docs example (numpy arrays, a matplotlib plot)
+  python3 python3-yaml python3-numpy python3-matplotlib
   # the Slurm farm test (tests/deploy/slurm_farm_test.sh) starts its own munged, slurmctld
   # and slurmd on loopback; nothing of the packages' own configuration is used
   slurm-wlm munge

@@ -53,7 +53,7 @@ configure() {  # DIR SANITIZE [extra cmake args]
   cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" \
-    "-DPDSM_SANITIZE=$sanitize" "${launcher[@]}" "$@" >/dev/null
+    "-DPDSM_SANITIZE=$sanitize" -DPDSM_PYTHON=OFF "${launcher[@]}" "$@" >/dev/null
 }
 
 for phase in "${phases[@]}"; do

@@ -1,8 +1,6 @@
 // `pdsm info PDSM.exr [--json]`: what a PDSM file holds and how it was made.
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
-#include <numbers>
 #include <string>
 #include <vector>
 
@@ -11,6 +9,7 @@
 #include "client/cli_common.h"
 #include "client/commands.h"
 #include "core/pdsm/pdsm_file.h"
+#include "core/pdsm/pdsm_header_json.h"
 
 namespace pdsm {
 namespace {
@@ -20,49 +19,6 @@ struct InfoFlags {
   std::string light;
   bool json = false;
 };
-
-std::string JsonString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      out += absl::StrFormat("\\u%04x", c);
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
-
-// As `--sampling` takes them ("blue-noise"; the file's attribute spells it blue_noise).
-const char* SamplingName(SamplingPattern pattern) {
-  switch (pattern) {
-    case SamplingPattern::kStratified:
-      return "stratified";
-    case SamplingPattern::kUniform:
-      return "uniform";
-    case SamplingPattern::kSobol:
-      return "sobol";
-    case SamplingPattern::kHalton:
-      return "halton";
-    case SamplingPattern::kBlueNoise:
-      return "blue-noise";
-  }
-  return "?";
-}
-
-// "rect", "disk", "spot" (a disk with a cone), "sun".
-const char* LightKindName(const PdsmHeader& h) {
-  return h.light_shape == LightShape::kDisk && h.cone_half_angle_deg > 0
-             ? "spot"
-             : LightShapeName(h.light_shape);
-}
-
-double SunDiameterDegrees(const PdsmHeader& h) {
-  return 2 * std::atan(h.tan_half_angle) * 180 / std::numbers::pi;
-}
 
 // The light's size as the scene file gives it: "size 3 x 3", "radius 0.5", "0.53 deg across".
 std::string LightSizeText(const PdsmHeader& h) {
@@ -81,24 +37,6 @@ std::string LightSizeText(const PdsmHeader& h) {
   return "";
 }
 
-// The same as JSON members (exact: 17 significant digits, like every JSON number here).
-std::string LightSizeJson(const PdsmHeader& h) {
-  switch (h.light_shape) {
-    case LightShape::kRect:
-      return absl::StrFormat(", \"lightSize\": [%.17g, %.17g]", 2 * h.light_half_width,
-                             2 * h.light_half_height);
-    case LightShape::kDisk:
-      if (h.cone_half_angle_deg > 0) {
-        return absl::StrFormat(", \"lightRadius\": %.17g, \"coneHalfAngleDeg\": %.17g",
-                               h.light_radius, h.cone_half_angle_deg);
-      }
-      return absl::StrFormat(", \"lightRadius\": %.17g", h.light_radius);
-    case LightShape::kSun:
-      return absl::StrFormat(", \"angularDiameterDeg\": %.17g", SunDiameterDegrees(h));
-  }
-  return "";
-}
-
 // One light's description: a JSON object, or lines of text under `title`.
 void Describe(const InfoFlags& flags, const std::string& title, const PdsmImage* pdsm) {
   const PdsmHeader& h = pdsm->header;
@@ -110,16 +48,21 @@ void Describe(const InfoFlags& flags, const std::string& title, const PdsmImage*
     max_vertices = std::max(max_vertices, n);
     empty_pixels += n == 0;
   }
-  // JSON is exact (17 significant digits, so it reads back to the same double); the text is
-  // for people: 6 significant digits everywhere.
-  const auto v3_json = [](const glm::dvec3& v) {
-    return absl::StrFormat("[%.17g, %.17g, %.17g]", v.x, v.y, v.z);
-  };
+  // JSON is exact (pdsm_header_json.h); the text is for people: 6 significant digits.
   const auto v3_text = [](const glm::dvec3& v) {
     return absl::StrFormat("[%.6g, %.6g, %.6g]", v.x, v.y, v.z);
   };
   const std::string projection =
       g.projection == Projection::kPerspective ? "perspective" : "orthographic";
+  if (flags.json) {
+    std::printf(
+        "%s", PdsmHeaderJson(h, absl::StrFormat(", \"vertices\": %zu, "
+                                                "\"maxVerticesPerPixel\": %zu, "
+                                                "\"emptyPixels\": %zu",
+                                                pdsm->vertices.size(), max_vertices, empty_pixels))
+                  .c_str());
+    return;
+  }
   // Adaptive bakes: how many samples the tiles took (min, mean, max).
   int tile_min = h.samples, tile_max = 0;
   double tile_mean = 0;
@@ -127,37 +70,6 @@ void Describe(const InfoFlags& flags, const std::string& title, const PdsmImage*
     tile_min = std::min(tile_min, n);
     tile_max = std::max(tile_max, n);
     tile_mean += static_cast<double>(n) / h.tile_samples.size();
-  }
-  const std::string adaptive_json =
-      h.adaptive()
-          ? absl::StrFormat(
-                ", \"adaptiveTolerance\": %.17g, \"adaptiveMinSamples\": %d, "
-                "\"tileSamples\": {\"min\": %d, \"mean\": %.17g, \"max\": %d}",
-                h.adaptive_tolerance, h.adaptive_min_samples, tile_min, tile_mean, tile_max)
-          : "";
-  // Format 2: where the file knows nothing (queries there are NaN).
-  const std::string validity_json =
-      absl::StrFormat(", \"surfacesOnly\": %s, \"zValidMin\": %.17g",
-                      h.surfaces_only ? "true" : "false", g.z_valid_min);
-  if (flags.json) {
-    const std::string name_json =
-        h.light_name.empty() ? "" : absl::StrCat(", \"name\": ", JsonString(h.light_name));
-    std::printf(
-        "{\"formatVersion\": %d, \"scene\": %s%s, \"light\": %s, \"projection\": \"%s\", "
-        "\"resolution\": [%d, %d], \"window\": [%.17g, %.17g, %.17g, %.17g], "
-        "\"depthRange\": [%.17g, %.17g], \"lightCenter\": %s, \"lightNormal\": %s, "
-        "\"samples\": %d, \"shadowMapResolution\": %d, \"epsilon\": %.17g, "
-        "\"depthBias\": %.17g, \"slopeBias\": %.17g, \"tileSize\": %d, "
-        "\"sampling\": \"%s\", \"seed\": \"%llu\"%s, "
-        "\"vertices\": %zu, \"maxVerticesPerPixel\": %zu, \"emptyPixels\": %zu%s%s}",
-        h.format_version, JsonString(h.scene_name).c_str(), name_json.c_str(),
-        JsonString(LightKindName(h)).c_str(), projection.c_str(), g.width, g.height, g.s_min,
-        g.s_max, g.t_min, g.t_max, g.z_near, g.z_far, v3_json(g.frame.center).c_str(),
-        v3_json(g.frame.n).c_str(), h.samples, h.shadow_map_resolution, h.epsilon, h.depth_bias,
-        h.slope_bias, h.tile_size, SamplingName(h.sampling),
-        static_cast<unsigned long long>(h.seed), LightSizeJson(h).c_str(), pdsm->vertices.size(),
-        max_vertices, empty_pixels, adaptive_json.c_str(), validity_json.c_str());
-    return;
   }
   std::printf("%s: PDSM format %d, scene \"%s\"\n", title.c_str(), h.format_version,
               h.scene_name.c_str());
