@@ -3,6 +3,7 @@
 // surfaces and in free space. Tolerances are stated in docs/accuracy.md.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <vector>
 
@@ -162,6 +163,124 @@ TEST_F(PlatesAccuracy, CasterSurfacesDoNotShadowThemselves) {
   std::printf("caster top: n=%zu mean %.4f p95 %.4f max %.4f\n", e.count, e.mean, e.p95, e.max);
   // Without the bias the plate would hide itself (attenuation 1); measured max 0.
   EXPECT_LT(e.max, 0.02);
+}
+
+// Issue #15 item 3, contact shadows. A unit box rests on the ground; a small rect light stands
+// 3.5 units to its -x side, 4 up. On the +x side the box's umbra starts at the wall: the
+// ground there is hidden from every light point right up to the contact, and must read so (a
+// depth bias that let light in under the wall would show here). On the -x side the ground is
+// lit right up to the wall and must read exactly 0 there: no smear of the box's shadow onto
+// the visible ground. What is not exact is inside the solid: ground under the box within one
+// PDSM pixel of the lit wall blends with the lit ray beside it (and lies within the depth
+// bias behind the wall), so it reads less than 1 although nothing can see it. That is where
+// the dragon's contact errors of issue #15 sit (docs/accuracy.md, "Contact shadows").
+class ContactAccuracy : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir();
+    const std::string scene_path = dir_->File("box_on_plane.json");
+    std::FILE* f = std::fopen(scene_path.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs(R"({
+  "name": "box on plane",
+  "meshes": [
+    {"inline": {"positions": [-2,0,-2, 2,0,-2, 2,0,2, -2,0,2], "indices": [0,2,1, 0,3,2]},
+     "role": "RECEIVER_ONLY"},
+    {"inline": {"positions": [-0.5,0,-0.5, 0.5,0,-0.5, 0.5,0,0.5, -0.5,0,0.5,
+                              -0.5,1,-0.5, 0.5,1,-0.5, 0.5,1,0.5, -0.5,1,0.5],
+                "indices": [0,1,2, 0,2,3, 4,6,5, 4,7,6, 0,4,5, 0,5,1,
+                            1,5,6, 1,6,2, 2,6,7, 2,7,3, 3,7,4, 3,4,0]}}
+  ],
+  "light": {"rect": {"center": [-3,4,0], "normal": [0,-1,0], "up": [0,0,1], "size": [0.5,0.5]}},
+  "bake": {"resolution": [128,128], "samples": 64, "shadowMapResolution": 512, "epsilon": 0.005}
+})",
+               f);
+    std::fclose(f);
+    auto scene = LoadSceneFile(scene_path);
+    ASSERT_TRUE(scene.ok()) << scene.status();
+    scene_ = new Scene(*std::move(scene));
+    LocalBakeOptions options;
+    options.output_path = dir_->File("box_on_plane.exr");
+    auto summary = RunLocalBake(*scene_, options);
+    ASSERT_TRUE(summary.ok()) << summary.status();
+    auto pdsm = ReadPdsm(options.output_path);
+    ASSERT_TRUE(pdsm.ok()) << pdsm.status();
+    pdsm_ = new PdsmImage(*std::move(pdsm));
+  }
+  static void TearDownTestSuite() {
+    delete pdsm_;
+    delete scene_;
+    delete dir_;
+  }
+  // The PDSM pixel's size on the ground at `p` (the ground is square to the light's axis).
+  static double GroundPixel(const glm::dvec3& p) {
+    const PdsmGeometry& g = pdsm_->header.geometry;
+    return std::max(g.PixelPitchS(), g.PixelPitchT()) * g.frame.LightFromWorld(p).z;
+  }
+  // Ground points at distance `d` outside the wall x = side * 0.5, along its middle 0.8.
+  static std::vector<glm::dvec3> AlongWall(double side, double d) {
+    std::vector<glm::dvec3> points;
+    for (int k = 0; k < 17; ++k) points.emplace_back(side * (0.5 + d), 0.0, -0.4 + 0.05 * k);
+    return points;
+  }
+  static Scene* scene_;
+  static PdsmImage* pdsm_;
+  static TempDir* dir_;
+};
+Scene* ContactAccuracy::scene_ = nullptr;
+PdsmImage* ContactAccuracy::pdsm_ = nullptr;
+TempDir* ContactAccuracy::dir_ = nullptr;
+
+TEST_F(ContactAccuracy, UmbraReachesTheContactOnTheShadowSide) {
+  ASSERT_NE(pdsm_, nullptr);
+  for (double d : {0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.4}) {
+    const std::vector<glm::dvec3> points = AlongWall(+1, d);
+    absl::StatusOr<std::vector<double>> exact = ExactAttenuation(*scene_, points);
+    ASSERT_TRUE(exact.ok()) << exact.status();
+    for (size_t k = 0; k < points.size(); ++k) {
+      ASSERT_GT((*exact)[k], 1 - 1e-9) << "the premise: umbra at " << d << " from the wall";
+      EXPECT_GE(QueryAttenuation(*pdsm_, points[k]), 0.95)
+          << "ground " << d << " from the wall, z " << points[k].z;
+    }
+  }
+}
+
+TEST_F(ContactAccuracy, LitGroundStaysLitUpToTheWall) {
+  ASSERT_NE(pdsm_, nullptr);
+  const double pixel = GroundPixel({-0.5, 0, 0});
+  ASSERT_GT(pixel, 0.01);  // 0.031 here
+  for (double d : {0.002, 0.1, 0.25, 0.5, 1.0, 2.0, 5.0}) {
+    const std::vector<glm::dvec3> points = AlongWall(-1, d * pixel);
+    absl::StatusOr<std::vector<double>> exact = ExactAttenuation(*scene_, points);
+    ASSERT_TRUE(exact.ok()) << exact.status();
+    for (size_t k = 0; k < points.size(); ++k) {
+      ASSERT_EQ((*exact)[k], 0.0) << "the premise: lit at " << d << " pixels from the wall";
+      EXPECT_EQ(QueryAttenuation(*pdsm_, points[k]), 0.0)
+          << "ground " << d << " pixels from the wall, z " << points[k].z;
+    }
+  }
+}
+
+TEST_F(ContactAccuracy, UnderTheBoxIsHiddenBeyondOnePixelOfTheLitWall) {
+  ASSERT_NE(pdsm_, nullptr);
+  const double pixel = GroundPixel({-0.5, 0, 0});
+  double least_within = 1;
+  for (double d : {0.25, 0.5, 0.75, 1.5, 2.0, 4.0, 8.0}) {
+    // Inside the footprint, d pixels from the lit wall (negative distance outside it).
+    const std::vector<glm::dvec3> points = AlongWall(-1, -d * pixel);
+    for (const glm::dvec3& p : points) {
+      const double baked = QueryAttenuation(*pdsm_, p);
+      if (d > 1.0) {
+        EXPECT_GE(baked, 0.95) << "under the box, " << d << " pixels from the lit wall";
+      } else {
+        least_within = std::min(least_within, baked);
+      }
+    }
+  }
+  // Measured (pdsm query): 0 a third of a pixel in, 0.17 at two thirds, 0.49 at one. Nothing sees
+  // these points (they are inside the box); the adaptive resolution of issue #15 item 2 narrows it.
+  std::printf("under the box within one pixel (%.4f) of the lit wall: down to %.3f\n", pixel,
+              least_within);
 }
 
 }  // namespace
