@@ -237,8 +237,10 @@ int RunBake(const BakeFlags& flags) {
   absl::StatusOr<pdsm::v1::BakeParams> overrides = ToBakeParams(flags.overrides);
   if (!overrides.ok()) return ReportError(overrides.status());
   if (flags.target_error) return RunTargetErrorBake(flags, *overrides);
-  absl::StatusOr<Scene> scene = LoadSceneFile(flags.scene_path, *overrides);
+  std::vector<std::string> warnings;  // a world file's lights that are not baked
+  absl::StatusOr<Scene> scene = LoadSceneFile(flags.scene_path, *overrides, &warnings);
   if (!scene.ok()) return ReportError(scene.status());
+  for (const std::string& w : warnings) std::fprintf(stderr, "pdsm: warning: %s\n", w.c_str());
 
   LocalBakeOptions options;
   options.output_path = flags.output_path;
@@ -306,7 +308,9 @@ int RunBake(const BakeFlags& flags) {
 void RegisterBakeCommand(CLI::App& app, int* exit_code) {
   auto flags = std::make_shared<BakeFlags>();
   CLI::App* cmd = app.add_subcommand("bake", "Bake a PDSM locally (no server needed)");
-  cmd->add_option("scene", flags->scene_path, "Scene file (JSON)")->required();
+  cmd->add_option("scene", flags->scene_path,
+                  "Scene file (JSON), or a world file (.gltf .glb .fbx .obj .dae) with its lights")
+      ->required();
   cmd->add_option("-o,--output", flags->output_path, "Output PDSM (.exr)")->required();
   AddOverrideFlags(cmd, &flags->overrides);
   cmd->add_option("--threads", flags->threads, "Worker threads (default: one per core)")

@@ -89,8 +89,10 @@ absl::Status Upload(const ServiceConnection& c, const std::string& server,
 int RunSubmit(const SubmitFlags& flags) {
   absl::StatusOr<pdsm::v1::BakeParams> overrides = ToBakeParams(flags.overrides);
   if (!overrides.ok()) return ReportError(overrides.status());
-  absl::StatusOr<pdsm::v1::Scene> scene = ParseSceneFile(flags.scene_path, *overrides);
+  std::vector<std::string> warnings;  // a world file's lights that are not baked
+  absl::StatusOr<pdsm::v1::Scene> scene = ParseSceneFile(flags.scene_path, *overrides, &warnings);
   if (!scene.ok()) return ReportError(scene.status());
+  for (const std::string& w : warnings) std::fprintf(stderr, "pdsm: warning: %s\n", w.c_str());
   // A scene file may not name assets itself: they are what this command makes of paths.
   for (int i = 0; i < scene->meshes_size(); ++i) {
     if (scene->meshes(i).source_case() == pdsm::v1::Mesh::kAssetSha256) {

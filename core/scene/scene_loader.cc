@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <google/protobuf/util/json_util.h>
+#include <spdlog/spdlog.h>
 
 #include "absl/status/status.h"
 #include "absl/strings/escaping.h"
@@ -22,6 +23,7 @@
 #include "core/scene/scene_bake.h"
 #include "core/scene/scene_builder.h"
 #include "core/scene/scene_mesh.h"
+#include "core/scene/world_file.h"
 
 namespace pdsm {
 namespace {
@@ -83,7 +85,22 @@ absl::StatusOr<std::string> ReadSceneFile(const std::string& path) {
 // overridden bake fields, for messages.
 absl::StatusOr<std::set<std::string>> ParseWithOverrides(const std::string& path,
                                                          const pdsm::v1::BakeParams& overrides,
-                                                         pdsm::v1::Scene* message) {
+                                                         pdsm::v1::Scene* message,
+                                                         std::vector<std::string>* warnings) {
+  if (IsWorldFile(path)) {
+    std::vector<std::string> world_warnings;
+    absl::StatusOr<pdsm::v1::Scene> world = ReadWorldFile(path, &world_warnings);
+    if (!world.ok()) return world.status();
+    *message = *std::move(world);
+    for (std::string& w : world_warnings) {
+      if (warnings != nullptr) {
+        warnings->push_back(std::move(w));
+      } else {
+        spdlog::warn("{}", w);
+      }
+    }
+    return ApplyOverrides(overrides, message);
+  }
   absl::StatusOr<std::string> text = ReadSceneFile(path);
   if (!text.ok()) return text.status();
 
@@ -106,9 +123,11 @@ absl::StatusOr<std::set<std::string>> ParseWithOverrides(const std::string& path
 }  // namespace
 
 absl::StatusOr<pdsm::v1::Scene> ParseSceneFile(const std::string& path,
-                                               const pdsm::v1::BakeParams& overrides) {
+                                               const pdsm::v1::BakeParams& overrides,
+                                               std::vector<std::string>* warnings) {
   pdsm::v1::Scene message;
-  absl::StatusOr<std::set<std::string>> overridden = ParseWithOverrides(path, overrides, &message);
+  absl::StatusOr<std::set<std::string>> overridden =
+      ParseWithOverrides(path, overrides, &message, warnings);
   if (!overridden.ok()) return overridden.status();
   return message;
 }
@@ -132,10 +151,11 @@ std::string ResolveMeshPath(const std::string& scene_path, const std::string& me
   return ResolveAgainst(SceneFolder(scene_path), mesh_path);
 }
 
-absl::StatusOr<Scene> LoadSceneFile(const std::string& path,
-                                    const pdsm::v1::BakeParams& overrides) {
+absl::StatusOr<Scene> LoadSceneFile(const std::string& path, const pdsm::v1::BakeParams& overrides,
+                                    std::vector<std::string>* warnings) {
   pdsm::v1::Scene message;
-  absl::StatusOr<std::set<std::string>> overridden = ParseWithOverrides(path, overrides, &message);
+  absl::StatusOr<std::set<std::string>> overridden =
+      ParseWithOverrides(path, overrides, &message, warnings);
   if (!overridden.ok()) return overridden.status();
   // No asset resolver: a scene file names meshes by path or inline, never by asset.
   return SceneBuilder(path, SceneFolder(path), *std::move(overridden)).Build(message);

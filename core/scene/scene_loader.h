@@ -6,6 +6,7 @@
 
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/scene/mesh_file.h"
@@ -16,19 +17,23 @@ namespace pdsm {
 
 // Parses, applies `overrides` (set fields of the override replace the scene's bake fields;
 // used for command-line flags), loads meshes (relative paths against the scene file's folder)
-// and validates. Errors: INVALID_ARGUMENT for bad input (malformed JSON, unknown field,
-// missing or unreadable mesh, non-finite number, bad size, out-of-range parameter, a mesh
-// given by assetSha256, which only the coordinator accepts), NOT_FOUND when the scene file
-// itself does not exist.
+// and validates. A world file (IsWorldFile: .gltf, .glb, .fbx, .obj, .dae) is its own scene,
+// with the lights it holds (core/scene/world_file.h); what it holds that is not baked goes to
+// `warnings` (null: logged as warnings). Errors: INVALID_ARGUMENT for bad input (malformed
+// JSON, unknown field, missing or unreadable mesh, non-finite number, bad size, out-of-range
+// parameter, a mesh given by assetSha256, which only the coordinator accepts, a world file
+// with no light to bake), NOT_FOUND when the scene file itself does not exist.
 absl::StatusOr<Scene> LoadSceneFile(const std::string& path,
-                                    const pdsm::v1::BakeParams& overrides = {});
+                                    const pdsm::v1::BakeParams& overrides = {},
+                                    std::vector<std::string>* warnings = nullptr);
 
 // The parse and override steps of LoadSceneFile alone, with the same error messages
 // (INVALID_ARGUMENT for malformed JSON or an unknown field, NOT_FOUND for a missing file). Loads
 // no mesh and validates nothing else: `pdsm submit` reads the message with it, then turns its
 // mesh paths (see ResolveMeshPath) into uploaded assets itself.
 absl::StatusOr<pdsm::v1::Scene> ParseSceneFile(const std::string& path,
-                                               const pdsm::v1::BakeParams& overrides = {});
+                                               const pdsm::v1::BakeParams& overrides = {},
+                                               std::vector<std::string>* warnings = nullptr);
 
 // `bake` with every default filled in, as a bake of a scene with that light (`sun`: a sun
 // light) resolves it, written back with every field set: loading the same scene with the

@@ -1,0 +1,107 @@
+"""Writes world.gltf, the bundled glTF world (docs/scene_format.md, "A world file as the scene").
+
+A 16 x 16 ground, a unit box resting on it, a pillar and a tilted bar; a sun (a directional
+light, 2 degrees across from the node's extras), a spot with a radius from its node's extras
+and its own sample count, and a point light, which pdsm cannot bake yet (no sphere light) and
+names in a warning. One buffer, embedded as base64, so the file stands alone.
+
+    /usr/bin/python3 examples/world/make_world.py   # rewrites examples/world/world.gltf
+"""
+
+import base64
+import json
+import math
+import os
+import struct
+
+
+def box(cx, cy, cz, sx, sy, sz):
+    """A closed box, 8 corners and 12 outward triangles."""
+    xs, ys, zs = (cx - sx / 2, cx + sx / 2), (cy, cy + sy), (cz - sz / 2, cz + sz / 2)
+    corners = [(x, y, z) for y in ys for z in zs for x in xs]
+    # corner index = 4 * (y) + 2 * (z) + (x)
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    tris = []
+    for a, b, c, d in quads:
+        tris += [a, b, c, a, c, d]
+    return corners, tris
+
+
+def main():
+    meshes = {
+        "ground": ([(-8, 0, -8), (8, 0, -8), (8, 0, 8), (-8, 0, 8)], [0, 2, 1, 0, 3, 2]),
+        "box": box(0, 0, 0, 1, 1, 1),
+        "pillar": box(0, 0, 0, 0.4, 3, 0.4),
+        "bar": box(0, 0, 0, 3, 0.2, 0.2),
+    }
+    blob = b""
+    views, accessors, gltf_meshes = [], [], []
+    for name, (positions, indices) in meshes.items():
+        pos = b"".join(struct.pack("<3f", *p) for p in positions)
+        idx = b"".join(struct.pack("<I", i) for i in indices)
+        for data, target in ((pos, 34962), (idx, 34963)):
+            views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data),
+                          "target": target})
+            blob += data
+        lo = [min(p[k] for p in positions) for k in range(3)]
+        hi = [max(p[k] for p in positions) for k in range(3)]
+        accessors.append({"bufferView": len(views) - 2, "componentType": 5126,
+                          "count": len(positions), "type": "VEC3", "min": lo, "max": hi})
+        accessors.append({"bufferView": len(views) - 1, "componentType": 5125,
+                          "count": len(indices), "type": "SCALAR"})
+        gltf_meshes.append({"name": name, "primitives": [
+            {"attributes": {"POSITION": len(accessors) - 2}, "indices": len(accessors) - 1}]})
+
+    def look_down(direction):
+        """A rotation quaternion (x, y, z, w) taking the light's -Z onto `direction`."""
+        d = [c / math.sqrt(sum(c * c for c in direction)) for c in direction]
+        axis = (d[1], -d[0], 0.0)  # (0, 0, -1) x d
+        s = math.sqrt(sum(c * c for c in axis))
+        angle = math.atan2(s, -d[2])
+        if s < 1e-12:
+            return [0.0, 0.0, 0.0, 1.0]
+        k = math.sin(angle / 2) / s
+        return [axis[0] * k, axis[1] * k, axis[2] * k, math.cos(angle / 2)]
+
+    nodes = [
+        {"name": "ground", "mesh": 0},
+        {"name": "box", "mesh": 1, "translation": [-2, 0, 1]},
+        {"name": "pillar", "mesh": 2, "translation": [2, 0, -1]},
+        {"name": "bar", "mesh": 3, "translation": [0, 2.2, -2.5],
+         "rotation": [0.0, 0.0, math.sin(math.radians(10)), math.cos(math.radians(10))]},
+        {"name": "sun", "rotation": look_down([0.35, -1.0, 0.25]),
+         "extensions": {"KHR_lights_punctual": {"light": 0}},
+         "extras": {"angularDiameterDeg": 2.0}},
+        {"name": "spot", "translation": [-4, 6, 4], "rotation": look_down([0.45, -1.0, -0.4]),
+         "extensions": {"KHR_lights_punctual": {"light": 1}},
+         "extras": {"radius": 0.3, "samples": 32}},
+        {"name": "bulb", "translation": [0, 3, 3],
+         "extensions": {"KHR_lights_punctual": {"light": 2}}},
+    ]
+    gltf = {
+        "asset": {"version": "2.0", "generator": "pdsm examples/world/make_world.py"},
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [
+            {"name": "sun", "type": "directional", "intensity": 3},
+            {"name": "spot", "type": "spot", "intensity": 200,
+             "spot": {"innerConeAngle": 0.3, "outerConeAngle": math.radians(40)}},
+            {"name": "bulb", "type": "point", "intensity": 50},
+        ]}},
+        "scene": 0,
+        "scenes": [{"name": "world", "nodes": list(range(len(nodes)))}],
+        "nodes": nodes,
+        "meshes": gltf_meshes,
+        "accessors": accessors,
+        "bufferViews": views,
+        "buffers": [{"byteLength": len(blob),
+                     "uri": "data:application/octet-stream;base64,"
+                            + base64.b64encode(blob).decode()}],
+    }
+    out = os.path.join(os.path.dirname(os.path.abspath(__file__)), "world.gltf")
+    with open(out, "w") as f:
+        json.dump(gltf, f, indent=1)
+        f.write("\n")
+
+
+if __name__ == "__main__":
+    main()
