@@ -56,6 +56,17 @@ std::vector<glm::dvec3> RandomBox(glm::dvec3 lo, glm::dvec3 hi, int n, uint64_t 
   return points;
 }
 
+// Bakes `scene` into `path` with the local bake and reads it back whole.
+PdsmImage* BakeAndRead(const Scene& scene, const std::string& path) {
+  LocalBakeOptions options;
+  options.output_path = path;
+  absl::StatusOr<BakeSummary> summary = RunLocalBake(scene, options);
+  EXPECT_TRUE(summary.ok()) << summary.status();
+  absl::StatusOr<PdsmImage> pdsm = ReadPdsm(path);
+  EXPECT_TRUE(pdsm.ok()) << pdsm.status();
+  return summary.ok() && pdsm.ok() ? new PdsmImage(*std::move(pdsm)) : nullptr;
+}
+
 class PlatesAccuracy : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -69,13 +80,7 @@ class PlatesAccuracy : public ::testing::Test {
     ASSERT_TRUE(scene.ok()) << scene.status();
     scene_ = new Scene(*std::move(scene));
     dir_ = new TempDir();
-    LocalBakeOptions options;
-    options.output_path = dir_->File("plates.exr");
-    auto summary = RunLocalBake(*scene_, options);
-    ASSERT_TRUE(summary.ok()) << summary.status();
-    auto pdsm = ReadPdsm(options.output_path);
-    ASSERT_TRUE(pdsm.ok()) << pdsm.status();
-    pdsm_ = new PdsmImage(*std::move(pdsm));
+    pdsm_ = BakeAndRead(*scene_, dir_->File("plates.exr"));
   }
   static void TearDownTestSuite() {
     delete pdsm_;
@@ -199,13 +204,7 @@ class ContactAccuracy : public ::testing::Test {
     auto scene = LoadSceneFile(scene_path);
     ASSERT_TRUE(scene.ok()) << scene.status();
     scene_ = new Scene(*std::move(scene));
-    LocalBakeOptions options;
-    options.output_path = dir_->File("box_on_plane.exr");
-    auto summary = RunLocalBake(*scene_, options);
-    ASSERT_TRUE(summary.ok()) << summary.status();
-    auto pdsm = ReadPdsm(options.output_path);
-    ASSERT_TRUE(pdsm.ok()) << pdsm.status();
-    pdsm_ = new PdsmImage(*std::move(pdsm));
+    pdsm_ = BakeAndRead(*scene_, dir_->File("box_on_plane.exr"));
   }
   static void TearDownTestSuite() {
     delete pdsm_;

@@ -63,14 +63,6 @@ void Describe(const InfoFlags& flags, const std::string& title, const PdsmImage*
                   .c_str());
     return;
   }
-  // Adaptive bakes: how many samples the tiles took (min, mean, max).
-  int tile_min = h.samples, tile_max = 0;
-  double tile_mean = 0;
-  for (int n : h.tile_samples) {
-    tile_min = std::min(tile_min, n);
-    tile_max = std::max(tile_max, n);
-    tile_mean += static_cast<double>(n) / h.tile_samples.size();
-  }
   std::printf("%s: PDSM format %d, scene \"%s\"\n", title.c_str(), h.format_version,
               h.scene_name.c_str());
   std::printf("  light       %s, %s, centre %s, normal %s\n", LightKindName(h),
@@ -85,10 +77,11 @@ void Describe(const InfoFlags& flags, const std::string& title, const PdsmImage*
       h.samples, SamplingName(h.sampling), static_cast<unsigned long long>(h.seed),
       h.shadow_map_resolution, h.epsilon, h.depth_bias, h.slope_bias, h.tile_size);
   if (h.adaptive()) {
+    const TileSampleCounts tiles = CountTileSamples(h);
     std::printf(
         "  adaptive    tolerance %.6g, first batch %d; samples per tile min %d, mean %.1f, "
         "max %d\n",
-        h.adaptive_tolerance, h.adaptive_min_samples, tile_min, tile_mean, tile_max);
+        h.adaptive_tolerance, h.adaptive_min_samples, tiles.min, tiles.mean, tiles.max);
   }
   if (h.surfaces_only || g.z_valid_min != 0) {
     std::printf(

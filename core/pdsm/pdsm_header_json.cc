@@ -75,24 +75,27 @@ std::string V3Json(const glm::dvec3& v) {
 
 }  // namespace
 
+TileSampleCounts CountTileSamples(const PdsmHeader& header) {
+  TileSampleCounts counts{.min = header.samples, .max = 0, .mean = 0};
+  for (int n : header.tile_samples) {
+    counts.min = std::min(counts.min, n);
+    counts.max = std::max(counts.max, n);
+    counts.mean += static_cast<double>(n) / header.tile_samples.size();
+  }
+  return counts;
+}
+
 std::string PdsmHeaderJson(const PdsmHeader& h, std::string_view extra_members) {
   const PdsmGeometry& g = h.geometry;
   const char* projection =
       g.projection == Projection::kPerspective ? "perspective" : "orthographic";
-  // Adaptive bakes: how many samples the tiles took (min, mean, max).
   std::string adaptive;
   if (h.adaptive()) {
-    int tile_min = h.samples, tile_max = 0;
-    double tile_mean = 0;
-    for (int n : h.tile_samples) {
-      tile_min = std::min(tile_min, n);
-      tile_max = std::max(tile_max, n);
-      tile_mean += static_cast<double>(n) / h.tile_samples.size();
-    }
+    const TileSampleCounts tiles = CountTileSamples(h);
     adaptive = absl::StrFormat(
         ", \"adaptiveTolerance\": %.17g, \"adaptiveMinSamples\": %d, "
         "\"tileSamples\": {\"min\": %d, \"mean\": %.17g, \"max\": %d}",
-        h.adaptive_tolerance, h.adaptive_min_samples, tile_min, tile_mean, tile_max);
+        h.adaptive_tolerance, h.adaptive_min_samples, tiles.min, tiles.mean, tiles.max);
   }
   const std::string name =
       h.light_name.empty() ? "" : absl::StrCat(", \"name\": ", JsonString(h.light_name));

@@ -24,6 +24,14 @@ const char* LightKindName(const PdsmHeader& header);
 // A sun's angular diameter, degrees (0 for other lights).
 double SunDiameterDegrees(const PdsmHeader& header);
 
+// How many samples an adaptive bake's tiles took (header.tile_samples): the least, the
+// most and the mean. With no list: min is header.samples, max and mean 0.
+struct TileSampleCounts {
+  int min = 0, max = 0;
+  double mean = 0;
+};
+TileSampleCounts CountTileSamples(const PdsmHeader& header);
+
 // The header as one JSON object: formatVersion, scene, name (named lights only), light,
 // projection, resolution, window, depthRange, lightCenter, lightNormal, samples,
 // shadowMapResolution, epsilon, depthBias, slopeBias, tileSize, sampling, seed (a string:
