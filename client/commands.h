@@ -11,9 +11,10 @@ void RegisterBakeCommand(CLI::App& app, int* exit_code);
 void RegisterQueryCommand(CLI::App& app, int* exit_code);
 void RegisterInfoCommand(CLI::App& app, int* exit_code);
 void RegisterExportImageCommand(CLI::App& app, int* exit_code);
-// Accuracy: the ground truth and the speed/accuracy sweep.
+// Accuracy: the ground truth, the speed/accuracy sweep, where a bake's error lives.
 void RegisterReferenceCommand(CLI::App& app, int* exit_code);
 void RegisterSweepCommand(CLI::App& app, int* exit_code);
+void RegisterCompareCommand(CLI::App& app, int* exit_code);
 // The distributed service (a pdsm-coordinator at --server).
 void RegisterSubmitCommand(CLI::App& app, int* exit_code);
 void RegisterJobCommands(CLI::App& app, int* exit_code);  // status, list, cancel, stats

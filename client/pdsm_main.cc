@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   pdsm::RegisterExportImageCommand(app, &exit_code);
   pdsm::RegisterReferenceCommand(app, &exit_code);
   pdsm::RegisterSweepCommand(app, &exit_code);
+  pdsm::RegisterCompareCommand(app, &exit_code);
   pdsm::RegisterSubmitCommand(app, &exit_code);
   pdsm::RegisterJobCommands(app, &exit_code);
   pdsm::RegisterWatchCommand(app, &exit_code);

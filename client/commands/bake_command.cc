@@ -32,6 +32,7 @@ struct BakeFlags {
   int threads = 0, samples_per_task = 0;
   int64_t event_memory_mib = kDefaultEventMemoryBudget >> 20;
   std::optional<double> target_error;
+  std::optional<double> target_volume;  // the band's height above the receivers
 };
 
 std::string HumanBytes(uint64_t bytes) {
@@ -194,6 +195,7 @@ int RunTargetErrorBake(const BakeFlags& flags, const pdsm::v1::BakeParams& overr
     }
   }
   TargetErrorOptions options;
+  if (flags.target_volume) options.band_height = *flags.target_volume;
   options.scene_path = flags.scene_path;
   options.output_path = flags.output_path;
   options.target = *flags.target_error;
@@ -212,12 +214,15 @@ int RunTargetErrorBake(const BakeFlags& flags, const pdsm::v1::BakeParams& overr
   if (!r.ok()) return ReportError(r.status());
   std::fprintf(stderr,
                "target-error %g: chose samples %d, resolution %dx%d, sm-resolution %d, "
-               "epsilon %g, sampling %s; measured mean error %.5f (surface %.5f, free space "
-               "%.5f; predicted %.5f): %s; bake %.2fs, %d bakes in all %.1fs\n",
+               "epsilon %g, sampling %s; mean error on held-out points %.5f (receivers %.5f, "
+               "band of %.4g %.5f; penumbra only %.5f on %zu points; on the fitted points "
+               "%.5f, predicted %.5f): %s; bake %.2fs, %d bakes in all %.1fs\n",
                options.target, r->knobs.samples, r->knobs.width, r->knobs.height,
                r->knobs.sm_resolution, r->knobs.epsilon, r->knobs.sampling.c_str(),
-               r->measured.all.mean, r->measured.surface.mean, r->measured.free_space.mean,
-               r->predicted, r->met ? "met" : "NOT met", r->seconds, r->bakes, r->total_seconds);
+               r->held_out.all.mean, r->held_out.surface.mean, r->band_height,
+               r->held_out.band.mean, r->held_out.penumbra.mean, r->held_out.penumbra.count,
+               r->measured.all.mean, r->predicted, r->met ? "met" : "NOT met", r->seconds, r->bakes,
+               r->total_seconds);
   std::printf("pdsm: %s\n", flags.output_path.c_str());
   if (!r->met) {
     std::fprintf(stderr,
@@ -236,6 +241,10 @@ int RunBake(const BakeFlags& flags) {
   }
   absl::StatusOr<pdsm::v1::BakeParams> overrides = ToBakeParams(flags.overrides);
   if (!overrides.ok()) return ReportError(overrides.status());
+  if (flags.target_volume && !flags.target_error) {
+    return ReportError(absl::InvalidArgumentError(
+        "--target-volume: says where --target-error is measured; give --target-error too"));
+  }
   if (flags.target_error) return RunTargetErrorBake(flags, *overrides);
   std::vector<std::string> warnings;  // a world file's lights that are not baked
   absl::StatusOr<Scene> scene = LoadSceneFile(flags.scene_path, *overrides, &warnings);
@@ -327,9 +336,15 @@ void RegisterBakeCommand(CLI::App& app, int* exit_code) {
                   "it, with .light.png");
   cmd->add_flag("--no-preview", flags->no_preview, "Write neither picture");
   cmd->add_option("--target-error", flags->target_error,
-                  "Choose the knobs not given to reach this mean attenuation error at least "
-                  "cost (pilot bakes against the reference; writes no preview)")
+                  "Choose the knobs not given to reach this mean attenuation error, on the "
+                  "receivers and in the band above them, at least cost (pilot bakes against "
+                  "the reference; writes no preview)")
       ->check(CLI::Range(1e-6, 1.0));
+  cmd->add_option("--target-volume", flags->target_volume,
+                  "With --target-error: the height of the band above the receivers where it is "
+                  "measured, world units (default: half the depth range between the casters "
+                  "and the farthest receiver)")
+      ->check(CLI::PositiveNumber);
   cmd->callback([flags, exit_code] { *exit_code = RunBake(*flags); });
 }
 

@@ -9,26 +9,26 @@
 
 namespace pdsm {
 
-absl::StatusOr<AccuracyProbe> AccuracyProbe::Create(const Scene& scene, int surface_points,
-                                                    int free_space_points, uint64_t seed,
+absl::StatusOr<AccuracyProbe> AccuracyProbe::Create(const Scene& scene,
+                                                    const AccuracyPointCounts& counts,
+                                                    uint64_t seed,
                                                     const ReferenceOptions& reference) {
   AccuracyProbe probe;
-  absl::StatusOr<AccuracyPoints> points =
-      MakeAccuracyPoints(scene, surface_points, free_space_points, seed);
+  absl::StatusOr<AccuracyPoints> points = MakeAccuracyPoints(scene, counts, seed);
   if (!points.ok()) return points.status();
   probe.points_ = *std::move(points);
   probe.method_ = ResolveReferenceMethod(reference.method, scene.light);
   const auto start = std::chrono::steady_clock::now();
-  absl::StatusOr<std::vector<double>> surface =
-      ReferenceAttenuation(scene, probe.points_.surface, reference);
-  if (!surface.ok()) return surface.status();
-  absl::StatusOr<std::vector<double>> free_space =
-      ReferenceAttenuation(scene, probe.points_.free_space, reference);
-  if (!free_space.ok()) return free_space.status();
+  for (auto [set, values] : {std::pair{&probe.points_.surface, &probe.surface_reference_},
+                             std::pair{&probe.points_.free_space, &probe.free_space_reference_},
+                             std::pair{&probe.points_.band, &probe.band_reference_}}) {
+    absl::StatusOr<std::vector<double>> reference_values =
+        ReferenceAttenuation(scene, *set, reference);
+    if (!reference_values.ok()) return reference_values.status();
+    *values = *std::move(reference_values);
+  }
   probe.reference_seconds_ =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  probe.surface_reference_ = *std::move(surface);
-  probe.free_space_reference_ = *std::move(free_space);
   return probe;
 }
 
@@ -43,14 +43,26 @@ absl::StatusOr<BakeErrors> AccuracyProbe::Measure(const std::string& pdsm_path) 
   };
   const std::vector<double> surface = query(points_.surface);
   const std::vector<double> free_space = query(points_.free_space);
+  const std::vector<double> band = query(points_.band);
   BakeErrors errors;
   errors.surface = CompareAttenuation(surface, surface_reference_);
   errors.free_space = CompareAttenuation(free_space, free_space_reference_);
-  std::vector<double> all = surface, all_reference = surface_reference_;
-  all.insert(all.end(), free_space.begin(), free_space.end());
-  all_reference.insert(all_reference.end(), free_space_reference_.begin(),
-                       free_space_reference_.end());
+  errors.band = CompareAttenuation(band, band_reference_);
+  std::vector<double> all, all_reference, penumbra, penumbra_reference;
+  for (auto [values, reference] :
+       {std::pair{&surface, &surface_reference_}, std::pair{&free_space, &free_space_reference_},
+        std::pair{&band, &band_reference_}}) {
+    all.insert(all.end(), values->begin(), values->end());
+    all_reference.insert(all_reference.end(), reference->begin(), reference->end());
+    for (size_t k = 0; k < values->size(); ++k) {
+      if ((*reference)[k] > 0.0 && (*reference)[k] < 1.0) {
+        penumbra.push_back((*values)[k]);
+        penumbra_reference.push_back((*reference)[k]);
+      }
+    }
+  }
   errors.all = CompareAttenuation(all, all_reference);
+  errors.penumbra = CompareAttenuation(penumbra, penumbra_reference);
   return errors;
 }
 
@@ -65,6 +77,7 @@ absl::Status AccuracyProbe::WriteReferenceCsv(const std::string& path, FileSyste
   };
   append("surface", points_.surface, surface_reference_);
   append("free", points_.free_space, free_space_reference_);
+  append("band", points_.band, band_reference_);
   return WriteFileAtomically(path, csv, fs);
 }
 

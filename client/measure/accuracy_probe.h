@@ -18,20 +18,21 @@ namespace pdsm {
 struct BakeErrors {
   ErrorStats surface;     // points on receivers
   ErrorStats free_space;  // points in the frustum's free space
-  ErrorStats all;         // both sets together: the "mean absolute error" of --target-error
+  ErrorStats band;        // points in the band above the receivers
+  ErrorStats all;         // every set together: the "mean absolute error" of --target-error
+  ErrorStats penumbra;    // the points of every set whose reference is strictly in (0, 1)
 };
 
 class AccuracyProbe {
  public:
   // Errors: those of MakeAccuracyPoints and ReferenceAttenuation.
-  static absl::StatusOr<AccuracyProbe> Create(const Scene& scene, int surface_points,
-                                              int free_space_points, uint64_t seed,
-                                              const ReferenceOptions& reference);
+  static absl::StatusOr<AccuracyProbe> Create(const Scene& scene, const AccuracyPointCounts& counts,
+                                              uint64_t seed, const ReferenceOptions& reference);
 
   // Errors: those of ReadPdsm.
   absl::StatusOr<BakeErrors> Measure(const std::string& pdsm_path) const;
 
-  // Writes "kind,x,y,z,attenuation" lines (kind: surface or free) with the reference values,
+  // Writes "kind,x,y,z,attenuation" lines (kind: surface, free or band) with the reference values,
   // through WriteFileAtomically (core/util/atomic_file.h): on failure `path` is left as it
   // was. `fs` null means FileSystem::Default().
   absl::Status WriteReferenceCsv(const std::string& path, FileSystem* fs = nullptr) const;
@@ -42,7 +43,7 @@ class AccuracyProbe {
 
  private:
   AccuracyPoints points_;
-  std::vector<double> surface_reference_, free_space_reference_;
+  std::vector<double> surface_reference_, free_space_reference_, band_reference_;
   double reference_seconds_ = 0;
   ReferenceMethod method_ = ReferenceMethod::kExact;
 };

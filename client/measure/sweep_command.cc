@@ -1,7 +1,9 @@
 // `pdsm sweep SCENE.json --out DIR [--samples 4,16,...] [--resolution ...] [--sm-resolution ...]
 // [--epsilon ...] [--sampling ...] [--depth-bias ...]`: bakes every combination of the knob lists
 // (each as a child `pdsm bake`, so its peak memory is its own), measures each PDSM against the
-// reference on fixed accuracy points, and writes DIR/sweep.csv and DIR/sweep.png.
+// reference on fixed accuracy points, and writes DIR/sweep.csv, DIR/sweep.png and DIR/error.png
+// (where the most accurate configuration's error lives, error_map.h).
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -14,15 +16,20 @@
 #include "client/measure/accuracy_probe.h"
 #include "client/measure/bake_knobs.h"
 #include "client/measure/child_bake.h"
+#include "client/measure/error_map.h"
 #include "client/measure/sweep_plot.h"
 #include "client/measure/sweep_report.h"
 #include "client/measure/target_error.h"
 #include "client/progress_reporter.h"
+#include "core/pdsm/pdsm_file.h"
 #include "core/scene/scene_loader.h"
 #include "core/util/output_path.h"
 
 namespace pdsm {
 namespace {
+
+// The error map's rays along the longer side (DrawBestErrorMap).
+constexpr int kSweepErrorMapRays = 256;
 
 struct SweepFlags {
   std::string scene_path;
@@ -78,9 +85,19 @@ absl::StatusOr<std::vector<BakeKnobs>> MakeGrid(const SweepFlags& flags, const B
   return grid;
 }
 
+// The most accurate row (lowest mean error over the probe's points; the faster of equals).
+bool MoreAccurate(const SweepRow& a, const SweepRow& b) {
+  if (a.errors.all.mean != b.errors.all.mean) return a.errors.all.mean < b.errors.all.mean;
+  return a.bake.seconds < b.bake.seconds;
+}
+
+// The bakes in DIR/bakes; the most accurate one's file is kept until the sweep has drawn its
+// error map (`best_exr`), the others go unless --keep-bakes.
 absl::Status RunGrid(const SweepFlags& flags, const std::vector<BakeKnobs>& grid,
-                     const AccuracyProbe& probe, std::vector<SweepRow>* rows) {
+                     const AccuracyProbe& probe, std::vector<SweepRow>* rows,
+                     std::string* best_exr) {
   const std::filesystem::path bakes = std::filesystem::path(flags.out_dir) / "bakes";
+  size_t best = 0;
   ProgressReporter progress("sweep", "bakes");
   const auto start = std::chrono::steady_clock::now();
   for (size_t i = 0; i < grid.size(); ++i) {
@@ -97,7 +114,13 @@ absl::Status RunGrid(const SweepFlags& flags, const std::vector<BakeKnobs>& grid
     absl::StatusOr<BakeErrors> errors = probe.Measure(exr);
     if (!errors.ok()) return errors.status();
     rows->push_back(SweepRow{grid[i], *bake, *errors});
-    if (!flags.keep_bakes) std::filesystem::remove(exr);
+    if (rows->size() == 1 || MoreAccurate(rows->back(), (*rows)[best])) {
+      if (!flags.keep_bakes && !best_exr->empty()) std::filesystem::remove(*best_exr);
+      best = rows->size() - 1;
+      *best_exr = exr;
+    } else if (!flags.keep_bakes) {
+      std::filesystem::remove(exr);
+    }
   }
   progress.Update(static_cast<int64_t>(grid.size()), static_cast<int64_t>(grid.size()),
                   std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
@@ -156,6 +179,44 @@ int CheckTargetError(const SweepFlags& flags, const AccuracyProbe& probe,
   return met ? kExitOk : kExitFailure;
 }
 
+// DIR/error.png: where the most accurate configuration's error lives (error_map.h), on at
+// most 256 x 256 of its rays so that the reference costs what the probe's points cost, give or
+// take. The map is a convenience beside the CSV: its failure is a warning.
+void DrawBestErrorMap(const SweepFlags& flags, const Scene& scene, ReferenceMethod method,
+                      const std::vector<SweepRow>& rows, const std::string& best_exr) {
+  const SweepRow* best = nullptr;
+  for (const SweepRow& row : rows) {
+    if (best == nullptr || MoreAccurate(row, *best)) best = &row;
+  }
+  if (best == nullptr || best_exr.empty()) return;
+  const std::string png = (std::filesystem::path(flags.out_dir) / "error.png").string();
+  const auto draw = [&]() -> absl::Status {
+    absl::StatusOr<PdsmImage> pdsm = ReadPdsm(best_exr);
+    if (!pdsm.ok()) return pdsm.status();
+    const int longest = std::max(pdsm->header.geometry.width, pdsm->header.geometry.height);
+    const int step = (longest + kSweepErrorMapRays - 1) / kSweepErrorMapRays;
+    absl::StatusOr<ErrorMap> map =
+        MeasureErrorMap(*pdsm, scene, ReferenceOptions{method, flags.reference_samples, 1}, step);
+    if (!map.ok()) return map.status();
+    const ErrorMapSummary summary = SummarizeErrorMap(*map);
+    const std::string title = absl::StrCat(best->knobs.Label(), ": ", ErrorMapTitle(*map));
+    if (absl::Status s = WriteErrorMapPng(*map, summary, kDefaultErrorMapScale, title, png);
+        !s.ok()) {
+      return s;
+    }
+    std::printf(
+        "error map of the most accurate configuration (%s): %s\n  all       %s\n  "
+        "penumbra  %s\n",
+        best->knobs.Label().c_str(), png.c_str(), FormatErrorStats(summary.all).c_str(),
+        FormatErrorStats(summary.penumbra).c_str());
+    return absl::OkStatus();
+  };
+  if (absl::Status s = draw(); !s.ok()) {
+    std::fprintf(stderr, "pdsm: warning: no error map: %s\n", std::string(s.message()).c_str());
+  }
+  if (!flags.keep_bakes) std::filesystem::remove(best_exr);
+}
+
 // A missing gnuplot is a warning: the CSV is the result, the plot a convenience.
 void Plot(const std::filesystem::path& dir, const std::string& scene_name) {
   const absl::Status plot =
@@ -176,7 +237,8 @@ int RunSweep(const SweepFlags& flags) {
   OutputPaths outputs = {{"--out", (out / "sweep.png").string()}};
   if (!flags.replot) {
     outputs.insert(outputs.end(), {{"--out", (out / "sweep.csv").string()},
-                                   {"--out", (out / "reference.csv").string()}});
+                                   {"--out", (out / "reference.csv").string()},
+                                   {"--out", (out / "error.png").string()}});
   }
   if (absl::Status s = CheckOutputPaths(outputs, {flags.scene_path}); !s.ok()) {
     return ReportError(s);
@@ -206,7 +268,7 @@ int RunSweep(const SweepFlags& flags) {
   }
   const std::filesystem::path dir(flags.out_dir);
   absl::StatusOr<AccuracyProbe> probe = AccuracyProbe::Create(
-      *scene, flags.surface_points, flags.free_space_points, flags.points_seed,
+      *scene, AccuracyPointCounts{flags.surface_points, flags.free_space_points}, flags.points_seed,
       ReferenceOptions{*method, flags.reference_samples, 1});
   if (!probe.ok()) return ReportError(probe.status());
   std::fprintf(stderr,
@@ -219,7 +281,10 @@ int RunSweep(const SweepFlags& flags) {
     return ReportError(s);
   }
   std::vector<SweepRow> rows;
-  if (absl::Status s = RunGrid(flags, *grid, *probe, &rows); !s.ok()) return ReportError(s);
+  std::string best_exr;
+  if (absl::Status s = RunGrid(flags, *grid, *probe, &rows, &best_exr); !s.ok()) {
+    return ReportError(s);
+  }
   MarkParetoFront(&rows);
   if (absl::Status s = WriteSweepCsv((dir / "sweep.csv").string(), rows); !s.ok()) {
     return ReportError(s);
@@ -227,6 +292,7 @@ int RunSweep(const SweepFlags& flags) {
   PrintRows(rows);
   std::printf("sweep: %s\n", (dir / "sweep.csv").c_str());
   Plot(dir, scene->name);
+  DrawBestErrorMap(flags, *scene, probe->method(), rows, best_exr);
   if (flags.target_error) return CheckTargetError(flags, *probe, rows);
   return kExitOk;
 }
@@ -239,7 +305,8 @@ void RegisterSweepCommand(CLI::App& app, int* exit_code) {
                                      "Bake every combination of knob values; "
                                      "error against time, CSV and plot");
   cmd->add_option("scene", flags->scene_path, "Scene file (JSON)")->required();
-  cmd->add_option("--out", flags->out_dir, "Output folder (sweep.csv, sweep.png, bakes/)")
+  cmd->add_option("--out", flags->out_dir,
+                  "Output folder (sweep.csv, sweep.png, error.png, bakes/)")
       ->required();
   cmd->add_option("--samples", flags->samples, "Light sample counts, e.g. 4,16,64")
       ->delimiter(',')

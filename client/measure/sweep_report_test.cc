@@ -52,7 +52,8 @@ TEST(SweepCsv, EveryFailureLeavesThePreviousCsv) {
 TEST(ReferenceCsv, EveryFailureLeavesThePreviousCsv) {
   absl::StatusOr<Scene> scene = LoadSceneFile(testing::ExamplePath("plates"));
   ASSERT_TRUE(scene.ok()) << scene.status();
-  absl::StatusOr<AccuracyProbe> probe = AccuracyProbe::Create(*scene, 20, 20, 1, {});
+  absl::StatusOr<AccuracyProbe> probe =
+      AccuracyProbe::Create(*scene, AccuracyPointCounts{20, 20}, 1, {});
   ASSERT_TRUE(probe.ok()) << probe.status();
   testing::TempDir dir;
   const std::string path = dir.File("reference.csv");

@@ -22,6 +22,7 @@ constexpr int kPilotSamples = 8;
 constexpr int kPilotResolution = 64;
 constexpr double kMargin = 1.25;
 constexpr uint64_t kPointsSeed = 1;
+constexpr uint64_t kHeldOutSeed = 2;
 constexpr int kSampleCounts[] = {1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024, 2048, 4096, 8192};
 constexpr int kResolutions[] = {32, 48, 64, 96, 128, 192, 256, 384, 512, 768, 1024, 1536, 2048};
 
@@ -208,12 +209,20 @@ absl::StatusOr<TargetErrorResult> BakeToTargetError(const TargetErrorOptions& op
     sampling = absl::AsciiStrToLower(*scene_sampling);
   }
   BakeKnobs base = KnobsFromScene(*scene, sampling);
-  absl::StatusOr<AccuracyProbe> probe = AccuracyProbe::Create(
-      *scene, options.surface_points, options.free_space_points, kPointsSeed, ReferenceOptions{});
+  const AccuracyPointCounts counts{options.surface_points, 0, options.band_points,
+                                   options.band_height};
+  absl::StatusOr<AccuracyProbe> probe =
+      AccuracyProbe::Create(*scene, counts, kPointsSeed, ReferenceOptions{});
   if (!probe.ok()) return probe.status();
-  std::fprintf(stderr, "target-error %g: reference (%s) on %zu + %zu points in %.1fs; pilots:\n",
+  absl::StatusOr<AccuracyProbe> held_out =
+      AccuracyProbe::Create(*scene, counts, kHeldOutSeed, ReferenceOptions{});
+  if (!held_out.ok()) return held_out.status();
+  std::fprintf(stderr,
+               "target-error %g: reference (%s) on %zu receiver + %zu band points (band %.4g "
+               "high), twice (fit, held out), in %.1fs; pilots:\n",
                options.target, ReferenceMethodName(probe->method()), probe->points().surface.size(),
-               probe->points().free_space.size(), probe->reference_seconds());
+               probe->points().band.size(), probe->points().band_height,
+               probe->reference_seconds() + held_out->reference_seconds());
 
   const std::filesystem::path pilots = options.output_path + ".pilots";
   std::error_code ec;
@@ -245,12 +254,17 @@ absl::StatusOr<TargetErrorResult> BakeToTargetError(const TargetErrorOptions& op
     if (!m.ok()) return m.status();
     result.knobs = knobs;
     result.predicted = predicted;
+    absl::StatusOr<BakeErrors> check = held_out->Measure(options.output_path);
+    if (!check.ok()) return check.status();
     result.measured = m->errors;
+    result.held_out = *check;
+    result.band_height = probe->points().band_height;
     result.seconds = m->seconds;
-    result.met = m->errors.all.mean <= options.target;
+    std::fprintf(stderr, "  held out: mean error %.5f\n", check->all.mean);
+    result.met = check->all.mean <= options.target;
     if (result.met) break;
     // Missed: the model was optimistic by this much; ask for that much more, and costlier.
-    demand *= 1.1 * m->errors.all.mean / options.target;
+    demand *= 1.1 * check->all.mean / options.target;
     above = cost;
   }
   std::filesystem::remove(options.output_path + ".log", ec);

@@ -1,6 +1,7 @@
 // `pdsm bake … --target-error E`: choose the bake knobs that reach a mean absolute attenuation
-// error E (over accuracy points on receivers and in free space, against the reference) at the least
-// predicted bake time, bake, and measure.
+// error E (over accuracy points on the receivers and in a band above them where objects go,
+// against the reference) at the least predicted bake time, bake, and check E on points of the
+// same region that the choice never saw.
 //
 // How: four cheap pilot bakes, N0 = 8, 32, 128 samples at R0 = 64 pixels and 32 samples at
 // 2 R0 (the shadow map follows the PDSM at 2R texels, epsilon is held at E/4), fit
@@ -35,17 +36,23 @@ struct TargetErrorOptions {
   std::optional<double> epsilon, depth_bias;
   std::string sampling;  // "" : the scene's
   int threads = 0;
-  int surface_points = 300, free_space_points = 300;
+  // Where E is measured: on the receivers and in the band above them (AccuracyPointCounts;
+  // band_height 0: DefaultBandHeight). The chooser fits on one draw of these points; whether
+  // E is met is judged on a second draw from the same region that it never saw.
+  int surface_points = 300, band_points = 300;
+  double band_height = 0;
 };
 
 struct TargetErrorResult {
   BakeKnobs knobs;           // of the bake left at output_path
   double predicted = 0;      // the model's error for it
-  BakeErrors measured;       // on the accuracy points
+  BakeErrors measured;       // on the points the chooser fitted its model on
+  BakeErrors held_out;       // on points from the same region it never saw: what `met` means
+  double band_height = 0;    // of both point sets, world units
   double seconds = 0;        // its bake time
   double total_seconds = 0;  // pilots, reference and every bake
   int bakes = 0;             // pilots included
-  bool met = false;          // measured.all.mean <= target
+  bool met = false;          // held_out.all.mean <= target
 };
 
 // Progress and the model go to stderr. The PDSM at output_path is always the last complete bake

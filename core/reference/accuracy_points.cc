@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "absl/strings/str_cat.h"
 #include "core/bake/bake_plan.h"
 #include "core/sampling/hash_rng.h"
 
@@ -40,10 +41,24 @@ glm::dvec3 InTriangle(const glm::dvec3* v, double u1, double u2) {
   return (1.0 - su) * v[0] + su * (1.0 - u2) * v[1] + su * u2 * v[2];
 }
 
+// DefaultBandHeight's rule.
+double BandHeightOf(const PdsmGeometry& g) { return 0.5 * (g.z_far - g.z_near); }
+
 }  // namespace
 
-absl::StatusOr<AccuracyPoints> MakeAccuracyPoints(const Scene& scene, int surface_count,
-                                                  int free_space_count, uint64_t seed) {
+absl::StatusOr<double> DefaultBandHeight(const Scene& scene) {
+  absl::StatusOr<BakePlan> plan = PlanBake(scene);
+  if (!plan.ok()) return plan.status();
+  return BandHeightOf(plan->geometry());
+}
+
+absl::StatusOr<AccuracyPoints> MakeAccuracyPoints(const Scene& scene,
+                                                  const AccuracyPointCounts& counts,
+                                                  uint64_t seed) {
+  if (!(std::isfinite(counts.band_height) && counts.band_height >= 0)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("band height: must be a finite number >= 0 (got ", counts.band_height, ")"));
+  }
   absl::StatusOr<BakePlan> plan = PlanBake(scene);
   if (!plan.ok()) return plan.status();
   const PdsmGeometry& g = plan->geometry();
@@ -51,26 +66,37 @@ absl::StatusOr<AccuracyPoints> MakeAccuracyPoints(const Scene& scene, int surfac
   SplitMix64 rng(HashInts(seed, 0x61636375726163ULL));
   auto u01 = [&rng](SplitMix64&) { return rng.NextDouble(); };
   AccuracyPoints points;
+  points.band_height = counts.band_height > 0 ? counts.band_height : BandHeightOf(g);
+  const bool ortho = g.projection == Projection::kOrthographic;
 
   const ReceiverAreas receivers = GatherReceivers(scene);
-  // Rejection keeps only points inside the frustum; the attempt cap ends the loop for receivers
-  // wholly behind the light.
-  for (int attempt = 0;
-       !receivers.cumulative.empty() && static_cast<int>(points.surface.size()) < surface_count &&
-       attempt < 50 * surface_count;
-       ++attempt) {
+  // A receiver point, area-weighted, and its triangle's unit normal on the side facing the light.
+  const auto on_receiver = [&](glm::dvec3* normal) {
     const double pick = u01(rng) * receivers.cumulative.back();
     const size_t t = std::min<size_t>(
         std::upper_bound(receivers.cumulative.begin(), receivers.cumulative.end(), pick) -
             receivers.cumulative.begin(),
         receivers.cumulative.size() - 1);
+    const glm::dvec3* v = &receivers.triangles[3 * t];
     const double u1 = u01(rng), u2 = u01(rng);
-    const glm::dvec3 p = InTriangle(&receivers.triangles[3 * t], u1, u2);
+    const glm::dvec3 p = InTriangle(v, u1, u2);
+    *normal = glm::normalize(glm::cross(v[1] - v[0], v[2] - v[0]));
+    const glm::dvec3 to_light = ortho ? -g.frame.n : g.frame.center - p;
+    if (glm::dot(*normal, to_light) < 0) *normal = -*normal;
+    return p;
+  };
+  // Rejection keeps only points inside the frustum; the attempt cap ends the loop for receivers
+  // wholly behind the light.
+  for (int attempt = 0;
+       !receivers.cumulative.empty() && static_cast<int>(points.surface.size()) < counts.surface &&
+       attempt < 50 * counts.surface;
+       ++attempt) {
+    glm::dvec3 normal;
+    const glm::dvec3 p = on_receiver(&normal);
     if (g.Locate(p).has_value()) points.surface.push_back(p);
   }
 
-  const bool ortho = g.projection == Projection::kOrthographic;
-  while (static_cast<int>(points.free_space.size()) < free_space_count) {
+  while (static_cast<int>(points.free_space.size()) < counts.free_space) {
     const double s = g.s_min + u01(rng) * (g.s_max - g.s_min);
     const double t = g.t_min + u01(rng) * (g.t_max - g.t_min);
     // Nearer than z_valid_min the PDSM knows nothing (the scan floor): no point there.
@@ -78,6 +104,17 @@ absl::StatusOr<AccuracyPoints> MakeAccuracyPoints(const Scene& scene, int surfac
     const double z = z_min + u01(rng) * (g.z_far - z_min);
     const glm::dvec3 p_light = ortho ? glm::dvec3(s, t, z) : glm::dvec3(s * z, t * z, z);
     points.free_space.push_back(g.frame.WorldFromLight(p_light));
+  }
+
+  for (int attempt = 0;
+       !receivers.cumulative.empty() && static_cast<int>(points.band.size()) < counts.band &&
+       attempt < 50 * counts.band;
+       ++attempt) {
+    glm::dvec3 normal;
+    const glm::dvec3 p = on_receiver(&normal);
+    // (0, h]: 1 - u in (0, 1], so no band point lies on the receiver itself.
+    const glm::dvec3 q = p + normal * ((1.0 - u01(rng)) * points.band_height);
+    if (g.Locate(q).has_value()) points.band.push_back(q);
   }
   return points;
 }
