@@ -24,7 +24,8 @@ Scene LoadExample(const std::string& name) {
 }
 
 std::vector<glm::dvec3> PlatesPoints(const Scene& scene) {
-  absl::StatusOr<AccuracyPoints> points = MakeAccuracyPoints(scene, AccuracyPointCounts{300, 300}, 5);
+  absl::StatusOr<AccuracyPoints> points =
+      MakeAccuracyPoints(scene, AccuracyPointCounts{300, 300}, 5);
   EXPECT_TRUE(points.ok()) << points.status();
   std::vector<glm::dvec3> all = points->surface;
   all.insert(all.end(), points->free_space.begin(), points->free_space.end());
