@@ -93,7 +93,7 @@ void Coordinator::TickUntilStopped() {
 
 absl::StatusOr<pdsm::v1::Job> Coordinator::SubmitBake(const pdsm::v1::SubmitBakeRequest& request) {
   if (absl::Status s = CheckSubmitRequest(request); !s.ok()) return s;
-  absl::StatusOr<std::vector<BakePlan>> plans =
+  absl::StatusOr<std::vector<PlannedLight>> plans =
       PlanJobLights(request.scene(), "scene", *assets_, &options_.limits);
   if (!plans.ok()) return plans.status();
   absl::StatusOr<JobRecord> record = NewJobRecord(request, *plans, UnixNowMs());
@@ -121,24 +121,20 @@ void Coordinator::SubmitBakeAsync(const pdsm::v1::SubmitBakeRequest* request,
 }
 
 absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<int>& done_tiles,
-                                   std::optional<std::vector<BakePlan>> plans) {
+                                   std::optional<std::vector<PlannedLight>> plans) {
   pdsm::v1::Scene scene;
   if (!scene.ParseFromString(record.scene)) {
     return absl::DataLossError(absl::StrCat("job ", record.job_id, ": stored scene is corrupt"));
   }
   if (!plans) {
-    absl::StatusOr<std::vector<BakePlan>> planned =
+    absl::StatusOr<std::vector<PlannedLight>> planned =
         PlanJobLights(scene, absl::StrCat("job ", record.job_id), *assets_, nullptr);
     if (!planned.ok()) return planned.status();
     plans = *std::move(planned);
   }
-  std::vector<std::shared_ptr<const BakePlan>> shared_plans;
-  for (BakePlan& plan : *plans) {
-    shared_plans.push_back(std::make_shared<const BakePlan>(std::move(plan)));
-  }
   const std::string job_id = record.job_id;
   auto job = std::make_shared<StoredJob>(
-      store_.get(), options_.data_dir, record, std::move(scene), std::move(shared_plans),
+      store_.get(), options_.data_dir, record, std::move(scene), *std::move(plans),
       [this](const std::string& id) { Forget(id); },
       [this, job_id](const absl::Status& why) { EndLights(job_id, why); }, options_.fs);
   {

@@ -137,7 +137,7 @@ class Coordinator {
   // `plans`: the job's plans when the caller has them (a new job); otherwise planned from the
   // record's scene. `done_tiles`: the job's (not a light's) tiles stored already, ascending.
   absl::Status Activate(const JobRecord& record, const std::vector<int>& done_tiles,
-                        std::optional<std::vector<BakePlan>> plans);
+                        std::optional<std::vector<PlannedLight>> plans);
   // Ends every light of the job still in the engine as failed with `why`.
   void EndLights(const std::string& job_id, const absl::Status& why);
   std::shared_ptr<StoredJob> Active(const std::string& job_id) const;

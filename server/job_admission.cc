@@ -10,6 +10,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/synchronization/mutex.h"
+#include "core/bake/plan_fingerprint.h"
 #include "core/scene/scene.h"
 #include "core/scene/scene_loader.h"
 
@@ -95,10 +96,10 @@ absl::StatusOr<pdsm::v1::Scene> ReadSceneLights(const std::string& serialized_sc
 
 }  // namespace
 
-absl::StatusOr<std::vector<BakePlan>> PlanJobLights(const pdsm::v1::Scene& scene,
-                                                    const std::string& label,
-                                                    const CoordinatorAssets& assets,
-                                                    const AdmissionLimits* limits) {
+absl::StatusOr<std::vector<PlannedLight>> PlanJobLights(const pdsm::v1::Scene& scene,
+                                                        const std::string& label,
+                                                        const CoordinatorAssets& assets,
+                                                        const AdmissionLimits* limits) {
   // Asset triangles are counted as they decode, to stop early on a huge scene; the final
   // check counts every mesh (inline ones too) once.
   int64_t asset_triangles = 0;
@@ -135,34 +136,39 @@ absl::StatusOr<std::vector<BakePlan>> PlanJobLights(const pdsm::v1::Scene& scene
                           triangles, limits->max_triangles));
     }
   }
-  std::vector<BakePlan> plans;
+  std::vector<PlannedLight> plans;
   plans.reserve(count);
   for (size_t i = 0; i < count; ++i) {
     // A one-light scene is planned as it stands (its light may have no name).
     const Scene one = count == 1 ? *std::move(loaded) : ForLight(*loaded, i);
     absl::StatusOr<BakePlan> plan = PlanBake(one);
     if (!plan.ok()) return plan.status();
-    plans.push_back(*std::move(plan));
+    std::string fingerprint = PlanFingerprint(*plan);
+    ReleaseRenderGeometry(&*plan);
+    plans.push_back(
+        PlannedLight{std::make_shared<const BakePlan>(*std::move(plan)), std::move(fingerprint)});
   }
   return plans;
 }
 absl::StatusOr<JobRecord> NewJobRecord(const pdsm::v1::SubmitBakeRequest& request,
-                                       const std::vector<BakePlan>& plans, int64_t now_unix_ms) {
+                                       const std::vector<PlannedLight>& lights,
+                                       int64_t now_unix_ms) {
   JobRecord record;
   record.job_id = RandomHex(8);
   record.idempotency_key = request.idempotency_key();
   record.scene_name = request.scene().name();
   record.state = pdsm::v1::QUEUED;
   record.priority = request.priority();
-  for (const BakePlan& plan : plans) {
-    const int tiles = static_cast<int>(plan.tiles.size());
+  for (const PlannedLight& light : lights) {
+    const int tiles = static_cast<int>(light.plan->tiles.size());
     record.tiles_total += tiles;
-    record.samples_total += int64_t{plan.header.samples} * tiles;
+    record.samples_total += int64_t{light.plan->header.samples} * tiles;
   }
   record.created_unix_ms = record.updated_unix_ms = now_unix_ms;
-  record.width = plans.at(0).geometry().width;
-  record.height = plans.at(0).geometry().height;
-  record.samples = plans.at(0).header.samples;
+  const BakePlan& first = *lights.at(0).plan;
+  record.width = first.geometry().width;
+  record.height = first.geometry().height;
+  record.samples = first.header.samples;
   if (!request.scene().SerializeToString(&record.scene)) {
     return absl::InternalError("cannot serialize the scene");
   }

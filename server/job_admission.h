@@ -13,6 +13,7 @@
 #include "core/bake/bake_plan.h"
 #include "pdsm/v1/jobs.pb.h"
 #include "server/coordinator_assets.h"
+#include "server/job_lights.h"
 #include "server/job_store.h"
 
 namespace pdsm {
@@ -34,17 +35,19 @@ absl::Status CheckSubmitRequest(const pdsm::v1::SubmitBakeRequest& request);
 // Loads `scene` (meshes from `assets`) and plans each of its lights as the local bake does
 // (the scene baking that light alone), in scene order; `label` prefixes errors. `limits`
 // null: none are checked; else each light within them, and the tiles of all the lights
-// together within max_job_tiles (the job store's unit).
-absl::StatusOr<std::vector<BakePlan>> PlanJobLights(const pdsm::v1::Scene& scene,
-                                                    const std::string& label,
-                                                    const CoordinatorAssets& assets,
-                                                    const AdmissionLimits* limits);
+// together within max_job_tiles (the job store's unit). Each plan is fingerprinted and then
+// released of its render geometry as soon as it is made, so that planning a world of many
+// lights never holds more than one light's geometry besides the scene.
+absl::StatusOr<std::vector<PlannedLight>> PlanJobLights(const pdsm::v1::Scene& scene,
+                                                        const std::string& label,
+                                                        const CoordinatorAssets& assets,
+                                                        const AdmissionLimits* limits);
 
 // The record of a new job: a fresh random id, QUEUED, its tiles and samples summed over the
 // lights (`plans`, one per light in scene order; width, height and samples the first's), the
 // scene serialized.
 absl::StatusOr<JobRecord> NewJobRecord(const pdsm::v1::SubmitBakeRequest& request,
-                                       const std::vector<BakePlan>& plans, int64_t now_unix_ms);
+                                       const std::vector<PlannedLight>& plans, int64_t now_unix_ms);
 
 // The effective bake settings (EffectiveBakeParams, core/scene/scene_loader.h) of a job's
 // stored scene (of its first light), read from its serialized bytes without parsing the

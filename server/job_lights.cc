@@ -5,12 +5,10 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
-#include "core/bake/plan_fingerprint.h"
 
 namespace pdsm {
 
-std::vector<JobLight> MakeJobLights(const std::string& job_id,
-                                    std::vector<std::shared_ptr<const BakePlan>> plans) {
+std::vector<JobLight> MakeJobLights(const std::string& job_id, std::vector<PlannedLight> plans) {
   std::vector<JobLight> lights;
   lights.reserve(plans.size());
   const int count = static_cast<int>(plans.size());
@@ -18,9 +16,9 @@ std::vector<JobLight> MakeJobLights(const std::string& job_id,
   for (int i = 0; i < count; ++i) {
     JobLight light;
     light.index = i;
-    light.name = plans[i]->header.light_name;
-    light.fingerprint = PlanFingerprint(*plans[i]);
-    light.plan = std::move(plans[i]);
+    light.name = plans[i].plan->header.light_name;
+    light.fingerprint = std::move(plans[i].fingerprint);
+    light.plan = std::move(plans[i].plan);
     light.tile_offset = offset;
     light.engine_id = EngineJobId(job_id, i, count);
     offset += light.tile_count();

@@ -23,19 +23,26 @@
 
 namespace pdsm {
 
+// A light as the coordinator plans it (PlanJobLights): the plan without what only a worker's
+// renderer uses (ReleaseRenderGeometry), and the fingerprint of the whole plan, taken before
+// (what a worker's own plan of the light must match).
+struct PlannedLight {
+  std::shared_ptr<const BakePlan> plan;
+  std::string fingerprint;
+};
+
 struct JobLight {
   int index = 0;     // in the scene
   std::string name;  // Light.name; "" only for the light of a one-light scene
   std::shared_ptr<const BakePlan> plan;
-  std::string fingerprint;  // PlanFingerprint(*plan)
+  std::string fingerprint;  // PlanFingerprint of the whole plan (PlannedLight)
   int tile_offset = 0;      // its first tile's index among the job's tiles
   std::string engine_id;    // EngineJobId(job_id, index, light count)
   int tile_count() const { return static_cast<int>(plan->tiles.size()); }
 };
 
-// The job's lights from their plans (one per light, in scene order). REQUIRES: plans non-empty.
-std::vector<JobLight> MakeJobLights(const std::string& job_id,
-                                    std::vector<std::shared_ptr<const BakePlan>> plans);
+// The job's lights from their plans (one per light, in scene order). REQUIRES: non-empty.
+std::vector<JobLight> MakeJobLights(const std::string& job_id, std::vector<PlannedLight> plans);
 
 // The engine job of light `light` of `light_count`: the job id for a one-light job, else
 // "<job id>/<light, 5 digits>" ('/' is in neither a job id nor a light name; the digits sort

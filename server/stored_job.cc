@@ -62,7 +62,7 @@ class StoredJob::Light final : public JobOutput {
 };
 
 StoredJob::StoredJob(JobStore* store, const std::string& data_dir, JobRecord record,
-                     pdsm::v1::Scene scene, std::vector<std::shared_ptr<const BakePlan>> plans,
+                     pdsm::v1::Scene scene, std::vector<PlannedLight> plans,
                      std::function<void(const std::string&)> on_ended,
                      std::function<void(const absl::Status&)> end_lights, FileSystem* fs)
     : store_(store),

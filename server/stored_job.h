@@ -52,8 +52,7 @@ class StoredJob : public std::enable_shared_from_this<StoredJob> {
   // called without any lock of this held. `fs`: where tile files and the PDSM are written (null:
   // the real file system).
   StoredJob(JobStore* store, const std::string& data_dir, JobRecord record, pdsm::v1::Scene scene,
-            std::vector<std::shared_ptr<const BakePlan>> plans,
-            std::function<void(const std::string&)> on_ended,
+            std::vector<PlannedLight> plans, std::function<void(const std::string&)> on_ended,
             std::function<void(const absl::Status&)> end_lights = nullptr,
             FileSystem* fs = nullptr);
   ~StoredJob();

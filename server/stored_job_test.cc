@@ -57,7 +57,7 @@ class StoredJobTest : public ::testing::Test {
   std::shared_ptr<StoredJob> Job(FileSystem* fs) {
     return std::make_shared<StoredJob>(
         store_.get(), dir_.path().string(), record_, pdsm::v1::Scene(),
-        std::vector<std::shared_ptr<const BakePlan>>{plan_}, nullptr, nullptr, fs);
+        std::vector<PlannedLight>{PlannedLight{plan_, "fingerprint"}}, nullptr, nullptr, fs);
   }
 
   TempDir dir_;

@@ -127,7 +127,8 @@ TEST(Cli, InfoGivesTheLightSizeWithSixDigits) {
 
 // The issue's case: a disk light 3 above a 100 x 100 floor bakes, but says that 53% of the
 // floor (beyond 85 degrees off the light's axis: 1 - (6 tan 85 / 100)^2) gets no shadow, and
-// what to do; a scene the frustum holds says nothing of the kind.
+// what to do; a scene the frustum holds, or a light bounded by its own frustum, says nothing
+// of the kind.
 TEST(Cli, WarnsWhenReceiversFallOutsideTheFrustum) {
   TempDir dir;
   WriteText(dir.File("wide.json"), R"({
@@ -160,6 +161,20 @@ TEST(Cli, WarnsWhenReceiversFallOutsideTheFrustum) {
   r = RunCommand(kPdsm + " query " + dir.File("wide.exr") + " --points " + dir.File("far.csv"),
                  dir);
   EXPECT_EQ(r.out, "40,0,40,nan\n") << r.err;
+
+  // A light whose reach is bounded on purpose (an explicit frustum: a world's local light)
+  // lights only that, and says nothing of the rest.
+  std::string bounded = testing::ReadBytes(dir.File("wide.json"));
+  const std::string knobs = R"("bake": {)";
+  ASSERT_NE(bounded.find(knobs), std::string::npos);
+  bounded.replace(bounded.find(knobs), knobs.size(),
+                  R"("bake": {"frustum": {"window": [-1,1,-1,1], "depthRange": [0.5,4]}, )");
+  WriteText(dir.File("bounded.json"), bounded);
+  r = RunCommand(kPdsm + " bake " + dir.File("bounded.json") + " -o " + dir.File("bounded.exr") +
+                     " --no-preview",
+                 dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
 
   WriteText(dir.File("tiny.json"), kGoodScene);
   r = RunCommand(

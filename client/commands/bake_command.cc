@@ -136,8 +136,10 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags,
 // Receivers the light's frustum does not hold get no shadow from the bake (query: nan): say how
 // much, and what to do, rather than bake silently. Under 0.1% is rounding at the window's edge.
 void WarnAboutUncoveredReceivers(const Scene& scene, const PdsmHeader& header) {
-  // A spot lights its cone only: receivers outside it are outside on purpose.
-  if (scene.light.is_spot()) return;
+  // A light whose reach is bounded on purpose lights only that: a spot's cone, an explicit
+  // bake.frustum (a world's local lights: otherwise each of them warned that ~100% of the
+  // world's ground was outside it; bench/large_world.py).
+  if (scene.light.is_spot() || scene.bake.frustum.has_value()) return;
   const double outside = ReceiverAreaOutsideFrustum(scene, header.geometry);
   if (outside < 1e-3) return;
   const std::string light =
@@ -146,7 +148,8 @@ void WarnAboutUncoveredReceivers(const Scene& scene, const PdsmHeader& header) {
                "pdsm: warning: %.1f%% of the receivers' area is outside %s frustum "
                "(behind the light, or more than 85 degrees off its axis): it gets no baked "
                "shadow and `pdsm query` gives nan there; move the light back or away from the "
-               "receivers, aim it at them, or use a sun light for wide ground\n",
+               "receivers, aim it at them, use a sun light for wide ground, or bound its reach "
+               "with bake.frustum if that is all it should light\n",
                100 * outside, light.c_str());
 }
 

@@ -301,4 +301,10 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
   return plan;
 }
 
+void ReleaseRenderGeometry(BakePlan* plan) {
+  plan->casters = LightSpaceMesh{};
+  plan->caster_clusters = std::vector<CasterCluster>{};
+  if (!plan->header.surfaces_only) plan->receivers = LightSpaceMesh{};
+}
+
 }  // namespace pdsm

@@ -87,6 +87,13 @@ double MaxWindowTangent(const LightSpec& light);
 // override the projection cannot use.
 absl::StatusOr<BakePlan> PlanBake(const Scene& scene);
 
+// Frees what only a shadow-map renderer uses: the casters and their clusters, and the
+// receivers unless the plan is surfaces-only (the tile assembly places its depth windows with
+// them). What is left tiles, groups, numbers and assembles the bake as before; a coordinator
+// keeps that much of each light of each job (a world's 10^6 triangles are ~40 MB per light).
+// Take PlanFingerprint first: it covers the geometry.
+void ReleaseRenderGeometry(BakePlan* plan);
+
 }  // namespace pdsm
 
 #endif  // PDSM_CORE_BAKE_BAKE_PLAN_H_
