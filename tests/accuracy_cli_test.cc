@@ -232,6 +232,19 @@ TEST(SweepCli, BadKnobExits2) {
 }
 
 // Knobs the chooser's bakes cannot take are refused, not silently dropped.
+// |pdsm query - exact| of the PDSM at `pdsm_path` over `points` (count 0 when either fails).
+ErrorStats ErrorAgainstExact(const Scene& scene, const std::string& pdsm_path,
+                             const std::vector<glm::dvec3>& points) {
+  absl::StatusOr<std::vector<double>> exact = ExactAttenuation(scene, points);
+  absl::StatusOr<PdsmImage> pdsm = ReadPdsm(pdsm_path);
+  EXPECT_TRUE(exact.ok()) << exact.status();
+  EXPECT_TRUE(pdsm.ok()) << pdsm.status();
+  if (!exact.ok() || !pdsm.ok()) return ErrorStats{};
+  std::vector<double> baked;
+  for (const glm::dvec3& p : points) baked.push_back(QueryAttenuation(*pdsm, p));
+  return CompareAttenuation(baked, *exact);
+}
+
 TEST(TargetErrorCli, RefusesKnobsItWouldIgnore) {
   TempDir dir;
   for (const std::string flag :
@@ -269,12 +282,7 @@ TEST(TargetErrorCli, BakeMeetsTheTargetOnIndependentPoints) {
   ASSERT_TRUE(points.ok());
   std::vector<glm::dvec3> all = points->surface;
   all.insert(all.end(), points->free_space.begin(), points->free_space.end());
-  absl::StatusOr<std::vector<double>> exact = ExactAttenuation(*scene, all);
-  absl::StatusOr<PdsmImage> pdsm = ReadPdsm(out);
-  ASSERT_TRUE(exact.ok() && pdsm.ok());
-  std::vector<double> baked;
-  for (const glm::dvec3& p : all) baked.push_back(QueryAttenuation(*pdsm, p));
-  const ErrorStats e = CompareAttenuation(baked, *exact);
+  const ErrorStats e = ErrorAgainstExact(*scene, out, all);
   EXPECT_EQ(e.count, all.size());
   EXPECT_LE(e.mean, kTarget);
   std::printf("target %.3f: independent mean error %.5f\n", kTarget, e.mean);
@@ -335,12 +343,7 @@ TEST(TargetErrorCli, MeetsTheTargetInTheBandAboveTheReceiversOnHeldOutPoints) {
   }
   std::vector<glm::dvec3> all = points->surface;
   all.insert(all.end(), points->band.begin(), points->band.end());
-  absl::StatusOr<std::vector<double>> exact = ExactAttenuation(*scene, all);
-  absl::StatusOr<PdsmImage> pdsm = ReadPdsm(out);
-  ASSERT_TRUE(exact.ok() && pdsm.ok());
-  std::vector<double> baked;
-  for (const glm::dvec3& p : all) baked.push_back(QueryAttenuation(*pdsm, p));
-  const ErrorStats e = CompareAttenuation(baked, *exact);
+  const ErrorStats e = ErrorAgainstExact(*scene, out, all);
   EXPECT_EQ(e.count, all.size());
   EXPECT_LE(e.mean, kTarget);
   std::printf("target %.3f: mean error on held-out receiver and band points %.5f\n", kTarget,
