@@ -210,7 +210,6 @@ absl::StatusOr<BakeSummary> BakePlanned(
   summary.tiles_all_lit = progress.tiles_all_lit;
   summary.groups = static_cast<int>(plan->groups.size());
   summary.casters = static_cast<int64_t>(plan->casters.TriangleCount());
-  summary.casters_out_of_reach = static_cast<int64_t>(plan->casters_culled);
   summary.tasks = progress.tasks_done;
   summary.tile_samples_total = progress.tile_samples_total;
   summary.assembly = progress.assembly;
@@ -230,7 +229,6 @@ void AddLight(const BakeSummary& light, BakeSummary* total) {
   total->tiles_all_lit += light.tiles_all_lit;
   total->groups += light.groups;
   total->casters += light.casters;
-  total->casters_out_of_reach += light.casters_out_of_reach;
   total->tasks += light.tasks;
   total->tile_samples_total += light.tile_samples_total;
   total->tasks_stats.Add(light.tasks_stats);

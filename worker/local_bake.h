@@ -49,8 +49,7 @@ struct BakeSummary {
   int tiles = 0;
   int tiles_all_lit = 0;  // tiles with no vertex at all (no caster can reach their rays)
   int groups = 0;         // tile groups (the unit of rendering)
-  int64_t casters = 0;    // caster triangles within the light's reach (what its plan keeps)
-  int64_t casters_out_of_reach = 0;  // the scene's other casters (BakePlan::casters_culled)
+  int64_t casters = 0;    // caster triangles of the scene
   int64_t tasks = 0;
   int64_t tile_samples_total = 0;  // light samples summed over tiles (adaptive bakes: < max)
   TaskStats tasks_stats;           // summed over threads (thread-seconds)

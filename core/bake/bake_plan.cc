@@ -96,104 +96,6 @@ void AppendMesh(const TriangleMesh& mesh, const LightFrame& frame, LightSpaceMes
   for (uint32_t i : mesh.indices) out->indices.push_back(base + i);
 }
 
-// A convex region of light space as half-spaces dot(n, p) <= d. A triangle whose three vertices
-// are all outside one of them is outside the region (the test is conservative: a triangle
-// outside it but across every single plane is kept).
-struct Region {
-  std::vector<std::pair<glm::dvec3, double>> half_spaces;
-
-  bool MayHold(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c) const {
-    const glm::dvec3 v[3] = {glm::dvec3(a), glm::dvec3(b), glm::dvec3(c)};
-    for (const auto& [n, d] : half_spaces) {
-      if (glm::dot(n, v[0]) > d && glm::dot(n, v[1]) > d && glm::dot(n, v[2]) > d) return false;
-    }
-    return true;
-  }
-};
-
-// Where a caster can shadow a PDSM ray, widened by kCullMarginTexels shadow-map texels for the
-// texels a scan reads beside a ray's own line. Perspective: a point P on the segment from a
-// sample (a, b, 0) to a ray point (s w, t w, w) has x_P - s z_P = a (1 - l) (docs/algorithms.md,
-// "What a tile's rays can reach"), so |x_P - s z_P| <= max |a| for some s of the window, at any
-// depth (perspective rays run on without end), and z_P >= 0. Sun (slopes |a|, rays ending at
-// z_far): |x_P - s| <= max |a| (z_far - z_P), and nothing beyond z_clip_far is drawn. The tile
-// reach's regions are each inside this one for points in front of the light plane.
-constexpr double kCullMarginTexels = 8;
-
-Region CasterRegion(const BakePlan& plan) {
-  const PdsmGeometry& g = plan.geometry();
-  double a = 0, b = 0;
-  for (const glm::dvec2& sample : plan.samples) {
-    a = std::max(a, std::abs(sample.x));
-    b = std::max(b, std::abs(sample.y));
-  }
-  const double ms = kCullMarginTexels * plan.lattice.pitch_s;
-  const double mt = kCullMarginTexels * plan.lattice.pitch_t;
-  Region r;
-  if (g.projection == Projection::kPerspective) {
-    r.half_spaces = {{{0, 0, -1}, 0},
-                     {{1, 0, -(g.s_max + ms)}, a},
-                     {{-1, 0, g.s_min - ms}, a},
-                     {{0, 1, -(g.t_max + mt)}, b},
-                     {{0, -1, g.t_min - mt}, b}};
-  } else {
-    r.half_spaces = {{{0, 0, 1}, plan.z_clip_far},
-                     {{1, 0, a}, g.s_max + ms + a * g.z_far},
-                     {{-1, 0, a}, -(g.s_min - ms) + a * g.z_far},
-                     {{0, 1, b}, g.t_max + mt + b * g.z_far},
-                     {{0, -1, b}, -(g.t_min - mt) + b * g.z_far}};
-  }
-  return r;
-}
-
-// Leaves out of the clustered casters the triangles `region` cannot hold, keeping the others in
-// their order (draw order decides depth ties, so a map must see the same triangles in the same
-// order: the clusters are cut over every caster first, then thinned) and only the vertices they
-// use. Each cluster keeps its kept triangles and their box; empty clusters go. Returns how
-// many triangles were left out (0: the mesh and clusters are untouched).
-size_t CullClusteredCasters(const Region& region, LightSpaceMesh* mesh,
-                            std::vector<CasterCluster>* clusters) {
-  const std::vector<glm::vec3>& p = mesh->positions;
-  const std::vector<uint32_t>& index = mesh->indices;
-  std::vector<bool> keep(mesh->TriangleCount());
-  size_t kept = 0;
-  for (size_t t = 0; t < keep.size(); ++t) {
-    keep[t] = region.MayHold(p[index[3 * t]], p[index[3 * t + 1]], p[index[3 * t + 2]]);
-    kept += keep[t] ? 1 : 0;
-  }
-  if (kept == keep.size()) return 0;
-  constexpr uint32_t kUnused = std::numeric_limits<uint32_t>::max();
-  std::vector<uint32_t> remap(p.size(), kUnused);
-  for (size_t t = 0; t < keep.size(); ++t) {
-    if (keep[t]) remap[index[3 * t]] = remap[index[3 * t + 1]] = remap[index[3 * t + 2]] = 0;
-  }
-  LightSpaceMesh out;
-  for (size_t i = 0; i < p.size(); ++i) {
-    if (remap[i] == kUnused) continue;
-    remap[i] = static_cast<uint32_t>(out.positions.size());
-    out.positions.push_back(p[i]);
-  }
-  std::vector<CasterCluster> thinned;
-  for (const CasterCluster& c : *clusters) {
-    CasterCluster next{static_cast<uint32_t>(out.TriangleCount()), 0, glm::dvec3(kInf),
-                       glm::dvec3(-kInf)};
-    for (uint32_t t = c.first_triangle; t < c.first_triangle + c.triangle_count; ++t) {
-      if (!keep[t]) continue;
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t v = index[3 * t + k];
-        out.indices.push_back(remap[v]);
-        next.lo = glm::min(next.lo, glm::dvec3(p[v]));
-        next.hi = glm::max(next.hi, glm::dvec3(p[v]));
-      }
-      ++next.triangle_count;
-    }
-    if (next.triangle_count > 0) thinned.push_back(next);
-  }
-  *mesh = std::move(out);
-  *clusters = std::move(thinned);
-  return keep.size() - kept;
-}
-
 void MakeTiles(BakePlan* plan) {
   const PdsmGeometry& g = plan->header.geometry;
   const int size = plan->header.tile_size;
@@ -393,10 +295,6 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
     if (Receives(mesh.role)) AppendMesh(mesh, g.frame, &plan.receivers);
   }
   plan.caster_clusters = ClusterCasters(&plan.casters);
-  // Only what this light's bake can see: a local light in a large world keeps the few
-  // casters around it, not the world, for its reach, its tasks and a worker's memory.
-  plan.casters_culled =
-      CullClusteredCasters(CasterRegion(plan), &plan.casters, &plan.caster_clusters);
   plan.tile_group_size = scene.bake.tile_group_size;
   plan.groups = GroupTiles(plan);
   plan.tile_has_casters = TilesCastersMayReach(plan);

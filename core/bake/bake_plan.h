@@ -48,11 +48,7 @@ struct BakePlan {
   // no task at all.
   std::vector<bool> tile_has_casters;
   int tile_group_size = 0;  // the scene's bake.tileGroupSize (0: chosen by GroupTiles)
-  // The casters that can shadow a PDSM ray (between a light sample and a ray, widened by a few
-  // shadow-map texels; the others are left out, casters_culled of them), in spatial order, cut
-  // into caster_clusters.
-  LightSpaceMesh casters;
-  size_t casters_culled = 0;
+  LightSpaceMesh casters;   // triangles in spatial order, cut into caster_clusters
   std::vector<CasterCluster> caster_clusters;
   LightSpaceMesh receivers;
 
