@@ -85,16 +85,20 @@ absl::StatusOr<AccuracyPoints> MakeAccuracyPoints(const Scene& scene,
     if (glm::dot(*normal, to_light) < 0) *normal = -*normal;
     return p;
   };
-  // Rejection keeps only points inside the frustum; the attempt cap ends the loop for receivers
-  // wholly behind the light.
-  for (int attempt = 0;
-       !receivers.cumulative.empty() && static_cast<int>(points.surface.size()) < counts.surface &&
-       attempt < 50 * counts.surface;
-       ++attempt) {
-    glm::dvec3 normal;
-    const glm::dvec3 p = on_receiver(&normal);
-    if (g.Locate(p).has_value()) points.surface.push_back(p);
-  }
+  // `count` receiver points moved by `place` (which may draw from the RNG too). Rejection keeps
+  // only points inside the frustum; the attempt cap ends the loop for receivers wholly behind
+  // the light.
+  const auto draw_on_receivers = [&](int count, auto place, std::vector<glm::dvec3>* out) {
+    for (int attempt = 0; !receivers.cumulative.empty() && static_cast<int>(out->size()) < count &&
+                          attempt < 50 * count;
+         ++attempt) {
+      glm::dvec3 normal;
+      const glm::dvec3 q = place(on_receiver(&normal), normal);
+      if (g.Locate(q).has_value()) out->push_back(q);
+    }
+  };
+  draw_on_receivers(
+      counts.surface, [](const glm::dvec3& p, const glm::dvec3&) { return p; }, &points.surface);
 
   while (static_cast<int>(points.free_space.size()) < counts.free_space) {
     const double s = g.s_min + u01(rng) * (g.s_max - g.s_min);
@@ -106,16 +110,13 @@ absl::StatusOr<AccuracyPoints> MakeAccuracyPoints(const Scene& scene,
     points.free_space.push_back(g.frame.WorldFromLight(p_light));
   }
 
-  for (int attempt = 0;
-       !receivers.cumulative.empty() && static_cast<int>(points.band.size()) < counts.band &&
-       attempt < 50 * counts.band;
-       ++attempt) {
-    glm::dvec3 normal;
-    const glm::dvec3 p = on_receiver(&normal);
-    // (0, h]: 1 - u in (0, 1], so no band point lies on the receiver itself.
-    const glm::dvec3 q = p + normal * ((1.0 - u01(rng)) * points.band_height);
-    if (g.Locate(q).has_value()) points.band.push_back(q);
-  }
+  // Heights in (0, h]: 1 - u is in (0, 1], so no band point lies on the receiver itself.
+  draw_on_receivers(
+      counts.band,
+      [&](const glm::dvec3& p, const glm::dvec3& normal) {
+        return p + normal * ((1.0 - u01(rng)) * points.band_height);
+      },
+      &points.band);
   return points;
 }
 
