@@ -91,13 +91,16 @@ bool MoreAccurate(const SweepRow& a, const SweepRow& b) {
   return a.bake.seconds < b.bake.seconds;
 }
 
-// The bakes in DIR/bakes; the most accurate one's file is kept until the sweep has drawn its
-// error map (`best_exr`), the others go unless --keep-bakes.
+// Where a configuration's bake goes: DIR/bakes/LABEL.exr.
+std::string BakePath(const SweepFlags& flags, const BakeKnobs& knobs) {
+  return (std::filesystem::path(flags.out_dir) / "bakes" / (knobs.Label() + ".exr")).string();
+}
+
+// The bakes in DIR/bakes; the most accurate one's (`*best`, an index into `rows`) is kept until
+// the sweep has drawn its error map, the others go unless --keep-bakes.
 absl::Status RunGrid(const SweepFlags& flags, const std::vector<BakeKnobs>& grid,
-                     const AccuracyProbe& probe, std::vector<SweepRow>* rows,
-                     std::string* best_exr) {
+                     const AccuracyProbe& probe, std::vector<SweepRow>* rows, size_t* best) {
   const std::filesystem::path bakes = std::filesystem::path(flags.out_dir) / "bakes";
-  size_t best = 0;
   ProgressReporter progress("sweep", "bakes");
   const auto start = std::chrono::steady_clock::now();
   for (size_t i = 0; i < grid.size(); ++i) {
@@ -105,7 +108,7 @@ absl::Status RunGrid(const SweepFlags& flags, const std::vector<BakeKnobs>& grid
         static_cast<int64_t>(i), static_cast<int64_t>(grid.size()),
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     const std::string label = grid[i].Label();
-    const std::string exr = (bakes / (label + ".exr")).string();
+    const std::string exr = BakePath(flags, grid[i]);
     std::vector<std::string> args = grid[i].BakeArgs();
     if (flags.threads > 0) args.insert(args.end(), {"--threads", std::to_string(flags.threads)});
     absl::StatusOr<ChildBakeResult> bake =
@@ -114,10 +117,11 @@ absl::Status RunGrid(const SweepFlags& flags, const std::vector<BakeKnobs>& grid
     absl::StatusOr<BakeErrors> errors = probe.Measure(exr);
     if (!errors.ok()) return errors.status();
     rows->push_back(SweepRow{grid[i], *bake, *errors});
-    if (rows->size() == 1 || MoreAccurate(rows->back(), (*rows)[best])) {
-      if (!flags.keep_bakes && !best_exr->empty()) std::filesystem::remove(*best_exr);
-      best = rows->size() - 1;
-      *best_exr = exr;
+    if (rows->size() == 1 || MoreAccurate(rows->back(), (*rows)[*best])) {
+      if (!flags.keep_bakes && rows->size() > 1) {
+        std::filesystem::remove(BakePath(flags, (*rows)[*best].knobs));
+      }
+      *best = rows->size() - 1;
     } else if (!flags.keep_bakes) {
       std::filesystem::remove(exr);
     }
@@ -183,12 +187,8 @@ int CheckTargetError(const SweepFlags& flags, const AccuracyProbe& probe,
 // most 256 x 256 of its rays so that the reference costs what the probe's points cost, give or
 // take. The map is a convenience beside the CSV: its failure is a warning.
 void DrawBestErrorMap(const SweepFlags& flags, const Scene& scene, ReferenceMethod method,
-                      const std::vector<SweepRow>& rows, const std::string& best_exr) {
-  const SweepRow* best = nullptr;
-  for (const SweepRow& row : rows) {
-    if (best == nullptr || MoreAccurate(row, *best)) best = &row;
-  }
-  if (best == nullptr || best_exr.empty()) return;
+                      const SweepRow& best) {
+  const std::string best_exr = BakePath(flags, best.knobs);
   const std::string png = (std::filesystem::path(flags.out_dir) / "error.png").string();
   const auto draw = [&]() -> absl::Status {
     absl::StatusOr<PdsmImage> pdsm = ReadPdsm(best_exr);
@@ -199,7 +199,7 @@ void DrawBestErrorMap(const SweepFlags& flags, const Scene& scene, ReferenceMeth
         MeasureErrorMap(*pdsm, scene, ReferenceOptions{method, flags.reference_samples, 1}, step);
     if (!map.ok()) return map.status();
     const ErrorMapSummary summary = SummarizeErrorMap(*map);
-    const std::string title = absl::StrCat(best->knobs.Label(), ": ", ErrorMapTitle(*map));
+    const std::string title = absl::StrCat(best.knobs.Label(), ": ", ErrorMapTitle(*map));
     if (absl::Status s = WriteErrorMapPng(*map, summary, kDefaultErrorMapScale, title, png);
         !s.ok()) {
       return s;
@@ -207,7 +207,7 @@ void DrawBestErrorMap(const SweepFlags& flags, const Scene& scene, ReferenceMeth
     std::printf(
         "error map of the most accurate configuration (%s): %s\n  all       %s\n  "
         "penumbra  %s\n",
-        best->knobs.Label().c_str(), png.c_str(), FormatErrorStats(summary.all).c_str(),
+        best.knobs.Label().c_str(), png.c_str(), FormatErrorStats(summary.all).c_str(),
         FormatErrorStats(summary.penumbra).c_str());
     return absl::OkStatus();
   };
@@ -281,8 +281,8 @@ int RunSweep(const SweepFlags& flags) {
     return ReportError(s);
   }
   std::vector<SweepRow> rows;
-  std::string best_exr;
-  if (absl::Status s = RunGrid(flags, *grid, *probe, &rows, &best_exr); !s.ok()) {
+  size_t best = 0;
+  if (absl::Status s = RunGrid(flags, *grid, *probe, &rows, &best); !s.ok()) {
     return ReportError(s);
   }
   MarkParetoFront(&rows);
@@ -292,7 +292,7 @@ int RunSweep(const SweepFlags& flags) {
   PrintRows(rows);
   std::printf("sweep: %s\n", (dir / "sweep.csv").c_str());
   Plot(dir, scene->name);
-  DrawBestErrorMap(flags, *scene, probe->method(), rows, best_exr);
+  if (!rows.empty()) DrawBestErrorMap(flags, *scene, probe->method(), rows[best]);
   if (flags.target_error) return CheckTargetError(flags, *probe, rows);
   return kExitOk;
 }
