@@ -8,6 +8,7 @@
 # byte-identical to the local bake.
 # Usage: bench/service_cpu.sh [BUILD_DIR] [SCENE] [ROUNDS] [OVERRIDES...]
 #   default: the dragon (../shared/scenes/dragon.json) at its own settings, 3 rounds
+#   $COORDINATOR_FLAGS: more pdsm-coordinator flags (e.g. "--verify-fraction 1")
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=$(realpath "${1:-build}")
@@ -26,7 +27,7 @@ timed() { /usr/bin/time -f "%U %S" -o "$out/time" "$@" >/dev/null 2>&1; awk '{pr
 median() { sort -g | awk '{v[NR] = $1} END {print v[int((NR + 1) / 2)]}'; }
 
 "$build"/server/pdsm-coordinator --listen 127.0.0.1:0 --data-dir "$out/data" \
-  --ready-file "$out/ready" --log-level warn >"$out/coordinator.log" 2>&1 &
+  --ready-file "$out/ready" --log-level warn ${COORDINATOR_FLAGS:-} >"$out/coordinator.log" 2>&1 &
 coordinator=$!
 while [[ ! -s $out/ready ]]; do sleep 0.05; done
 address=$(cat "$out/ready")
@@ -43,7 +44,8 @@ bake_job() {  # submits the scene and waits for its end; prints the job id
   "$pdsm" watch "$job" --server "$address" >/dev/null 2>&1
   echo "$job"
 }
-echo "scene: $scene ${overrides[*]}; warm-up job (uploads the mesh)"
+echo "scene: $scene ${overrides[*]}; coordinator flags: ${COORDINATOR_FLAGS:-none};" \
+  "warm-up job (uploads the mesh)"
 bake_job >/dev/null
 
 : >"$out/local" && : >"$out/service"
@@ -73,3 +75,4 @@ done
 l=$(median <"$out/local") && s=$(median <"$out/service")
 echo "median: local $l CPU-s, service (coordinator + 2 workers + client) $s CPU-s:" \
   "service / local = $(awk -v a="$l" -v b="$s" 'BEGIN {printf "%.2f", b / a}')"
+"$pdsm" stats --server "$address" | grep verification || true

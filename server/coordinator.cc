@@ -40,6 +40,8 @@ EngineOptions MakeEngineOptions(const CoordinatorOptions& options, WorkQueue* po
   e.scheduler.lease_ms = options.lease_ms;
   e.scheduler.max_task_failures = options.max_task_failures;
   e.scheduler.max_worker_failures_per_job = options.max_worker_failures;
+  e.scheduler.verify_fraction = options.verify_fraction;
+  e.scheduler.verify_seed = options.verify_seed;
   e.scheduler.max_open_tiles = options.max_open_tiles;
   // A fresh random base: results for a previous process's leases can never match.
   e.scheduler.lease_id_base = (std::stoull(RandomHex(4), nullptr, 16) << 32) | 1;
@@ -48,6 +50,10 @@ EngineOptions MakeEngineOptions(const CoordinatorOptions& options, WorkQueue* po
   e.spill_dir = options.data_dir;
   e.event_memory_budget_bytes = options.event_memory_budget_bytes;
   e.fs = options.fs;
+  e.on_quarantine = [](const std::string& worker_id, const std::string& why) {
+    spdlog::error("worker {} quarantined by verification (it gets no more tasks): {}", worker_id,
+                  why);
+  };
   return e;
 }
 
@@ -519,6 +525,11 @@ pdsm::v1::Stats Coordinator::GetStats() {
   stats.set_results_dropped(s.scheduler.results_dropped);
   stats.set_leases_expired(s.scheduler.leases_expired);
   stats.set_workers_incompatible(s.scheduler.workers_incompatible);
+  stats.set_tasks_verified(s.scheduler.tasks_verified);
+  stats.set_verification_mismatches(s.scheduler.verification_mismatches);
+  stats.set_tasks_unverified(s.scheduler.tasks_unverified);
+  stats.set_workers_quarantined(s.scheduler.workers_quarantined);
+  stats.set_tasks_awaiting_verification(s.scheduler.tasks_awaiting_verification);
   stats.set_uptime_seconds(static_cast<double>(SteadyNowMs() - started_ms_) / 1000.0);
   return stats;
 }

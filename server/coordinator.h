@@ -49,6 +49,8 @@
 
 namespace pdsm {
 
+inline constexpr double kDefaultVerifyFraction = 0.02;
+
 struct CoordinatorOptions {
   std::string data_dir;
   // Light samples per task (a group's batch). 0: the job's samples / 8, within [1, 64], so
@@ -63,6 +65,12 @@ struct CoordinatorOptions {
   int64_t query_cache_bytes = kDefaultTileCacheBytes;
   int max_task_failures = 3;
   int max_worker_failures = 3;
+  // Verification by redundancy (core/pipeline/scheduler.h): this fraction of tasks, drawn at
+  // random, is run by a second worker and compared bit for bit; a worker outvoted two to one
+  // is quarantined and what it fed is recomputed. 0 turns it off. The farm's extra work is the
+  // fraction (2 % by default).
+  double verify_fraction = kDefaultVerifyFraction;
+  uint64_t verify_seed = 0;  // 0: unpredictable; tests fix it
   int assembly_threads = 1;
   AdmissionLimits limits;  // RESOURCE_EXHAUSTED above them
   int64_t max_asset_bytes = int64_t{1} << 30;

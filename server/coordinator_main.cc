@@ -251,6 +251,11 @@ int main(int argc, char** argv) {
                  "Failures after which a worker gets no more tasks of a job")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
+  app.add_option("--verify-fraction", o.verify_fraction,
+                 "Fraction of tasks run by a second worker and compared bit for bit; a worker "
+                 "outvoted two to one is quarantined and what it computed is redone (0: off)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   app.add_option("--assembly-threads", o.assembly_threads,
                  "Threads merging and compressing finished tiles")
       ->check(CLI::Range(1, 256))

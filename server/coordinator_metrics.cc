@@ -39,6 +39,19 @@ std::string RenderCoordinatorMetrics(const CoordinatorMetrics& m) {
             "(job, worker) pairs of jobs in progress where the worker plans the job differently "
             "(another build).",
             s.workers_incompatible);
+  out.Gauge("pdsm_workers_quarantined",
+            "Workers verification outvoted since the coordinator started; they get no tasks.",
+            s.workers_quarantined);
+  out.Family("pdsm_verifications_total", "counter",
+             "Tasks drawn for verification: agreed (two workers, same bytes), mismatch (decided "
+             "against a disagreeing worker), unverified (accepted on one result: no second "
+             "worker was active).");
+  out.Sample("pdsm_verifications_total", static_cast<double>(s.tasks_verified),
+             {{"outcome", "agreed"}});
+  out.Sample("pdsm_verifications_total", static_cast<double>(s.verification_mismatches),
+             {{"outcome", "mismatch"}});
+  out.Sample("pdsm_verifications_total", static_cast<double>(s.tasks_unverified),
+             {{"outcome", "unverified"}});
   out.Counter("pdsm_leases_issued_total", "Task leases issued.",
               static_cast<double>(s.leases_issued));
   out.Counter("pdsm_leases_expired_total", "Leases that expired (a dead or stalled worker).",

@@ -497,6 +497,24 @@ absl::Status JobStore::MarkTileDone(const std::string& job_id, int tile_index, i
   return txn.Commit();
 }
 
+absl::Status JobStore::MarkTileUndone(const std::string& job_id, int tile_index) {
+  absl::MutexLock lock(&mu_);
+  absl::StatusOr<Statement> exists =
+      Statement::Prepare(db_, db_path_, "SELECT 1 FROM jobs WHERE job_id = ?1");
+  if (!exists.ok()) return exists.status();
+  exists->BindText(1, job_id);
+  absl::StatusOr<bool> found = exists->Step();
+  if (!found.ok()) return found.status();
+  if (!*found) return NoSuchJob(job_id);
+  exists->Reset();
+  absl::StatusOr<Statement> remove = Statement::Prepare(
+      db_, db_path_, "DELETE FROM done_tiles WHERE job_id = ?1 AND tile_index = ?2");
+  if (!remove.ok()) return remove.status();
+  remove->BindText(1, job_id);
+  remove->BindInt64(2, tile_index);
+  return remove->Run();
+}
+
 absl::StatusOr<std::vector<int>> JobStore::DoneTiles(const std::string& job_id) {
   absl::MutexLock lock(&mu_);
   absl::StatusOr<Statement> exists =

@@ -100,6 +100,12 @@ class JobStore {
   // outside [0, tiles_total).
   absl::Status MarkTileDone(const std::string& job_id, int tile_index, int64_t now_ms);
 
+  // Takes tile `tile_index` out of the job's done tiles (no-op if not there): verification found
+  // it computed from a quarantined worker's results, so a resumed job must redo it.
+  // tile_assemblies is unchanged (the redo counts when it is marked done again). NOT_FOUND when
+  // there is no such job.
+  absl::Status MarkTileUndone(const std::string& job_id, int tile_index);
+
   // The job's done tiles, ascending. NOT_FOUND when there is no such job.
   absl::StatusOr<std::vector<int>> DoneTiles(const std::string& job_id);
 

@@ -257,6 +257,24 @@ TEST(JobStoreTest, MarkTileDoneCountsAssembliesIncludingRepeats) {
   EXPECT_EQ((*listed)[0].tile_assemblies, 4);
 }
 
+TEST(JobStoreTest, AWithdrawnTileIsNoLongerDoneUntilMarkedAgain) {
+  TempDir dir;
+  std::unique_ptr<JobStore> store = OpenOrDie(dir.path().string());
+  ASSERT_NE(store, nullptr);
+  const std::string id = CreateOrDie(*store, SampleJob(1)).job_id;
+  for (const int tile : {2, 5}) ASSERT_TRUE(store->MarkTileDone(id, tile, 10).ok());
+  ASSERT_TRUE(store->MarkTileUndone(id, 5).ok());
+  ASSERT_TRUE(store->MarkTileUndone(id, 9).ok());  // never done: no-op
+  EXPECT_THAT(*store->DoneTiles(id), ElementsAre(2));
+  ASSERT_TRUE(store->MarkTileDone(id, 5, 11).ok());  // recomputed
+  EXPECT_THAT(*store->DoneTiles(id), ElementsAre(2, 5));
+  absl::StatusOr<JobRecord> job = store->GetJob(id);
+  ASSERT_TRUE(job.ok());
+  EXPECT_EQ(job->tiles_done, 2);
+  EXPECT_EQ(job->tile_assemblies, 3);  // the recomputation counts
+  EXPECT_EQ(store->MarkTileUndone("no-such-job", 0).code(), absl::StatusCode::kNotFound);
+}
+
 TEST(JobStoreTest, MarkTileDoneRejectsTilesOutsideTheJob) {
   TempDir dir;
   std::unique_ptr<JobStore> store = OpenOrDie(dir.path().string());

@@ -52,6 +52,9 @@ class StoredJob::Light final : public JobOutput {
   void Started() override { job_->Started(); }
   absl::Status StoreTile(const PdsmTile& tile) override { return job_->StoreTile(*light_, tile); }
   absl::Status Finish() override { return job_->LightFinished(); }
+  absl::Status WithdrawTiles(const std::vector<int>& tile_indices) override {
+    return job_->WithdrawTiles(*light_, tile_indices);
+  }
   void Ended(JobEnd end, const absl::Status& status, const JobProgress& progress) override {
     job_->LightEnded(*light_, end, status, progress);
   }
@@ -116,6 +119,19 @@ absl::Status StoredJob::StoreTile(const JobLight& light, const PdsmTile& tile) {
     return s;
   }
   spdlog::debug("job {} tile {}: stored, {} vertices", record_.job_id, index, tile.vertices.size());
+  return absl::OkStatus();
+}
+
+absl::Status StoredJob::WithdrawTiles(const JobLight& light, const std::vector<int>& tiles) {
+  for (int tile : tiles) {
+    const int index = light.tile_offset + tile;
+    // The row first: a crash before the file goes leaves a tile a restart recomputes.
+    if (absl::Status s = store_->MarkTileUndone(record_.job_id, index); !s.ok()) return s;
+    FileSystem* fs = fs_ != nullptr ? fs_ : FileSystem::Default();
+    const absl::Status removed = fs->RemoveFile(paths_.Tile(index));
+    if (!removed.ok() && !absl::IsNotFound(removed)) return removed;
+    spdlog::info("job {} tile {}: withdrawn, to be computed again", record_.job_id, index);
+  }
   return absl::OkStatus();
 }
 

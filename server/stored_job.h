@@ -85,6 +85,9 @@ class StoredJob : public std::enable_shared_from_this<StoredJob> {
   class Light;  // the JobOutput of one light
   void Started();
   absl::Status StoreTile(const JobLight& light, const PdsmTile& tile);
+  // Verification found the tiles (the light's own indices) fed by a quarantined worker: their
+  // rows leave the store and their files go, until they are stored again.
+  absl::Status WithdrawTiles(const JobLight& light, const std::vector<int>& tiles);
   // The light's every tile is stored; the last light to get here writes the file.
   absl::Status LightFinished();
   absl::Status WriteFile();

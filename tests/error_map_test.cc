@@ -236,7 +236,9 @@ TEST(ErrorMapTilted, AReceiverNeverHidesItselfFromTheReference) {
   const ErrorMapSummary summary = SummarizeErrorMap(*map);
   EXPECT_GT(summary.all.count, 48u * 48u / 2);
   for (size_t p = 0; p < map->reference.size(); ++p) {
-    if (!std::isnan(map->reference[p])) EXPECT_EQ(map->reference[p], 0.0f) << p;
+    if (!std::isnan(map->reference[p])) {
+      EXPECT_EQ(map->reference[p], 0.0f) << p;
+    }
   }
   EXPECT_EQ(summary.all.max, 0.0);
 }

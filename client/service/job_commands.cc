@@ -126,13 +126,18 @@ int RunStats(const JobFlags& flags) {
       "tasks: %d pending (queue depth), %d leased; %d tiles in flight\n"
       "workers: %d active, %d (job, worker) pairs incompatible (another build)\n"
       "throughput (last 60 s): %.2f tasks/s, %.3g events/s\n"
-      "since start (%.0f s): %lld results accepted, %lld dropped, %lld leases expired\n",
+      "since start (%.0f s): %lld results accepted, %lld dropped, %lld leases expired\n"
+      "verification: %d tasks awaiting a vote; since start %lld agreed, %lld decided against "
+      "a worker, %lld unverified (no second worker); %d workers quarantined\n",
       stats.jobs_running(), stats.jobs_queued(), stats.tasks_pending(), stats.tasks_leased(),
       stats.tiles_in_flight(), stats.workers_active(), stats.workers_incompatible(),
       stats.tasks_per_second(), stats.events_per_second(), stats.uptime_seconds(),
       static_cast<long long>(stats.tasks_accepted()),
       static_cast<long long>(stats.results_dropped()),
-      static_cast<long long>(stats.leases_expired()));
+      static_cast<long long>(stats.leases_expired()), stats.tasks_awaiting_verification(),
+      static_cast<long long>(stats.tasks_verified()),
+      static_cast<long long>(stats.verification_mismatches()),
+      static_cast<long long>(stats.tasks_unverified()), stats.workers_quarantined());
   return kExitOk;
 }
 

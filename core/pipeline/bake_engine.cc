@@ -2,10 +2,14 @@
 
 #include <algorithm>
 #include <chrono>
+#include <set>
+#include <tuple>
 #include <utility>
 
 #include "absl/cleanup/cleanup.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
+#include "core/pipeline/result_digest.h"
 
 namespace pdsm {
 namespace {
@@ -62,6 +66,12 @@ int TileCount(const JobSpec& spec) {
 
 }  // namespace
 
+absl::Status JobOutput::WithdrawTiles(const std::vector<int>& tile_indices) {
+  return absl::UnimplementedError(
+      absl::StrCat("this output cannot take back stored tiles (", tile_indices.size(),
+                   " were fed by a quarantined worker): run it without verification"));
+}
+
 // An open group: its current stage and, per tile of that stage, the batches merged so far
 // and (adaptive bakes) the tile's earlier stages. Results merge into it under its own mutex,
 // outside the engine's; the report that brings the group's last result of a stage, or the
@@ -101,6 +111,19 @@ struct BakeEngine::Job {
   };
   std::optional<DeferredEnd> deferred_end;
   std::atomic<bool> ended{false};
+  bool finishing = false;  // every tile is stored and Finish is on its way: nothing is redone
+
+  // Verification (scheduler.verify_fraction > 0) only: what a quarantine must take back.
+  std::map<int, std::set<std::string>> contributors;  // group -> workers merged since it started
+  std::map<int, int64_t> merged_samples;  // group -> samples_done its merged results added
+  std::set<int> tainted;                  // open groups to start over when their stage completes
+  struct StoredTile {
+    bool stored = false;
+    bool all_lit = false;
+    int64_t tile_samples = 0;     // added to tile_samples_total
+    int64_t samples_skipped = 0;  // added to samples_done
+  };
+  std::vector<StoredTile> stored;  // by tile index
 };
 
 BakeEngine::BakeEngine(EngineOptions options)
@@ -136,6 +159,7 @@ absl::Status BakeEngine::AddJob(EngineJob spec) {
   p.samples_at_add = p.samples_done;
   p.added_ms = options_.now_ms();
   p.started = spec.started;
+  if (options_.scheduler.verify_fraction > 0) job->stored.resize(spec.plan->tiles.size());
   job->spec = std::move(spec);
   if (!options_.spill_dir.empty()) {
     job->spill = std::make_unique<EventSpill>(options_.spill_dir, options_.fs);
@@ -151,6 +175,7 @@ absl::Status BakeEngine::AddJob(EngineJob spec) {
     jobs_[job->spec.job_id] = job;
     p.tasks_total = TasksTotal(*job);
     complete = job->direct_left == 0 && scheduler_.JobComplete(job->spec.job_id);
+    job->finishing = complete;
     changed_.SignalAll();
   }
   if (!direct.empty()) {
@@ -188,6 +213,7 @@ void BakeEngine::StoreUnreachedTiles(const JobPtr& job, const std::vector<int>& 
     absl::MutexLock lock(&mu_);
     if (job->ended) return;
     complete = job->direct_left == 0 && scheduler_.JobComplete(job->spec.job_id);
+    job->finishing = complete;
   }
   if (complete) FinishJob(job);
 }
@@ -230,11 +256,25 @@ std::optional<TaskLease> BakeEngine::FindLease(uint64_t lease_id) const {
 
 bool BakeEngine::Report(const std::string& worker_id, uint64_t lease_id,
                         std::vector<TileEvents> events) {
+  // A verified task's result is hashed outside the lock (it may be large); a lease that changes
+  // meanwhile is found out by Complete.
+  std::string digest;
+  bool verify = false;
+  {
+    absl::MutexLock lock(&mu_);
+    const std::optional<TaskLease> lease = scheduler_.FindLease(lease_id);
+    verify = lease && lease->verify;
+  }
+  if (verify) digest = ResultDigest(events);
+
   JobPtr job;
-  OpenGroupPtr group;
+  OpenGroupPtr group;         // merged into
+  OpenGroupPtr complete_now;  // its stage completes through this result, with no merge
   int group_index = 0;
   ResultOutcome outcome;
   std::optional<JobFailure> failure;
+  Withdrawals withdrawals;
+  std::string quarantine_why;
   {
     absl::MutexLock lock(&mu_);
     const int64_t now = options_.now_ms();
@@ -244,38 +284,77 @@ bool BakeEngine::Report(const std::string& worker_id, uint64_t lease_id,
                                 absl::StrCat("the result holds ", events.size(),
                                              " tiles' events for a task of ", lease->tiles.size()),
                                 /*handed_back=*/false, now, absl::StatusCode::kInvalidArgument);
-      if (failure) job = FindJob(failure->job_id);
+      if (!failure) {
+        changed_.SignalAll();  // the task is pending again
+        return false;
+      }
+    } else {
+      outcome = scheduler_.Complete(worker_id, lease_id, now, digest);
+      failure = outcome.failure;
+      if (!failure && outcome.kind == ResultOutcome::kDropped) return false;
     }
-    if (!failure) {
-      outcome = scheduler_.Complete(worker_id, lease_id, now);
-      if (outcome.kind == ResultOutcome::kDropped) return false;
+    if (failure) {
+      job = FindJob(failure->job_id);
+    } else {
       job = FindJob(outcome.job_id);
       if (!job) return false;  // cannot happen: an ended job's leases are gone
       int64_t event_count = 0;
       for (const TileEvents& e : events) event_count += static_cast<int64_t>(e.events.size());
       recent_results_.emplace_back(now, event_count);
       ForgetOldRates(now);
-      JobProgress& p = job->progress;
-      ++p.tasks_done;
-      p.samples_done += int64_t{outcome.sample_end - outcome.sample_begin} *
-                        static_cast<int64_t>(outcome.tiles.size());
       group_index = outcome.group_index;
-      OpenGroupPtr& slot = job->groups[group_index];
-      if (!slot) slot = std::make_shared<OpenGroup>(0, &event_memory_bytes_);
-      group = slot;
-      absl::MutexLock group_lock(&group->mu);
-      ++group->merging;
-      if (outcome.kind == ResultOutcome::kStageComplete) {
-        group->stage_complete = true;
-        job->groups.erase(group_index);
+      if (outcome.merge) {
+        JobProgress& p = job->progress;
+        ++p.tasks_done;
+        const int64_t samples = int64_t{outcome.sample_end - outcome.sample_begin} *
+                                static_cast<int64_t>(outcome.tiles.size());
+        p.samples_done += samples;
+        if (options_.scheduler.verify_fraction > 0) {
+          job->contributors[group_index].insert(worker_id);
+          job->merged_samples[group_index] += samples;
+        }
+        OpenGroupPtr& slot = job->groups[group_index];
+        if (!slot) slot = std::make_shared<OpenGroup>(0, &event_memory_bytes_);
+        group = slot;
+        absl::MutexLock group_lock(&group->mu);
+        ++group->merging;
+        if (outcome.kind == ResultOutcome::kStageComplete) {
+          group->stage_complete = true;
+          job->groups.erase(group_index);
+        }
+      } else if (outcome.kind == ResultOutcome::kStageComplete) {
+        absl::StatusOr<OpenGroupPtr> completed = CompleteWithoutMerge(job, outcome);
+        if (completed.ok()) {
+          complete_now = *std::move(completed);
+        } else {
+          failure = JobFailure{outcome.job_id, std::string(completed.status().message())};
+        }
+      }
+      if (!outcome.quarantined.empty()) {
+        withdrawals = Recompute(outcome.quarantined, &quarantine_why);
+        quarantine_why = absl::StrCat(
+            "its result for job ", outcome.job_id, ", tile group ", outcome.group_index,
+            ", samples [", outcome.sample_begin, ", ", outcome.sample_end,
+            ") differs from the one two other workers agree on; ", quarantine_why);
       }
     }
     changed_.SignalAll();
+  }
+  Withdraw(withdrawals);
+  if (options_.on_quarantine) {
+    for (const std::string& worker : outcome.quarantined) {
+      options_.on_quarantine(worker, quarantine_why);
+    }
   }
   if (failure) {
     if (job) End(job, JobEnd::kFailed, absl::AbortedError(failure->reason));
     return false;
   }
+  if (complete_now) {
+    options_.executor(
+        [this, job, group_index, complete_now] { CompleteStage(job, group_index, complete_now); });
+  }
+  if (!group) return true;
   const absl::Status merged =
       MergeResult(*job, *group, outcome.sample_begin, outcome.tiles, std::move(events));
   bool complete = false;
@@ -289,6 +368,100 @@ bool BakeEngine::Report(const std::string& worker_id, uint64_t lease_id,
     options_.executor([this, job, group_index, group] { CompleteStage(job, group_index, group); });
   }
   return true;
+}
+
+absl::StatusOr<BakeEngine::OpenGroupPtr> BakeEngine::CompleteWithoutMerge(
+    const JobPtr& job, const ResultOutcome& outcome) {
+  const auto it = job->groups.find(outcome.group_index);
+  // Every task's first result was merged, so its group is here until its stage completes; if
+  // not, the stage would never complete and the job would hang: it fails instead.
+  if (it == job->groups.end()) {
+    return absl::InternalError(absl::StrCat("tile group ", outcome.group_index,
+                                            ": its stage completed with no result merged"));
+  }
+  OpenGroupPtr group = it->second;
+  job->groups.erase(it);
+  absl::MutexLock group_lock(&group->mu);
+  group->stage_complete = true;
+  // Otherwise the last merge running into it completes it.
+  return group->merging == 0 ? group : nullptr;
+}
+
+BakeEngine::Withdrawals BakeEngine::Recompute(const std::vector<std::string>& workers,
+                                              std::string* summary) {
+  Withdrawals withdrawals;
+  int groups = 0, jobs = 0;
+  std::vector<std::string> kept;
+  for (const auto& [job_id, job] : jobs_) {
+    std::vector<int> fed;
+    for (const auto& [group_index, contributors] : job->contributors) {
+      for (const std::string& worker : workers) {
+        if (contributors.contains(worker)) {
+          fed.push_back(group_index);
+          break;
+        }
+      }
+    }
+    if (fed.empty()) continue;
+    if (job->finishing) {
+      kept.push_back(job_id);  // its file is being written: too late to take anything back
+      continue;
+    }
+    ++jobs;
+    groups += static_cast<int>(fed.size());
+    std::vector<int> withdrawn;
+    for (int group_index : fed) {
+      if (std::optional<std::vector<int>> tiles = scheduler_.RequeueGroup(job_id, group_index)) {
+        const std::vector<int> stored = ForgetGroup(*job, group_index, *tiles);
+        withdrawn.insert(withdrawn.end(), stored.begin(), stored.end());
+      } else {
+        job->tainted.insert(group_index);  // open: CompleteStage starts it over
+      }
+    }
+    job->progress.tasks_total = TasksTotal(*job);
+    if (!withdrawn.empty()) withdrawals.emplace_back(job, std::move(withdrawn));
+  }
+  *summary =
+      absl::StrCat("what it fed is computed again: ", groups, " tile groups of ", jobs, " jobs");
+  if (!kept.empty()) {
+    absl::StrAppend(summary,
+                    "; jobs already being written keep its results: ", absl::StrJoin(kept, ", "));
+  }
+  return withdrawals;
+}
+
+std::vector<int> BakeEngine::ForgetGroup(Job& job, int group_index, const std::vector<int>& tiles) {
+  JobProgress& p = job.progress;
+  p.samples_done -= job.merged_samples[group_index];
+  job.merged_samples.erase(group_index);
+  job.contributors.erase(group_index);
+  std::vector<int> stored;
+  for (int t : tiles) {
+    if (t < 0 || t >= static_cast<int>(job.stored.size()) || !job.stored[t].stored) continue;
+    const Job::StoredTile& record = job.stored[t];
+    --p.tiles_done;
+    if (record.all_lit) --p.tiles_all_lit;
+    p.tile_samples_total -= record.tile_samples;
+    p.samples_done -= record.samples_skipped;
+    ++p.tiles_recomputed;
+    job.stored[t] = {};
+    stored.push_back(t);
+  }
+  return stored;
+}
+
+void BakeEngine::Withdraw(const Withdrawals& withdrawals) {
+  for (const auto& [job, tiles] : withdrawals) {
+    if (!BeginOutputCall(job)) continue;
+    const absl::Status withdrawn = job->spec.output->WithdrawTiles(tiles);
+    EndOutputCall(job);
+    if (!withdrawn.ok()) {
+      End(job, JobEnd::kFailed,
+          absl::Status(withdrawn.code(),
+                       absl::StrCat("taking back ", tiles.size(),
+                                    " tiles to recompute: ", withdrawn.message())));
+    }
+  }
 }
 
 absl::Status BakeEngine::MergeResult(Job& job, OpenGroup& group, int sample_begin,
@@ -325,6 +498,27 @@ absl::Status BakeEngine::MergeResult(Job& job, OpenGroup& group, int sample_begi
 
 void BakeEngine::CompleteStage(const JobPtr& job, int group_index, const OpenGroupPtr& group) {
   if (job->ended) return;  // cancelled or failed while queued
+  {
+    // A quarantined worker fed the group: nothing of this stage is stored, `group` and its lists
+    // go, and the tiles it stored in earlier stages are taken back.
+    bool tainted = false, restarted = false;
+    std::vector<int> withdrawn;
+    {
+      absl::MutexLock lock(&mu_);
+      tainted = job->tainted.contains(group_index);
+      if (tainted) restarted = RestartTainted(*job, group_index, &withdrawn);
+      changed_.SignalAll();
+    }
+    if (tainted) {
+      if (!restarted) {
+        return End(job, JobEnd::kFailed,
+                   absl::InternalError(
+                       absl::StrCat("tile group ", group_index, ": could not start it over")));
+      }
+      if (!withdrawn.empty()) Withdraw({{job, std::move(withdrawn)}});
+      return;
+    }
+  }
   const PdsmHeader& header = job->spec.plan->header;
   auto next = std::make_shared<OpenGroup>(group->stage + 1, &event_memory_bytes_);
   std::vector<int> next_tiles;
@@ -363,12 +557,16 @@ void BakeEngine::CompleteStage(const JobPtr& job, int group_index, const OpenGro
     }
   }
   bool complete = false, queued = true;
+  std::vector<int> withdrawn;  // stored above, but a quarantine tainted the group meanwhile
   {
     absl::MutexLock lock(&mu_);
     if (job->ended) return;
-    if (next_tiles.empty()) {
+    if (job->tainted.contains(group_index)) {
+      queued = RestartTainted(*job, group_index, &withdrawn);
+    } else if (next_tiles.empty()) {
       scheduler_.GroupAssembled(job->spec.job_id, group_index);
       complete = job->direct_left == 0 && scheduler_.JobComplete(job->spec.job_id);
+      job->finishing = complete;
     } else {
       queued = scheduler_.AddStage(job->spec.job_id, group_index, next_tiles);
       job->progress.tasks_total = TasksTotal(*job);
@@ -380,9 +578,21 @@ void BakeEngine::CompleteStage(const JobPtr& job, int group_index, const OpenGro
     // A group left open would hold its slot and the job would never end: fail it loudly.
     return End(job, JobEnd::kFailed,
                absl::InternalError(absl::StrCat("tile group ", group_index,
-                                                ": its next adaptive stage could not be queued")));
+                                                ": its next stage could not be queued")));
   }
+  if (!withdrawn.empty()) Withdraw({{job, std::move(withdrawn)}});
   if (complete) FinishJob(job);
+}
+
+bool BakeEngine::RestartTainted(Job& job, int group_index, std::vector<int>* withdrawn) {
+  job.tainted.erase(group_index);
+  const std::optional<std::vector<int>> tiles =
+      scheduler_.RestartGroup(job.spec.job_id, group_index);
+  if (!tiles) return false;
+  *withdrawn = ForgetGroup(job, group_index, *tiles);
+  job.groups[group_index] = std::make_shared<OpenGroup>(0, &event_memory_bytes_);
+  job.progress.tasks_total = TasksTotal(job);
+  return true;
 }
 
 void BakeEngine::FailReadingBack(const JobPtr& job, int tile_index, const absl::Status& status) {
@@ -416,8 +626,15 @@ bool BakeEngine::StoreTile(const JobPtr& job, int tile_index, StageVerdict verdi
   ++p.tiles_done;
   if (tile->vertices.empty()) ++p.tiles_all_lit;
   p.samples_done += verdict.samples_skipped;
-  p.tile_samples_total +=
+  const int64_t tile_samples =
       verdict.tile_samples > 0 ? verdict.tile_samples : job->spec.plan->header.samples;
+  p.tile_samples_total += tile_samples;
+  if (tile_index >= 0 && tile_index < static_cast<int>(job->stored.size())) {
+    job->stored[tile_index] = {.stored = true,
+                               .all_lit = tile->vertices.empty(),
+                               .tile_samples = tile_samples,
+                               .samples_skipped = verdict.samples_skipped};
+  }
   // Every spill of a tile's lists comes before it is stored, so the last tile's count is final.
   if (job->spill) p.spilled_bytes = job->spill->bytes_written();
   p.assembly.Add(stats);
@@ -518,16 +735,32 @@ void BakeEngine::SignOff(const std::string& worker_id) {
 
 void BakeEngine::Tick() {
   std::vector<std::pair<JobPtr, std::string>> failed;
+  std::vector<std::tuple<JobPtr, int, OpenGroupPtr>> completed;
   {
     absl::MutexLock lock(&mu_);
     const int64_t now = options_.now_ms();
     for (JobFailure& f : scheduler_.Tick(now)) {
       if (JobPtr job = FindJob(f.job_id)) failed.emplace_back(job, std::move(f.reason));
     }
+    for (const ResultOutcome& outcome : scheduler_.AcceptUnverifiable(now)) {
+      const JobPtr job = FindJob(outcome.job_id);
+      if (!job || outcome.kind != ResultOutcome::kStageComplete) continue;
+      absl::StatusOr<OpenGroupPtr> group = CompleteWithoutMerge(job, outcome);
+      if (!group.ok()) {
+        failed.emplace_back(job, std::string(group.status().message()));
+      } else if (*group) {
+        completed.emplace_back(job, outcome.group_index, *std::move(group));
+      }
+    }
     ForgetOldRates(now);
     changed_.SignalAll();
   }
   for (const auto& [job, reason] : failed) End(job, JobEnd::kFailed, absl::AbortedError(reason));
+  for (auto& [job, group_index, group] : completed) {
+    // clang 14 cannot capture structured bindings: named copies instead.
+    options_.executor(
+        [this, j = job, g = group_index, open = group] { CompleteStage(j, g, open); });
+  }
 }
 
 bool BakeEngine::Cancel(const std::string& job_id, const absl::Status& status) {

@@ -68,7 +68,8 @@ struct JobProgress {
   int64_t added_ms = 0;            // now_ms() at AddJob: with the two above, this run's rate
   int64_t tile_samples_total = 0;  // samples behind the stored tiles (adaptive: < maximum)
   int64_t spilled_bytes = 0;       // running event lists moved to the scratch file
-  AssemblyStats assembly;
+  int tiles_recomputed = 0;        // stored, then withdrawn because a quarantined worker fed them
+  AssemblyStats assembly;          // of every assembly, recomputed tiles' included
 };
 
 // Where a job's results go: the local bake writes the PDSM as tiles come; the coordinator
@@ -85,6 +86,13 @@ class JobOutput {
   // Every tile is stored: produce the PDSM. Once, from the executor, unless the job ended
   // first. An error fails the job.
   virtual absl::Status Finish() = 0;
+  // Verification by redundancy (SchedulerOptions::verify_fraction) found that these stored
+  // tiles hold a quarantined worker's results: they will be stored again, recomputed, before
+  // Finish; until then they are not done (a resumed job must redo them). From any thread
+  // holding no engine lock; may race with the recomputed tile's StoreTile (the tile is then
+  // redone once more after a restart, never lost). An error fails the job. The default refuses:
+  // an output that cannot take a tile back must not be used with verification.
+  virtual absl::Status WithdrawTiles(const std::vector<int>& tile_indices);
   // Exactly once, when the job leaves the engine: kSucceeded after Finish() returned OK,
   // kFailed with the reason, kCancelled with Cancel()'s status; `progress` as it was then.
   // Always after every Started, StoreTile and Finish call of the job has returned, and none
@@ -111,6 +119,10 @@ struct EngineOptions {
   std::string spill_dir;
   int64_t event_memory_budget_bytes = kDefaultEventMemoryBudget;
   FileSystem* fs = nullptr;  // for the scratch files; null: FileSystem::Default()
+  // Called when verification quarantines a worker (scheduler.verify_fraction), with what it
+  // found, after the engine has queued the recomputation of what the worker contributed. From
+  // a reporting thread, no engine lock held.
+  std::function<void(const std::string& worker_id, const std::string& why)> on_quarantine;
 };
 
 // A job to run.
@@ -159,6 +171,10 @@ class BakeEngine {
   // A worker's events for its lease: one TileEvents per tile of the lease, in its order. Each
   // is merged into its tile's running lists at once, outside the engine's lock (under its
   // group's), and the group's lists move to the scratch file when the memory budget is spent.
+  // A verification copy (TaskLease::verify, its task's second result) is only compared; a
+  // worker it outvotes is quarantined and every group it fed, in every job not yet finishing,
+  // is computed again: an assembled group is queued anew (its tiles withdrawn from the output),
+  // an open one starts over when its stage completes.
   // REQUIRES: each fits its tile (the coordinator checks a remote worker's with
   // rpc/tile_events_codec.h). False when the result was dropped (late after expiry,
   // duplicate, job ended; a result with the wrong number of tiles counts as the task's
@@ -204,6 +220,28 @@ class BakeEngine {
   absl::Status MergeResult(Job& job, OpenGroup& group, int sample_begin,
                            const std::vector<int>& tiles, std::vector<TileEvents> events);
   void CompleteStage(const JobPtr& job, int group_index, const OpenGroupPtr& group);
+  // A completed stage's group reached through a result that brought no events (a vote, or a
+  // task accepted unverified): schedules CompleteStage when no merge is running into it.
+  // Returns the group when CompleteStage is the caller's to schedule (after the lock), null
+  // when a merge still running into it will; INTERNAL when the group is not open (a broken
+  // invariant: the caller fails the job rather than let it hang).
+  absl::StatusOr<OpenGroupPtr> CompleteWithoutMerge(const JobPtr& job, const ResultOutcome& outcome)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  // What a job must give back to its output after a quarantine: (job, tiles).
+  using Withdrawals = std::vector<std::pair<JobPtr, std::vector<int>>>;
+  // Queues again, or marks for a restart, every group the workers fed in every job not yet
+  // finishing; `summary` says what, for the log.
+  Withdrawals Recompute(const std::vector<std::string>& workers, std::string* summary)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  // A tainted group whose stage completed starts over (Scheduler::RestartGroup); `withdrawn`
+  // gets its tiles stored in earlier stages. False when the scheduler refused.
+  bool RestartTainted(Job& job, int group_index, std::vector<int>* withdrawn)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  // Forgets what the group's tiles counted in the job's progress (they were stored) and what
+  // its merged results counted; returns the tiles that were stored.
+  std::vector<int> ForgetGroup(Job& job, int group_index, const std::vector<int>& tiles)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  void Withdraw(const Withdrawals& withdrawals);
   // Ends the job: the tile's spilled lists could not be read back.
   void FailReadingBack(const JobPtr& job, int tile_index, const absl::Status& status);
   // False when the job ended (the store failed, or it was ended meanwhile).

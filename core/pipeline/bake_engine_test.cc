@@ -12,6 +12,7 @@
 
 #include "absl/synchronization/notification.h"
 #include "core/pdsm/attenuation_function.h"
+#include "core/pipeline/engine_test_support.h"
 #include "core/util/fault_injecting_file_system.h"
 #include "core/util/work_queue.h"
 #include "tests/test_support.h"
@@ -19,158 +20,13 @@
 namespace pdsm {
 namespace {
 
-// A plan of `tiles_x` x 1 tiles of 2x1 pixels, without geometry: the engine only reads the
-// header, the tile grid and the groups (`group_size` consecutive tiles each).
-std::shared_ptr<const BakePlan> SmallPlan(int tiles_x, int samples, double adaptive_tolerance = 0,
-                                          int adaptive_min_samples = 0, int group_size = 1) {
-  auto plan = std::make_shared<BakePlan>();
-  PdsmHeader& h = plan->header;
-  h.samples = samples;
-  h.tile_size = 2;
-  h.epsilon = 0;
-  h.geometry.width = 2 * tiles_x;
-  h.geometry.height = 1;
-  h.geometry.z_near = 1;
-  h.geometry.z_far = 10;
-  h.adaptive_tolerance = adaptive_tolerance;
-  h.adaptive_min_samples = adaptive_min_samples;
-  plan->tiles_x = tiles_x;
-  plan->tiles_y = 1;
-  for (int t = 0; t < tiles_x; ++t) {
-    plan->tiles.push_back(TileRect{.index = t, .x0 = 2 * t, .y0 = 0, .width = 2, .height = 1});
-    if (t % group_size == 0) {
-      plan->groups.push_back(TileGroup{static_cast<int>(plan->groups.size()), 2 * t, 0, 0, 1, {}});
-    }
-    plan->groups.back().tiles.push_back(t);
-    plan->groups.back().width += 2;
-  }
-  return plan;
-}
-
-// The events of samples [begin, end) of tile `tile`: in pixel 0 sample k is in shadow from
-// depth 2 + k % 3 to 8 (so the answer depends on every sample); pixel 1 is lit.
-TileEvents BatchEvents(const BakePlan& plan, int tile, int begin, int end) {
-  const TileRect& r = plan.tiles.at(tile);
-  TileEvents out{.tile_index = tile, .x0 = r.x0, .y0 = r.y0, .width = r.width, .height = r.height};
-  std::vector<Event> pixel;
-  for (int k = begin; k < end; ++k) {
-    pixel.push_back({static_cast<float>(2 + k % 3 + tile), +1});
-    pixel.push_back({8.0f, -1});
-  }
-  NormalizeEvents(&pixel);
-  out.events = pixel;
-  out.offsets = {0, pixel.size(), pixel.size()};
-  return out;
-}
-
-// Records what the engine asks of an output; StoreTile can be held to race a cancel.
-class RecordingOutput : public JobOutput {
- public:
-  void Started() override {
-    absl::MutexLock lock(&mu_);
-    ++started_;
-  }
-  absl::Status StoreTile(const PdsmTile& tile) override {
-    if (hold_store_) {
-      store_entered_.Notify();
-      release_store_.WaitForNotification();
-    }
-    absl::MutexLock lock(&mu_);
-    EXPECT_EQ(ended_, 0) << "StoreTile after Ended";
-    tiles_[tile.x0 / 2] = tile;
-    return store_error_;
-  }
-  absl::Status Finish() override {
-    absl::MutexLock lock(&mu_);
-    EXPECT_EQ(ended_, 0) << "Finish after Ended";
-    ++finished_;
-    return absl::OkStatus();
-  }
-  void Ended(JobEnd end, const absl::Status& status, const JobProgress& progress) override {
-    absl::MutexLock lock(&mu_);
-    // A second call is a failure the tests count (ended() == 1), not a second Notify, which
-    // would abort the process before any expectation is printed.
-    if (++ended_ > 1) return;
-    end_ = end;
-    status_ = status;
-    progress_ = progress;
-    ended_note_.Notify();
-  }
-
-  int started() {
-    absl::MutexLock lock(&mu_);
-    return started_;
-  }
-  int finished() {
-    absl::MutexLock lock(&mu_);
-    return finished_;
-  }
-  int ended() {
-    absl::MutexLock lock(&mu_);
-    return ended_;
-  }
-  JobEnd end() {
-    absl::MutexLock lock(&mu_);
-    return end_;
-  }
-  absl::Status status() {
-    absl::MutexLock lock(&mu_);
-    return status_;
-  }
-  JobProgress progress() {
-    absl::MutexLock lock(&mu_);
-    return progress_;
-  }
-  std::map<int, PdsmTile> tiles() {
-    absl::MutexLock lock(&mu_);
-    return tiles_;
-  }
-
-  bool hold_store_ = false;
-  absl::Notification store_entered_, release_store_, ended_note_;
-  absl::Status store_error_;
-
- private:
-  absl::Mutex mu_;
-  int started_ = 0, finished_ = 0, ended_ = 0;
-  JobEnd end_ = JobEnd::kFailed;
-  absl::Status status_;
-  JobProgress progress_;
-  std::map<int, PdsmTile> tiles_;
-};
-
-// The events of a lease: one TileEvents per tile of it, in order.
-std::vector<TileEvents> LeaseEvents(const BakePlan& plan, const TaskLease& lease) {
-  std::vector<TileEvents> out;
-  for (int tile : lease.tiles) {
-    out.push_back(BatchEvents(plan, tile, lease.sample_begin, lease.sample_end));
-  }
-  return out;
-}
-
-// One tile's events as a lease result.
-std::vector<TileEvents> One(TileEvents events) {
-  std::vector<TileEvents> out;
-  out.push_back(std::move(events));
-  return out;
-}
-
-EngineOptions InlineOptions() {
-  EngineOptions options;
-  options.executor = [](std::function<void()> work) { work(); };
-  options.scheduler.lease_ms = 1000;
-  return options;
-}
-
-EngineJob Job(std::shared_ptr<const BakePlan> plan, std::shared_ptr<JobOutput> output,
-              int samples_per_task) {
-  EngineJob job;
-  job.job_id = "j";
-  job.plan = std::move(plan);
-  job.samples_per_task = samples_per_task;
-  job.output = std::move(output);
-  return job;
-}
+using testing::BatchEvents;
+using testing::InlineOptions;
+using testing::Job;
+using testing::LeaseEvents;
+using testing::One;
+using testing::RecordingOutput;
+using testing::SmallPlan;
 
 // Leases every task the engine hands out to one worker and reports it, in a shuffled order
 // when `seed` is set. Returns the number of tasks run.

@@ -19,8 +19,20 @@ bool Scheduler::JobKey::operator<(const JobKey& o) const {
   return job_id < o.job_id;
 }
 
+namespace {
+
+uint64_t VerifySeed(uint64_t seed) {
+  if (seed != 0) return seed;
+  std::random_device device;
+  return (uint64_t{device()} << 32) ^ device();
+}
+
+}  // namespace
+
 Scheduler::Scheduler(SchedulerOptions options)
-    : options_(options), next_lease_id_(options.lease_id_base) {}
+    : options_(options),
+      next_lease_id_(options.lease_id_base),
+      verify_draw_(VerifySeed(options.verify_seed)) {}
 
 void Scheduler::AddJob(const JobSpec& spec) {
   Job& job = jobs_[spec.job_id];
@@ -43,6 +55,7 @@ void Scheduler::AddJob(const JobSpec& spec) {
 }
 
 std::optional<TaskLease> Scheduler::Lease(const std::string& worker_id, int64_t now_ms) {
+  if (quarantined_.contains(worker_id)) return std::nullopt;
   Touch(worker_id, now_ms);
   // With every tile slot taken only pending tasks of open groups can go out, so the walk can
   // skip the jobs that have none.
@@ -58,20 +71,23 @@ std::optional<TaskLease> Scheduler::Lease(const std::string& worker_id, int64_t 
 std::optional<TaskLease> Scheduler::TryLease(Job& job, const std::string& worker_id,
                                              int64_t now_ms) {
   // A worker skips only the tasks it failed on, fewer than max_worker_failures_per_job
-  // since it is not excluded.
+  // since it is not excluded, and those it voted on.
   for (const TaskRef& task : job.pending) {
-    const std::vector<std::pair<std::string, std::string>>& failures =
-        GroupOf(job, task).tasks[task.second].failures;
-    const bool failed_here =
-        std::any_of(failures.begin(), failures.end(),
-                    [&](const auto& failure) { return failure.first == worker_id; });
-    if (!failed_here) return Issue(job, task, worker_id, now_ms);
+    if (MayTake(GroupOf(job, task).tasks[task.second], worker_id)) {
+      return Issue(job, task, worker_id, now_ms);
+    }
   }
   // A freshly opened group's first batch has failed on nobody.
   if (OpenGroup(job)) {
     return Issue(job, {static_cast<int>(job.next_group) - 1, 0}, worker_id, now_ms);
   }
   return std::nullopt;
+}
+
+bool Scheduler::MayTake(const Task& task, const std::string& worker_id) {
+  const auto is_worker = [&](const auto& entry) { return entry.first == worker_id; };
+  return std::none_of(task.failures.begin(), task.failures.end(), is_worker) &&
+         std::none_of(task.votes.begin(), task.votes.end(), is_worker);
 }
 
 bool Scheduler::OpenGroup(Job& job) {
@@ -117,6 +133,9 @@ void Scheduler::AddTasks(Job& job, Group& group, int stage) {
     Task task;
     task.sample_begin = begin;
     task.sample_end = end;
+    // Drawn for every task, verified or not, so that the draw does not depend on the fraction.
+    task.verify =
+        std::uniform_real_distribution<double>(0.0, 1.0)(verify_draw_) < options_.verify_fraction;
     group.tasks.push_back(std::move(task));
     ++group.tasks_left;
   }
@@ -181,6 +200,7 @@ TaskLease Scheduler::LeaseOf(uint64_t lease_id, const LeaseInfo& info) const {
   lease.sample_begin = task.sample_begin;
   lease.sample_end = task.sample_end;
   lease.deadline_ms = info.deadline_ms;
+  lease.verify = task.verify;
   return lease;
 }
 
@@ -199,7 +219,8 @@ absl::StatusOr<int64_t> Scheduler::Extend(const std::string& worker_id, uint64_t
   return lease.deadline_ms;
 }
 
-ResultOutcome Scheduler::Complete(const std::string& worker_id, uint64_t lease_id, int64_t now_ms) {
+ResultOutcome Scheduler::Complete(const std::string& worker_id, uint64_t lease_id, int64_t now_ms,
+                                  std::string_view digest) {
   Touch(worker_id, now_ms);
   const LeaseMap::iterator it = FindCurrent(worker_id, lease_id);
   if (it == leases_.end()) {
@@ -208,20 +229,179 @@ ResultOutcome Scheduler::Complete(const std::string& worker_id, uint64_t lease_i
   }
   const LeaseInfo lease = TakeLease(it);
   Job& job = jobs_.at(lease.job_id);
-  Group& group = GroupOf(job, lease.task);
-  group.tasks[lease.task.second].done = true;
+  Task& task = GroupOf(job, lease.task).tasks[lease.task.second];
+  ++results_accepted_;
+  ResultOutcome outcome = OutcomeOf(job, lease.task);
+  outcome.kind = ResultOutcome::kAccepted;
+  outcome.merge = !task.merged;
+  task.merged = true;
+  if (!task.verify) {
+    MarkDone(job, lease.task, &outcome);
+    return outcome;
+  }
+  task.votes.emplace_back(worker_id, std::string(digest));
+  Decide(job, lease.task, now_ms, &outcome);
+  return outcome;
+}
+
+ResultOutcome Scheduler::OutcomeOf(const Job& job, TaskRef task) const {
+  const Group& group = GroupOf(job, task);
+  ResultOutcome outcome;
+  outcome.job_id = job.key.job_id;
+  outcome.group_index = job.group_order[task.first].group_index;
+  outcome.tiles = group.tiles;
+  outcome.sample_begin = group.tasks[task.second].sample_begin;
+  outcome.sample_end = group.tasks[task.second].sample_end;
+  return outcome;
+}
+
+void Scheduler::MarkDone(Job& job, TaskRef task, ResultOutcome* outcome) {
+  Group& group = GroupOf(job, task);
+  Task& t = group.tasks[task.second];
+  t.done = true;
+  t.votes.clear();
+  job.awaiting.erase(task);
   --group.tasks_left;
   --job.tasks_left;
-  ++results_accepted_;
+  outcome->kind = group.tasks_left == 0 ? ResultOutcome::kStageComplete : ResultOutcome::kAccepted;
+}
 
-  ResultOutcome outcome;
-  outcome.kind = group.tasks_left == 0 ? ResultOutcome::kStageComplete : ResultOutcome::kAccepted;
-  outcome.job_id = lease.job_id;
-  outcome.group_index = job.group_order[lease.task.first].group_index;
-  outcome.tiles = group.tiles;
-  outcome.sample_begin = group.tasks[lease.task.second].sample_begin;
-  outcome.sample_end = group.tasks[lease.task.second].sample_end;
-  return outcome;
+void Scheduler::Decide(Job& job, TaskRef task, int64_t now_ms, ResultOutcome* outcome) {
+  Task& t = GroupOf(job, task).tasks[task.second];
+  std::map<std::string, int> tally;
+  for (const auto& [worker, digest] : t.votes) ++tally[digest];
+  const auto agreed = std::max_element(
+      tally.begin(), tally.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+  if (agreed->second >= 2) {
+    const std::string digest = agreed->first;
+    std::vector<std::string> outvoted, agreeing;
+    for (const auto& [worker, d] : t.votes) (d == digest ? agreeing : outvoted).push_back(worker);
+    ++(outvoted.empty() ? tasks_verified_ : verification_mismatches_);
+    MarkDone(job, task, outcome);
+    for (const std::string& worker : outvoted) {
+      if (quarantined_.contains(worker)) continue;
+      Quarantine(worker);
+      outcome->quarantined.push_back(worker);
+    }
+    return;
+  }
+  if (t.votes.size() == 1 && !CanVerify(job, t, now_ms)) {
+    ++tasks_unverified_;
+    MarkDone(job, task, outcome);
+    return;
+  }
+  if (static_cast<int>(t.votes.size()) > options_.max_task_failures + 1) {
+    std::string why =
+        absl::StrCat("tile group ", job.group_order[task.first].group_index, " samples [",
+                     t.sample_begin, ", ", t.sample_end, "): ", t.votes.size(),
+                     " workers returned ", tally.size(), " different results and no two agree:");
+    for (const auto& [worker, digest] : t.votes) {
+      absl::StrAppend(&why, " ", worker, " (", digest.substr(0, 12), ")");
+    }
+    outcome->kind = ResultOutcome::kDropped;
+    outcome->failure = JobFailure{job.key.job_id, std::move(why)};
+    RemoveJob(job.key.job_id);
+    return;
+  }
+  job.awaiting.insert(task);
+  Requeue(job, task);
+}
+
+bool Scheduler::CanVerify(const Job& job, const Task& task, int64_t now_ms) const {
+  for (auto it = workers_by_seen_.rbegin(); it != workers_by_seen_.rend(); ++it) {
+    const auto& [seen_ms, worker_id] = *it;
+    if (now_ms - seen_ms > options_.worker_active_ms) break;  // the rest are older
+    if (job.incompatible_workers.contains(worker_id) || Excluded(job, worker_id)) continue;
+    if (MayTake(task, worker_id)) return true;
+  }
+  return false;
+}
+
+std::vector<ResultOutcome> Scheduler::AcceptUnverifiable(int64_t now_ms) {
+  std::vector<ResultOutcome> accepted;
+  for (auto& [job_id, job] : jobs_) {
+    // Copied: MarkDone erases from it.
+    const std::vector<TaskRef> awaiting(job.awaiting.begin(), job.awaiting.end());
+    for (const TaskRef& ref : awaiting) {
+      const Task& task = GroupOf(job, ref).tasks[ref.second];
+      // Leased: a vote is on its way. Two votes that differ need a third, however long.
+      if (task.lease_id || task.votes.size() != 1 || CanVerify(job, task, now_ms)) continue;
+      ResultOutcome outcome = OutcomeOf(job, ref);
+      job.pending.erase(ref);
+      UpdateReady(job);
+      ++tasks_unverified_;
+      MarkDone(job, ref, &outcome);
+      accepted.push_back(std::move(outcome));
+    }
+  }
+  return accepted;
+}
+
+bool Scheduler::Quarantined(const std::string& worker_id) const {
+  return quarantined_.contains(worker_id);
+}
+
+void Scheduler::Quarantine(const std::string& worker_id) {
+  quarantined_.insert(worker_id);
+  // Its leases are taken back (results it sends now are dropped) and it stops counting as an
+  // active worker.
+  for (auto it = leases_.begin(); it != leases_.end();) {
+    const auto next = std::next(it);
+    if (it->second.worker_id == worker_id) {
+      const LeaseInfo lease = TakeLease(it);
+      Requeue(jobs_.at(lease.job_id), lease.task);
+    }
+    it = next;
+  }
+  SignOff(worker_id);
+  // Its votes no longer count: a task it voted on waits for an honest second opinion.
+  for (auto& [job_id, job] : jobs_) {
+    for (const TaskRef& ref : job.awaiting) {
+      std::vector<std::pair<std::string, std::string>>& votes =
+          GroupOf(job, ref).tasks[ref.second].votes;
+      std::erase_if(votes, [&](const auto& vote) { return vote.first == worker_id; });
+    }
+  }
+}
+
+std::optional<std::vector<int>> Scheduler::RequeueGroup(const std::string& job_id,
+                                                        int group_index) {
+  const auto job_it = jobs_.find(job_id);
+  if (job_it == jobs_.end()) return std::nullopt;
+  Job& job = job_it->second;
+  if (job.groups.contains(group_index)) return std::nullopt;  // open
+  // Its latest entry: one not opened yet means it is queued again already.
+  std::optional<size_t> latest;
+  for (size_t i = 0; i < job.group_order.size(); ++i) {
+    if (job.group_order[i].group_index == group_index) latest = i;
+  }
+  if (!latest || *latest >= job.next_group) return std::nullopt;
+  GroupWork again = job.group_order[*latest];
+  job.group_order.push_back(again);
+  ++job.groups_left;
+  job.tasks_left += static_cast<int64_t>(StageBatches(job, 0).size());
+  std::sort(again.tiles.begin(), again.tiles.end());
+  again.tiles.erase(std::unique(again.tiles.begin(), again.tiles.end()), again.tiles.end());
+  return again.tiles;
+}
+
+std::optional<std::vector<int>> Scheduler::RestartGroup(const std::string& job_id,
+                                                        int group_index) {
+  const auto job_it = jobs_.find(job_id);
+  if (job_it == jobs_.end()) return std::nullopt;
+  Job& job = job_it->second;
+  const auto group_it = job.groups.find(group_index);
+  if (group_it == job.groups.end() || group_it->second.tasks_left > 0) return std::nullopt;
+  Group& group = group_it->second;
+  std::vector<int> tiles = job.group_order[group.position].tiles;
+  std::sort(tiles.begin(), tiles.end());
+  tiles.erase(std::unique(tiles.begin(), tiles.end()), tiles.end());
+  tiles_open_ += static_cast<int>(tiles.size()) - static_cast<int>(group.tiles.size());
+  group.tiles = tiles;
+  group.tasks.clear();  // all done: no lease, pending entry or vote refers to them
+  AddTasks(job, group, 0);
+  job.tasks_left += group.tasks_left;
+  return tiles;
 }
 
 std::optional<JobFailure> Scheduler::Fail(const std::string& worker_id, uint64_t lease_id,
@@ -328,7 +508,12 @@ SchedulerStats Scheduler::Stats(int64_t now_ms) const {
   for (const auto& [job_id, job] : jobs_) {
     stats.tasks_pending += static_cast<int>(job.tasks_left - job.leases.size());
     stats.workers_incompatible += static_cast<int>(job.incompatible_workers.size());
+    stats.tasks_awaiting_verification += static_cast<int>(job.awaiting.size());
   }
+  stats.workers_quarantined = static_cast<int>(quarantined_.size());
+  stats.tasks_verified = tasks_verified_;
+  stats.verification_mismatches = verification_mismatches_;
+  stats.tasks_unverified = tasks_unverified_;
   stats.tasks_leased = static_cast<int>(leases_.size());
   stats.tiles_open = tiles_open_;
   // Workers Tick() has not yet forgotten sit at the front.
@@ -462,6 +647,7 @@ void Scheduler::UpdateReady(const Job& job) {
 }
 
 void Scheduler::Touch(const std::string& worker_id, int64_t now_ms) {
+  if (quarantined_.contains(worker_id)) return;  // never active again
   auto [it, inserted] = worker_seen_ms_.try_emplace(worker_id, now_ms);
   if (!inserted) {
     if (it->second >= now_ms) return;  // a call from the past changes nothing

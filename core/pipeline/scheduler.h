@@ -11,14 +11,25 @@
 // bounds memory whatever the job size. Jobs run by priority (higher first), then in submission
 // order. Adaptive jobs hand out a group's work in stages: the next stage's batches, for the
 // tiles that need it, are queued only when the service calls AddStage().
+//
+// Verification by redundancy: tasks are deterministic, so two honest workers return the same
+// bytes for one. A fraction of tasks (SchedulerOptions::verify_fraction), drawn at random as
+// they are queued, is run by a second worker: the first result is merged at once, the second
+// is only compared (by digest, core/pipeline/result_digest.h). When they differ a third worker
+// decides; a worker outvoted two to one is quarantined (Quarantined()): it gets no more tasks of
+// any job, its leases are taken back and its votes dropped, and the service recomputes what it
+// contributed (RequeueGroup, RestartGroup). A worker is never asked to verify its own result
+// and cannot tell a verification copy from a task.
 #ifndef PDSM_CORE_PIPELINE_SCHEDULER_H_
 #define PDSM_CORE_PIPELINE_SCHEDULER_H_
 
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <random>
 #include <set>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -34,6 +45,13 @@ struct SchedulerOptions {
   int64_t worker_active_ms = 30'000;    // a worker is active if seen this recently
   uint64_t lease_id_base = 1;           // first lease id; a restarted coordinator picks a new
                                         // base so results for its predecessor's leases drop
+  // Fraction of tasks run by two distinct workers and compared (see above), in [0, 1]; 0 turns
+  // verification off (the local bake: its threads are one process). A verified task costs a
+  // second run, so the farm does about (1 + verify_fraction) times the work.
+  double verify_fraction = 0;
+  // Seeds the draw of verified tasks; 0: std::random_device, so that no worker can predict
+  // which of its tasks are checked. Tests fix it.
+  uint64_t verify_seed = 0;
 };
 
 // A group's tiles still to do (a resumed job lists only its unfinished ones).
@@ -62,20 +80,32 @@ struct TaskLease {
   std::vector<int> tiles;  // the group's tiles of this stage, ascending
   int sample_begin = 0, sample_end = 0;
   int64_t deadline_ms = 0;
-};
-
-// What happened to a reported result.
-struct ResultOutcome {
-  enum Kind { kDropped, kAccepted, kStageComplete } kind = kDropped;
-  std::string job_id;  // set unless dropped
-  int group_index = 0;
-  std::vector<int> tiles;
-  int sample_begin = 0, sample_end = 0;
+  // The task is one verification draws (its result's digest is needed by Complete). The
+  // service never tells the worker.
+  bool verify = false;
 };
 
 struct JobFailure {
   std::string job_id;
   std::string reason;
+};
+
+// What happened to a reported result.
+struct ResultOutcome {
+  // kAccepted: the result counts (merged, or a vote on a verified task); kStageComplete: and
+  // with it every batch of the group's stage is done.
+  enum Kind { kDropped, kAccepted, kStageComplete } kind = kDropped;
+  std::string job_id;  // set unless dropped
+  int group_index = 0;
+  std::vector<int> tiles;
+  int sample_begin = 0, sample_end = 0;
+  // The service merges this result's events: true for an unverified task and for a verified
+  // task's first result; a later vote is only compared.
+  bool merge = false;
+  // Workers this result outvoted, now quarantined (the service recomputes what they merged).
+  std::vector<std::string> quarantined;
+  // Set (with kind kDropped) when the votes on this task cannot agree: the job is removed.
+  std::optional<JobFailure> failure;
 };
 
 struct SchedulerStats {
@@ -86,13 +116,19 @@ struct SchedulerStats {
   int64_t leases_expired = 0;
   int64_t results_dropped = 0;
   int64_t results_accepted = 0;
-  int workers_incompatible = 0;  // (job, worker) pairs of jobs in progress (Incompatible())
+  int workers_incompatible = 0;         // (job, worker) pairs of jobs in progress (Incompatible())
+  int workers_quarantined = 0;          // outvoted by verification, since the scheduler started
+  int tasks_awaiting_verification = 0;  // first result in, second not yet
   // Since the scheduler started (counters, for metrics):
   int64_t leases_issued = 0;
   int64_t tasks_failed = 0;  // reported failures (Fail, not handed back)
   std::map<absl::StatusCode, int64_t> tasks_failed_by_code;  // the same, by Fail's code
   int64_t tasks_handed_back = 0;                             // Fail with handed_back
-  int64_t tasks_incompatible = 0;  // current leases reported by Incompatible()
+  int64_t tasks_incompatible = 0;       // current leases reported by Incompatible()
+  int64_t tasks_verified = 0;           // verified tasks whose two results agreed at once
+  int64_t verification_mismatches = 0;  // verified tasks decided against a disagreeing worker
+  int64_t tasks_unverified = 0;         // drawn for verification, accepted on one result: no other
+                                        // able worker was active
 };
 
 class Scheduler {
@@ -116,7 +152,14 @@ class Scheduler {
   // that need more and GroupAssembled() when none does. A lease expires when Tick()
   // finds its deadline passed; until then it is current. Extend, Complete and Fail also record
   // the worker as seen (a worker busy on a long task is active).
-  ResultOutcome Complete(const std::string& worker_id, uint64_t lease_id, int64_t now_ms);
+  // `digest`: of the result (core/pipeline/result_digest.h), required when the lease's
+  // `verify` is set, else ignored. A verified task is done when two distinct workers' digests
+  // agree; workers whose digest differs from those two are quarantined. Before that its task
+  // goes back to the queue for a worker that has not voted on it; with no such worker active,
+  // a lone first result is accepted unverified (counted in tasks_unverified). When more than
+  // max_task_failures + 1 workers have voted and no two agree, the job fails.
+  ResultOutcome Complete(const std::string& worker_id, uint64_t lease_id, int64_t now_ms,
+                         std::string_view digest = {});
 
   // The worker could not do the task. Unless `handed_back`, it counts against the worker and
   // the task; the task goes back to the queue. Returns the job's failure when the task has now
@@ -143,6 +186,24 @@ class Scheduler {
   // worker) and fails jobs that can no longer progress: a task failed on too many workers, or
   // every active worker excluded. Call periodically.
   std::vector<JobFailure> Tick(int64_t now_ms);
+
+  // Verified tasks waiting for a second result that no active worker can give (every able one
+  // voted already, or left): accepted on their one result, as Complete would have (kAccepted or
+  // kStageComplete, merge false). Call periodically, after Tick.
+  std::vector<ResultOutcome> AcceptUnverifiable(int64_t now_ms);
+
+  // True once verification has outvoted the worker (for the scheduler's lifetime).
+  bool Quarantined(const std::string& worker_id) const;
+
+  // Verification found a worker wrong: what it merged must be computed again.
+  // An assembled group (GroupAssembled called) is queued again as at AddJob, with the tiles it
+  // had then, which are returned; nullopt, changing nothing, when the group is open (restart it
+  // when its stage completes), already queued again, or unknown.
+  std::optional<std::vector<int>> RequeueGroup(const std::string& job_id, int group_index);
+  // An open group whose stage just completed (kStageComplete) starts over at its first stage
+  // with the tiles it had at AddJob, which are returned (the service stored some of them in
+  // earlier stages); nullopt, changing nothing, when it is not open or has work outstanding.
+  std::optional<std::vector<int>> RestartGroup(const std::string& job_id, int group_index);
 
   // Adaptive jobs: queues the next stage of a group whose stage just completed
   // (kStageComplete) for `tiles`, a non-empty subset of its stage's tiles (the others are
@@ -181,6 +242,10 @@ class Scheduler {
     // (worker, reason) of each failure; the workers are distinct since a task never goes back
     // to a worker it failed on.
     std::vector<std::pair<std::string, std::string>> failures;
+    bool verify = false;  // drawn for verification
+    bool merged = false;  // a result of it has been merged (the first vote)
+    // (worker, digest) of each result of a verified task, distinct workers, until decided.
+    std::vector<std::pair<std::string, std::string>> votes;
   };
   // A group from its opening until GroupAssembled(). Unopened groups are only entries of
   // Job::group_order, so a job's memory follows its open groups, not its size.
@@ -209,6 +274,7 @@ class Scheduler {
     size_t next_group = 0;               // next group of group_order to open
     std::map<int, Group> groups;         // open groups by group index
     std::set<TaskRef> pending;           // tasks of open groups waiting for a worker
+    std::set<TaskRef> awaiting;          // verified tasks with votes, not yet decided
     std::set<uint64_t> leases;           // current leases
     int64_t tasks_left = 0;              // not yet accepted, open or not
     int groups_left = 0;                 // not yet assembled
@@ -225,6 +291,17 @@ class Scheduler {
   using LeaseMap = std::map<uint64_t, LeaseInfo>;
 
   std::optional<TaskLease> TryLease(Job& job, const std::string& worker_id, int64_t now_ms);
+  // Whether the worker may take the task: it has neither failed nor voted on it.
+  static bool MayTake(const Task& task, const std::string& worker_id);
+  // Marks the task accepted and fills the outcome's kind.
+  void MarkDone(Job& job, TaskRef task, ResultOutcome* outcome);
+  // A verified task's votes so far: decides it, quarantines the outvoted, requeues it for
+  // another vote or fails the job (outcome->failure).
+  void Decide(Job& job, TaskRef task, int64_t now_ms, ResultOutcome* outcome);
+  // Some active worker could give the task another vote.
+  bool CanVerify(const Job& job, const Task& task, int64_t now_ms) const;
+  void Quarantine(const std::string& worker_id);
+  ResultOutcome OutcomeOf(const Job& job, TaskRef task) const;
   bool OpenGroup(Job& job);
   // The sample ranges of a group's stage, cut into batches of samples_per_task.
   static std::vector<std::pair<int, int>> StageBatches(const Job& job, int stage);
@@ -256,6 +333,8 @@ class Scheduler {
   std::set<std::pair<int64_t, uint64_t>> deadlines_;  // (deadline, lease id) of current leases
   std::map<std::string, int64_t> worker_seen_ms_;
   std::set<std::pair<int64_t, std::string>> workers_by_seen_;  // (last seen, worker)
+  std::set<std::string> quarantined_;
+  std::mt19937_64 verify_draw_;
   int tiles_open_ = 0;
   int64_t leases_expired_ = 0;
   int64_t results_dropped_ = 0;
@@ -265,6 +344,9 @@ class Scheduler {
   std::map<absl::StatusCode, int64_t> tasks_failed_by_code_;
   int64_t tasks_handed_back_ = 0;
   int64_t tasks_incompatible_ = 0;
+  int64_t tasks_verified_ = 0;
+  int64_t verification_mismatches_ = 0;
+  int64_t tasks_unverified_ = 0;
 };
 
 }  // namespace pdsm
