@@ -1,11 +1,15 @@
 #include "server/watch_hub.h"
 
 #include <chrono>
+#include <map>
+#include <string>
 
 #include "rpc/grpc_support.h"
 
 namespace pdsm {
 namespace {
+
+using JobsRead = std::map<std::string, absl::StatusOr<pdsm::v1::Job>>;
 
 constexpr auto kPollPeriod = std::chrono::milliseconds(100);
 constexpr auto kHeartbeat = std::chrono::seconds(2);
@@ -28,15 +32,18 @@ class WatchHub::Watcher final : public grpc::ServerWriteReactor<pdsm::v1::Job> {
  public:
   Watcher(WatchHub* hub, std::string job_id) : hub_(hub), job_id_(std::move(job_id)) {}
 
+  // `polled`: the jobs read in this round, by id: watchers of one job share one read.
   // REQUIRES: the hub's mutex held (asserted: the analysis cannot see that hub_ is the hub).
-  void Poll(std::chrono::steady_clock::time_point now) {
+  void Poll(std::chrono::steady_clock::time_point now, JobsRead* polled) {
     hub_->mu_.AssertHeld();
     if (writing_ || finished_) return;
     if (sent_any_ && Ended(sent_)) return Finish(grpc::Status::OK);  // the last word was said
-    absl::StatusOr<pdsm::v1::Job> job = hub_->coordinator_->GetJob(job_id_);
+    auto [it, first] = polled->try_emplace(job_id_, absl::UnknownError(""));
+    if (first) it->second = hub_->coordinator_->GetJob(job_id_);
+    const absl::StatusOr<pdsm::v1::Job>& job = it->second;
     if (!job.ok()) return Finish(ToGrpcStatus(job.status()));
     if (sent_any_ && SameProgress(*job, sent_) && now - sent_at_ < kHeartbeat) return;
-    sent_ = *std::move(job);
+    sent_ = *job;
     sent_any_ = true;
     sent_at_ = now;
     writing_ = true;
@@ -99,7 +106,8 @@ grpc::ServerWriteReactor<pdsm::v1::Job>* WatchHub::Watch(const std::string& job_
     watcher->Finish(grpc::Status(grpc::StatusCode::UNAVAILABLE, "the coordinator is stopping"));
   } else {
     watchers_.insert(watcher);
-    watcher->Poll(std::chrono::steady_clock::now());  // the first state at once
+    JobsRead polled;
+    watcher->Poll(std::chrono::steady_clock::now(), &polled);  // the first state at once
   }
   return watcher;
 }
@@ -110,7 +118,8 @@ void WatchHub::Loop() {
     cv_.WaitWithTimeout(&mu_, absl::FromChrono(kPollPeriod));
     if (stopping_) break;
     const auto now = std::chrono::steady_clock::now();
-    for (Watcher* w : watchers_) w->Poll(now);
+    JobsRead polled;
+    for (Watcher* w : watchers_) w->Poll(now, &polled);
   }
 }
 

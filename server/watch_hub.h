@@ -1,6 +1,8 @@
 // WatchJob streams: one reactor per watcher, all woken by one hub thread every 100 ms. A
 // watcher writes when its job changed (state, tiles, samples) or every 2 s (a fresh ETA), and
-// finishes after writing an ended job. Fifty watchers cost one thread, not fifty.
+// finishes after writing an ended job. Fifty watchers cost one thread, not fifty, and the
+// watchers of one job share one read of it per round: a thousand watchers of 40 jobs read
+// the job store 40 times per round, not a thousand.
 #ifndef PDSM_SERVER_WATCH_HUB_H_
 #define PDSM_SERVER_WATCH_HUB_H_
 
