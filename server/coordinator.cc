@@ -455,13 +455,7 @@ absl::StatusOr<std::string> Coordinator::FinishedTilePath(const std::string& job
   if (!job.ok()) return job.status();
   absl::StatusOr<int> index = FindJobLight((*job)->lights(), light, job_id);
   if (!index.ok()) return index.status();
-  const JobLight& l = (*job)->lights()[*index];
-  const std::vector<int> done = (*job)->FinishedTiles(*index);
-  if (!std::binary_search(done.begin(), done.end(), tile_index)) {
-    return absl::NotFoundError(
-        absl::StrCat("job ", job_id, ": tile ", tile_index, " is not assembled (yet)"));
-  }
-  return (*job)->paths().Tile(l.tile_offset + tile_index);
+  return (*job)->FinishedTileFile(*index, tile_index);
 }
 
 absl::StatusOr<QueryAnswer> Coordinator::Query(const std::string& job_id, std::string_view light,

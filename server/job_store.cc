@@ -460,6 +460,11 @@ absl::Status JobStore::SetSucceeded(const std::string& job_id, uint64_t pdsm_byt
 }
 
 absl::Status JobStore::MarkTileDone(const std::string& job_id, int tile_index, int64_t now_ms) {
+  return MarkTilesDone(job_id, {tile_index}, now_ms);
+}
+
+absl::Status JobStore::MarkTilesDone(const std::string& job_id, const std::vector<int>& tiles,
+                                     int64_t now_ms) {
   absl::MutexLock lock(&mu_);
   Transaction txn(db_, db_path_);
   if (absl::Status s = txn.Begin(); !s.ok()) return s;
@@ -473,26 +478,32 @@ absl::Status JobStore::MarkTileDone(const std::string& job_id, int tile_index, i
   if (!*row) return NoSuchJob(job_id);
   const int64_t tiles_total = total->Int64(0);
   total->Reset();
-  if (tile_index < 0 || tile_index >= tiles_total) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("job %s: tile %d is outside [0, %d)", job_id, tile_index, tiles_total));
+  for (int tile_index : tiles) {
+    if (tile_index < 0 || tile_index >= tiles_total) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("job %s: tile %d is outside [0, %d)", job_id, tile_index, tiles_total));
+    }
   }
 
   absl::StatusOr<Statement> insert = Statement::Prepare(db_, db_path_, R"sql(
       INSERT OR IGNORE INTO done_tiles (job_id, tile_index, done_unix_ms)
       VALUES (?1, ?2, ?3))sql");
   if (!insert.ok()) return insert.status();
-  insert->BindText(1, job_id);
-  insert->BindInt64(2, tile_index);
-  insert->BindInt64(3, now_ms);
-  if (absl::Status s = insert->Run(); !s.ok()) return s;
+  for (int tile_index : tiles) {
+    insert->BindText(1, job_id);
+    insert->BindInt64(2, tile_index);
+    insert->BindInt64(3, now_ms);
+    if (absl::Status s = insert->Run(); !s.ok()) return s;
+    insert->Reset();
+  }
 
   absl::StatusOr<Statement> count = Statement::Prepare(db_, db_path_, R"sql(
-      UPDATE jobs SET tile_assemblies = tile_assemblies + 1, updated_unix_ms = ?1
-      WHERE job_id = ?2)sql");
+      UPDATE jobs SET tile_assemblies = tile_assemblies + ?1, updated_unix_ms = ?2
+      WHERE job_id = ?3)sql");
   if (!count.ok()) return count.status();
-  count->BindInt64(1, now_ms);
-  count->BindText(2, job_id);
+  count->BindInt64(1, static_cast<int64_t>(tiles.size()));
+  count->BindInt64(2, now_ms);
+  count->BindText(3, job_id);
   if (absl::Status s = count->Run(); !s.ok()) return s;
   return txn.Commit();
 }

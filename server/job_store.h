@@ -99,6 +99,10 @@ class JobStore {
   // updated_unix_ms. NOT_FOUND when there is no such job; INVALID_ARGUMENT when tile_index is
   // outside [0, tiles_total).
   absl::Status MarkTileDone(const std::string& job_id, int tile_index, int64_t now_ms);
+  // MarkTileDone of every tile in one transaction (one sync for thousands of tiles no caster
+  // reaches); nothing is marked when one is outside the job.
+  absl::Status MarkTilesDone(const std::string& job_id, const std::vector<int>& tiles,
+                             int64_t now_ms);
 
   // Takes tile `tile_index` out of the job's done tiles (no-op if not there): verification found
   // it computed from a quarantined worker's results, so a resumed job must redo it.

@@ -275,6 +275,21 @@ TEST(JobStoreTest, AWithdrawnTileIsNoLongerDoneUntilMarkedAgain) {
   EXPECT_EQ(store->MarkTileUndone("no-such-job", 0).code(), absl::StatusCode::kNotFound);
 }
 
+TEST(JobStoreTest, MarkTilesDoneMarksABatchOrNothing) {
+  TempDir dir;
+  std::unique_ptr<JobStore> store = OpenOrDie(dir.path().string());
+  ASSERT_NE(store, nullptr);
+  const std::string id = CreateOrDie(*store, SampleJob(1)).job_id;  // 16 tiles
+  EXPECT_EQ(store->MarkTilesDone(id, {1, 2, 16}, 5).code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(*store->DoneTiles(id), IsEmpty());  // nothing of a refused batch
+  ASSERT_TRUE(store->MarkTilesDone(id, {9, 3, 4}, 6).ok());
+  EXPECT_THAT(*store->DoneTiles(id), ElementsAre(3, 4, 9));
+  absl::StatusOr<JobRecord> job = store->GetJob(id);
+  ASSERT_TRUE(job.ok());
+  EXPECT_EQ(job->tiles_done, 3);
+  EXPECT_EQ(job->tile_assemblies, 3);
+}
+
 TEST(JobStoreTest, MarkTileDoneRejectsTilesOutsideTheJob) {
   TempDir dir;
   std::unique_ptr<JobStore> store = OpenOrDie(dir.path().string());

@@ -6,10 +6,12 @@
 
 #include <spdlog/spdlog.h>
 
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "core/bake/plan_fingerprint.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pipeline/tile_file.h"
+#include "core/pipeline/unreached_tile.h"
 
 namespace pdsm {
 namespace {
@@ -51,6 +53,9 @@ class StoredJob::Light final : public JobOutput {
       : job_(std::move(job)), light_(light) {}
   void Started() override { job_->Started(); }
   absl::Status StoreTile(const PdsmTile& tile) override { return job_->StoreTile(*light_, tile); }
+  absl::Status StoreUnreachedTiles(const BakePlan&, const std::vector<int>& tiles) override {
+    return job_->StoreUnreachedTiles(*light_, tiles);
+  }
   absl::Status Finish() override { return job_->LightFinished(); }
   absl::Status WithdrawTiles(const std::vector<int>& tile_indices) override {
     return job_->WithdrawTiles(*light_, tile_indices);
@@ -91,14 +96,40 @@ std::shared_ptr<JobOutput> StoredJob::LightOutput(int light) {
 
 std::vector<int> StoredJob::FinishedTiles(int light) const {
   const JobLight& l = lights_.at(light);
-  std::vector<int> done;
+  // One read of the folder, not a stat per tile (2^18 of them on the largest job). Only
+  // complete files count: "<n>.tile", not a temporary "<n>.tile.tmp-…".
+  std::vector<bool> stored(l.plan->tiles.size(), false);
   std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(paths_.tiles, ec)) {
+    const std::filesystem::path& path = entry.path();
+    int index = 0;
+    if (path.extension() != ".tile" || !absl::SimpleAtoi(path.stem().string(), &index)) continue;
+    index -= l.tile_offset;
+    if (index >= 0 && index < static_cast<int>(stored.size())) stored[index] = true;
+  }
+  std::vector<int> done;
   for (const TileRect& rect : l.plan->tiles) {
-    if (std::filesystem::exists(paths_.Tile(l.tile_offset + rect.index), ec)) {
-      done.push_back(rect.index);
-    }
+    if (stored[rect.index] || IsUnreachedTile(*l.plan, rect.index)) done.push_back(rect.index);
   }
   return done;
+}
+
+absl::StatusOr<std::string> StoredJob::FinishedTileFile(int light, int tile) const {
+  const JobLight& l = lights_.at(light);
+  const std::string path = paths_.Tile(l.tile_offset + tile);
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec)) return path;
+  if (tile < 0 || tile >= static_cast<int>(l.plan->tiles.size()) ||
+      !IsUnreachedTile(*l.plan, tile)) {
+    return absl::NotFoundError(
+        absl::StrCat("job ", record_.job_id, ": tile ", tile, " is not assembled (yet)"));
+  }
+  // Two requests at once both write the same bytes; the rename makes either whole.
+  std::filesystem::create_directories(paths_.tiles, ec);
+  if (absl::Status s = WriteTileFile(path, MakeUnreachedTile(*l.plan, tile).tile, fs_); !s.ok()) {
+    return s;
+  }
+  return path;
 }
 
 void StoredJob::Started() {
@@ -120,6 +151,14 @@ absl::Status StoredJob::StoreTile(const JobLight& light, const PdsmTile& tile) {
   }
   spdlog::debug("job {} tile {}: stored, {} vertices", record_.job_id, index, tile.vertices.size());
   return absl::OkStatus();
+}
+
+absl::Status StoredJob::StoreUnreachedTiles(const JobLight& light, const std::vector<int>& tiles) {
+  std::vector<int> indices;
+  indices.reserve(tiles.size());
+  for (int t : tiles) indices.push_back(light.tile_offset + t);
+  if (ended_) return absl::OkStatus();
+  return store_->MarkTilesDone(record_.job_id, indices, UnixNowMs());
 }
 
 absl::Status StoredJob::WithdrawTiles(const JobLight& light, const std::vector<int>& tiles) {
@@ -148,7 +187,11 @@ absl::Status StoredJob::WriteFile() {
   std::filesystem::create_directories(paths_.dir, ec);
   const auto write_light = [&](const JobLight& light, PdsmWriter* writer) -> absl::Status {
     for (const TileRect& rect : light.plan->tiles) {
-      absl::StatusOr<PdsmTile> tile = ReadTileFile(paths_.Tile(light.tile_offset + rect.index));
+      // A tile no caster reaches was never stored: it is made again, as the engine made it.
+      absl::StatusOr<PdsmTile> tile =
+          IsUnreachedTile(*light.plan, rect.index)
+              ? MakeUnreachedTile(*light.plan, rect.index).tile
+              : ReadTileFile(paths_.Tile(light.tile_offset + rect.index));
       if (!tile.ok()) return tile.status();
       if (absl::Status s = writer->WriteTile(*tile); !s.ok()) return s;
     }

@@ -72,9 +72,15 @@ class StoredJob : public std::enable_shared_from_this<StoredJob> {
   // Light `light`'s progress as its engine job ended; nullopt while it runs.
   std::optional<JobProgress> LightEndProgress(int light) const;
 
-  // Light `light`'s tiles (its own indices) whose files are complete (written under a
-  // temporary name, then renamed), ascending.
+  // Light `light`'s tiles (its own indices) that are finished, ascending: those whose files are
+  // complete (written under a temporary name, then renamed) and those no caster reaches, which
+  // are never stored as files (core/pipeline/unreached_tile.h).
   std::vector<int> FinishedTiles(int light) const;
+
+  // The file of finished tile `tile` of light `light`, for FetchTile: a tile no caster reaches
+  // is written on the first request (the bytes the file will hold). NOT_FOUND when the tile is
+  // not finished (yet).
+  absl::StatusOr<std::string> FinishedTileFile(int light, int tile) const;
 
   // Writes the job's end state to the store now, without waiting for the end of every light: a
   // cancel's answer then already says CANCELLED. The end writes it again (the same values).
@@ -85,6 +91,8 @@ class StoredJob : public std::enable_shared_from_this<StoredJob> {
   class Light;  // the JobOutput of one light
   void Started();
   absl::Status StoreTile(const JobLight& light, const PdsmTile& tile);
+  // Marks the light's tiles no caster reaches done, in one transaction, without files.
+  absl::Status StoreUnreachedTiles(const JobLight& light, const std::vector<int>& tiles);
   // Verification found the tiles (the light's own indices) fed by a quarantined worker: their
   // rows leave the store and their files go, until they are stored again.
   absl::Status WithdrawTiles(const JobLight& light, const std::vector<int>& tiles);

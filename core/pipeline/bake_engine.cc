@@ -10,6 +10,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 #include "core/pipeline/result_digest.h"
+#include "core/pipeline/unreached_tile.h"
 
 namespace pdsm {
 namespace {
@@ -65,6 +66,13 @@ int TileCount(const JobSpec& spec) {
 }
 
 }  // namespace
+
+absl::Status JobOutput::StoreUnreachedTiles(const BakePlan& plan, const std::vector<int>& tiles) {
+  for (int t : tiles) {
+    if (absl::Status s = StoreTile(MakeUnreachedTile(plan, t).tile); !s.ok()) return s;
+  }
+  return absl::OkStatus();
+}
 
 absl::Status JobOutput::WithdrawTiles(const std::vector<int>& tile_indices) {
   return absl::UnimplementedError(
@@ -187,26 +195,36 @@ absl::Status BakeEngine::AddJob(EngineJob spec) {
 }
 
 void BakeEngine::StoreUnreachedTiles(const JobPtr& job, const std::vector<int>& tiles) {
-  // What a task would have returned for them, judged as every stage rule judges a tile with
-  // no event: fixed-count tiles complete, adaptive ones converge at their pilot.
+  // In batches, so that a cancel stops a world of 2^18 empty tiles between two of them.
+  constexpr size_t kBatch = 4096;
   const BakePlan& plan = *job->spec.plan;
-  for (int t : tiles) {
-    if (job->ended) return;
-    const TileRect& r = plan.tiles[t];
-    TileEvents none{.tile_index = t, .x0 = r.x0, .y0 = r.y0, .width = r.width, .height = r.height};
-    none.offsets.assign(none.PixelCount() + 1, 0);
-    std::vector<TileParts> ranges;
-    for (size_t k = 0; k < StageRanges(plan.header, 0).size(); ++k) {
-      ranges.push_back(TileParts{.in_memory = {none}, .spilled = {}, .shape = none});
+  // Every unreached tile of a plan counts the same (adaptive: converged at the pilot).
+  const UnreachedTile sample = MakeUnreachedTile(plan, tiles.front());
+  const int64_t tile_samples = sample.tile_samples > 0 ? sample.tile_samples : plan.header.samples;
+  for (size_t begin = 0; begin < tiles.size(); begin += kBatch) {
+    const std::vector<int> batch(
+        tiles.begin() + static_cast<ptrdiff_t>(begin),
+        tiles.begin() + static_cast<ptrdiff_t>(std::min(tiles.size(), begin + kBatch)));
+    if (!BeginOutputCall(job)) return;
+    const absl::Status stored = job->spec.output->StoreUnreachedTiles(plan, batch);
+    EndOutputCall(job);
+    if (!stored.ok()) {
+      return End(job, JobEnd::kFailed,
+                 absl::Status(stored.code(),
+                              absl::StrCat("storing ", batch.size(),
+                                           " tiles no caster reaches: ", stored.message())));
     }
-    // No run: the rule reads nothing back, so it cannot fail.
-    StageVerdict verdict = *JudgeStage(plan.header, TileStageState{}, std::move(ranges), nullptr);
-    const int64_t samples = verdict.tile_samples > 0 ? verdict.tile_samples : plan.header.samples;
-    if (!StoreTile(job, t, std::move(verdict))) return;
     absl::MutexLock lock(&mu_);
-    --job->direct_left;
-    ++job->progress.tiles_without_task;
-    job->progress.samples_done += samples;  // what its tasks would have reported
+    if (job->ended) return;
+    const int n = static_cast<int>(batch.size());
+    JobProgress& p = job->progress;
+    job->direct_left -= n;
+    p.tiles_done += n;
+    p.tiles_all_lit += n;
+    p.tiles_without_task += n;
+    // What their tasks would have reported, and the samples they never needed.
+    p.samples_done += int64_t{n} * (tile_samples + sample.samples_skipped);
+    p.tile_samples_total += int64_t{n} * tile_samples;
   }
   bool complete = false;
   {

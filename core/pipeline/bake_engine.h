@@ -83,6 +83,11 @@ class JobOutput {
   // A finished tile. Once per tile, from the executor; different tiles may be stored at the
   // same time. An error fails the job.
   virtual absl::Status StoreTile(const PdsmTile& tile) = 0;
+  // Tiles no caster reaches (core/pipeline/unreached_tile.h), in ascending batches, instead of
+  // StoreTile for each: their content follows from `plan`. The default stores
+  // MakeUnreachedTile of each through StoreTile; an output may record them without their
+  // bytes. Called as StoreTile is; an error fails the job.
+  virtual absl::Status StoreUnreachedTiles(const BakePlan& plan, const std::vector<int>& tiles);
   // Every tile is stored: produce the PDSM. Once, from the executor, unless the job ended
   // first. An error fails the job.
   virtual absl::Status Finish() = 0;

@@ -1,0 +1,33 @@
+// Tiles no caster reaches (BakePlan::tile_has_casters false): their rays meet no shadow, so
+// they need no task, and what they hold follows from the plan alone. The local bake writes
+// them like any tile; the coordinator stores only that they are done and makes them again
+// when it writes the file or serves one (server/stored_job.h), so a sparse world of 2^18
+// tiles costs no file per empty tile.
+#ifndef PDSM_CORE_PIPELINE_UNREACHED_TILE_H_
+#define PDSM_CORE_PIPELINE_UNREACHED_TILE_H_
+
+#include <cstdint>
+
+#include "core/bake/bake_plan.h"
+#include "core/pdsm/pdsm_image.h"
+
+namespace pdsm {
+
+// True when the plan knows that no caster reaches tile `tile_index` (a plan without the
+// per-tile flags reaches every tile). REQUIRES: tile_index in [0, plan.tiles.size()).
+bool IsUnreachedTile(const BakePlan& plan, int tile_index);
+
+struct UnreachedTile {
+  PdsmTile tile;            // all lit: no vertex
+  int tile_samples = 0;     // adaptive bakes: the pilot's samples, at which it converged; else 0
+  int samples_skipped = 0;  // adaptive bakes: the samples it never needed
+};
+
+// What a task for the tile would have led to, judged as every stage rule judges a tile with
+// no event (fixed-count tiles complete, adaptive ones converge at their pilot), assembled:
+// the same bytes the engine stores. Pure; thread-safe.
+UnreachedTile MakeUnreachedTile(const BakePlan& plan, int tile_index);
+
+}  // namespace pdsm
+
+#endif  // PDSM_CORE_PIPELINE_UNREACHED_TILE_H_

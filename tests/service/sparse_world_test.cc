@@ -1,0 +1,99 @@
+// Tiles no caster reaches on the service (core/pipeline/unreached_tile.h): a sparse world's
+// empty tiles are done at once without a task, and the coordinator keeps no file for them
+// (a 2^18-tile job used to write 2^18 files, one fsync'd commit each); it makes them again
+// when it writes the PDSM, and when a client fetches one.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/pipeline/tile_file.h"
+#include "tests/service/service_cluster.h"
+
+namespace pdsm::testing {
+namespace {
+
+using std::chrono::seconds;
+
+// Files in the job's tile folder (none when it does not exist).
+int TileFiles(ServiceCluster& cluster, const std::string& job_id) {
+  const std::filesystem::path dir =
+      std::filesystem::path(cluster.dir().File("data")) / "jobs" / job_id / "tiles";
+  std::error_code ec;
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    files += entry.is_regular_file() ? 1 : 0;
+  }
+  return files;
+}
+
+TEST(SparseWorld, TilesNoCasterReachesAreNeverFilesYetServedAndBakedExactly) {
+  ServiceCluster cluster;
+  ASSERT_TRUE(cluster.StartCoordinator());
+  // A 40 x 40 ground under one 1 x 1 square: at 256^2 in 16-pixel tiles, few of the 256 tiles
+  // are reached.
+  const std::string scene = cluster.dir().File("sparse.json");
+  WriteText(scene, R"({
+  "name": "sparse",
+  "meshes": [
+    {"inline": {"positions": [-20,0,-20, 20,0,-20, 20,0,20, -20,0,20], "indices": [0,1,2, 0,2,3]},
+     "role": "RECEIVER_ONLY"},
+    {"inline": {"positions": [-0.5,2,-0.5, 0.5,2,-0.5, 0.5,2,0.5, -0.5,2,0.5],
+                "indices": [0,1,2, 0,2,3]}}
+  ],
+  "light": {"rect": {"center": [0,10,0], "normal": [0,-1,0], "up": [0,0,1], "size": [1,1]}},
+  "bake": {"resolution": [256,256], "samples": 16, "tileSize": 16}
+})");
+  const std::string expected = LocalBakeBytes(cluster.dir(), scene);
+  const std::string job_id = cluster.Submit(scene);
+
+  // No worker yet: only tiles no caster reaches can be finished, and they are at once.
+  pdsm::v1::FinishedTiles finished;
+  for (int attempt = 0; attempt < 100 && finished.tile_indices_size() == 0; ++attempt) {
+    grpc::ClientContext context;
+    PrepareCall(&context, "", seconds(10));
+    pdsm::v1::ListFinishedTilesRequest request;
+    request.set_job_id(job_id);
+    ASSERT_TRUE(cluster.JobsStub()->ListFinishedTiles(&context, request, &finished).ok());
+  }
+  ASSERT_GT(finished.tile_indices_size(), 200) << "the scene should leave most tiles unreached";
+  ASSERT_LT(finished.tile_indices_size(), 256);
+  const pdsm::v1::Job waiting = cluster.WaitUntil(job_id, seconds(60), [&](const pdsm::v1::Job& j) {
+    return j.tiles_done() == finished.tile_indices_size();
+  });
+  EXPECT_EQ(waiting.tiles_done(), finished.tile_indices_size());
+  EXPECT_EQ(TileFiles(cluster, job_id), 0) << "a tile no caster reaches was stored as a file";
+
+  // A client fetching one gets it all lit, made on request.
+  const int unreached = finished.tile_indices(finished.tile_indices_size() / 2);
+  {
+    grpc::ClientContext context;
+    PrepareCall(&context, "", seconds(10));
+    pdsm::v1::FetchTileRequest request;
+    request.set_job_id(job_id);
+    request.set_tile_index(unreached);
+    auto reader = cluster.JobsStub()->FetchTile(&context, request);
+    std::string bytes;
+    pdsm::v1::PdsmChunk chunk;
+    while (reader->Read(&chunk)) bytes += chunk.data();
+    ASSERT_TRUE(reader->Finish().ok());
+    const std::string copy = cluster.dir().File("fetched.tile");
+    WriteText(copy, bytes);
+    absl::StatusOr<PdsmTile> tile = ReadTileFile(copy);
+    ASSERT_TRUE(tile.ok()) << tile.status();
+    EXPECT_TRUE(tile->vertices.empty());
+    EXPECT_EQ(tile->width * tile->height + 1, static_cast<int>(tile->offsets.size()));
+  }
+  EXPECT_EQ(TileFiles(cluster, job_id), 1);
+
+  cluster.AddWorker();
+  const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
+  ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error();
+  EXPECT_EQ(job.tiles_done(), 256);
+  EXPECT_EQ(job.tile_assemblies(), job.tiles_total());  // each tile counted once
+  EXPECT_TRUE(FetchBytes(cluster, job_id) == expected) << "the file differs from pdsm bake's";
+}
+
+}  // namespace
+}  // namespace pdsm::testing
