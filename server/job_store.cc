@@ -508,8 +508,7 @@ absl::Status JobStore::MarkTilesDone(const std::string& job_id, const std::vecto
   return txn.Commit();
 }
 
-absl::Status JobStore::MarkTileUndone(const std::string& job_id, int tile_index) {
-  absl::MutexLock lock(&mu_);
+absl::Status JobStore::CheckJobExists(const std::string& job_id) {
   absl::StatusOr<Statement> exists =
       Statement::Prepare(db_, db_path_, "SELECT 1 FROM jobs WHERE job_id = ?1");
   if (!exists.ok()) return exists.status();
@@ -518,6 +517,12 @@ absl::Status JobStore::MarkTileUndone(const std::string& job_id, int tile_index)
   if (!found.ok()) return found.status();
   if (!*found) return NoSuchJob(job_id);
   exists->Reset();
+  return absl::OkStatus();
+}
+
+absl::Status JobStore::MarkTileUndone(const std::string& job_id, int tile_index) {
+  absl::MutexLock lock(&mu_);
+  if (absl::Status s = CheckJobExists(job_id); !s.ok()) return s;
   absl::StatusOr<Statement> remove = Statement::Prepare(
       db_, db_path_, "DELETE FROM done_tiles WHERE job_id = ?1 AND tile_index = ?2");
   if (!remove.ok()) return remove.status();
@@ -528,14 +533,7 @@ absl::Status JobStore::MarkTileUndone(const std::string& job_id, int tile_index)
 
 absl::StatusOr<std::vector<int>> JobStore::DoneTiles(const std::string& job_id) {
   absl::MutexLock lock(&mu_);
-  absl::StatusOr<Statement> exists =
-      Statement::Prepare(db_, db_path_, "SELECT 1 FROM jobs WHERE job_id = ?1");
-  if (!exists.ok()) return exists.status();
-  exists->BindText(1, job_id);
-  absl::StatusOr<bool> found = exists->Step();
-  if (!found.ok()) return found.status();
-  if (!*found) return NoSuchJob(job_id);
-  exists->Reset();
+  if (absl::Status s = CheckJobExists(job_id); !s.ok()) return s;
 
   absl::StatusOr<Statement> stmt = Statement::Prepare(
       db_, db_path_, "SELECT tile_index FROM done_tiles WHERE job_id = ?1 ORDER BY tile_index ASC");

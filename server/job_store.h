@@ -117,6 +117,8 @@ class JobStore {
 
  private:
   JobStore(sqlite3* db, std::string db_path) : db_(db), db_path_(std::move(db_path)) {}
+  // NOT_FOUND (NoSuchJob) unless the job has a row.
+  absl::Status CheckJobExists(const std::string& job_id) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
 
   absl::Mutex mu_;
   sqlite3* const db_ ABSL_PT_GUARDED_BY(mu_);  // closed by the destructor

@@ -13,6 +13,7 @@
 
 #include "core/pipeline/bake_engine.h"
 #include "core/pipeline/engine_test_support.h"
+#include "core/pipeline/unreached_tile.h"
 
 namespace pdsm {
 namespace {
@@ -28,18 +29,7 @@ using testing::SmallPlan;
 // wrong: every pixel lit. Only comparison with another worker can tell.
 std::vector<TileEvents> AllLit(const BakePlan& plan, const TaskLease& lease) {
   std::vector<TileEvents> out;
-  for (int tile : lease.tiles) {
-    const TileRect& r = plan.tiles.at(tile);
-    TileEvents none{.tile_index = tile,
-                    .x0 = r.x0,
-                    .y0 = r.y0,
-                    .width = r.width,
-                    .height = r.height,
-                    .offsets = {},
-                    .events = {}};
-    none.offsets.assign(none.PixelCount() + 1, 0);
-    out.push_back(std::move(none));
-  }
+  for (int tile : lease.tiles) out.push_back(NoShadowEvents(plan.tiles.at(tile)));
   return out;
 }
 

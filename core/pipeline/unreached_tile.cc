@@ -12,16 +12,20 @@ bool IsUnreachedTile(const BakePlan& plan, int tile_index) {
   return !plan.tile_has_casters.empty() && !plan.tile_has_casters[tile_index];
 }
 
-UnreachedTile MakeUnreachedTile(const BakePlan& plan, int tile_index) {
-  const TileRect& r = plan.tiles[tile_index];
-  TileEvents none{.tile_index = tile_index,
-                  .x0 = r.x0,
-                  .y0 = r.y0,
-                  .width = r.width,
-                  .height = r.height,
+TileEvents NoShadowEvents(const TileRect& rect) {
+  TileEvents none{.tile_index = rect.index,
+                  .x0 = rect.x0,
+                  .y0 = rect.y0,
+                  .width = rect.width,
+                  .height = rect.height,
                   .offsets = {},
                   .events = {}};
   none.offsets.assign(none.PixelCount() + 1, 0);
+  return none;
+}
+
+UnreachedTile MakeUnreachedTile(const BakePlan& plan, int tile_index) {
+  const TileEvents none = NoShadowEvents(plan.tiles[tile_index]);
   std::vector<TileParts> ranges;
   for (size_t k = 0; k < StageRanges(plan.header, 0).size(); ++k) {
     ranges.push_back(TileParts{.in_memory = {none}, .spilled = {}, .shape = none});

@@ -9,6 +9,7 @@
 #include <cstdint>
 
 #include "core/bake/bake_plan.h"
+#include "core/events/event.h"
 #include "core/pdsm/pdsm_image.h"
 
 namespace pdsm {
@@ -16,6 +17,10 @@ namespace pdsm {
 // True when the plan knows that no caster reaches tile `tile_index` (a plan without the
 // per-tile flags reaches every tile). REQUIRES: tile_index in [0, plan.tiles.size()).
 bool IsUnreachedTile(const BakePlan& plan, int tile_index);
+
+// The result a task returns for tile `rect` when no sample shadows any of its rays: every
+// pixel's list empty.
+TileEvents NoShadowEvents(const TileRect& rect);
 
 struct UnreachedTile {
   PdsmTile tile;            // all lit: no vertex

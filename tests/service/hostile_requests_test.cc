@@ -38,19 +38,6 @@ grpc::Status Upload(ServiceCluster& cluster, const std::vector<pdsm::v1::AssetCh
   return writer->Finish();
 }
 
-grpc::Status FetchTile(ServiceCluster& cluster, const std::string& job_id, int index) {
-  grpc::ClientContext context;
-  PrepareCall(&context, "", seconds(10));
-  pdsm::v1::FetchTileRequest request;
-  request.set_job_id(job_id);
-  request.set_tile_index(index);
-  auto reader = cluster.JobsStub()->FetchTile(&context, request);
-  pdsm::v1::PdsmChunk chunk;
-  while (reader->Read(&chunk)) {
-  }
-  return reader->Finish();
-}
-
 TEST(HostileRequests, EchoedInputIsBoundedAndIdsAreChecked) {
   ServiceCluster cluster;
   ASSERT_TRUE(cluster.StartCoordinator());
@@ -166,12 +153,14 @@ TEST(HostileRequests, TileIndicesOutsideTheJobAreInvalidAndHealthIsPerService) {
   ASSERT_FALSE(job_id.empty());
   ASSERT_EQ(cluster.WaitForEnd(job_id).state(), pdsm::v1::SUCCEEDED);
   for (const int index : {-1, INT_MIN, 4, INT_MAX}) {  // 2 x 2 tiles
-    EXPECT_EQ(FetchTile(cluster, job_id, index).error_code(), grpc::StatusCode::INVALID_ARGUMENT)
+    EXPECT_EQ(FetchTileBytes(cluster, job_id, index).error_code(),
+              grpc::StatusCode::INVALID_ARGUMENT)
         << index;
   }
-  EXPECT_EQ(FetchTile(cluster, job_id, 3).error_code(), grpc::StatusCode::FAILED_PRECONDITION)
+  EXPECT_EQ(FetchTileBytes(cluster, job_id, 3).error_code(), grpc::StatusCode::FAILED_PRECONDITION)
       << "a finished job's tiles are not served";
-  EXPECT_EQ(FetchTile(cluster, "0123456789abcdef", 0).error_code(), grpc::StatusCode::NOT_FOUND);
+  EXPECT_EQ(FetchTileBytes(cluster, "0123456789abcdef", 0).error_code(),
+            grpc::StatusCode::NOT_FOUND);
 
   std::string reply;
   for (const std::string service : {"", "pdsm.v1.PdsmJobs", "pdsm.v1.PdsmWorkers"}) {
@@ -194,17 +183,9 @@ TEST(HostileRequests, ForgedResultsAreRefusedAndTheBakeStaysExact) {
   const std::string job_id = cluster.Submit(scene);
   const auto workers = cluster.WorkersStub();
 
-  pdsm::v1::Task task;
-  for (int attempt = 0; attempt < 100 && task.tile_indices_size() == 0; ++attempt) {
-    grpc::ClientContext context;
-    PrepareCall(&context, "", seconds(10));
-    pdsm::v1::LeaseTaskRequest request;
-    request.set_worker_id("forger");
-    pdsm::v1::LeaseTaskResponse response;
-    ASSERT_TRUE(workers->LeaseTask(&context, request, &response).ok());
-    if (response.has_task()) task = response.task();
-  }
-  ASSERT_GT(task.tile_indices_size(), 0) << "no task leased";
+  const std::optional<pdsm::v1::Task> leased = LeaseOneTask(cluster, "forger");
+  ASSERT_TRUE(leased) << "no task leased";
+  const pdsm::v1::Task task = *leased;
   const int batch = task.sample_end() - task.sample_begin();
 
   // One pixel with events, the others none: each tile of the task is 32x32.

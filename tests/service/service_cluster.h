@@ -319,40 +319,84 @@ inline std::string WriteServiceScene(const TempDir& dir, int resolution, int sam
   return path;
 }
 
-// grpc.health.v1.Health/Check for `service` over a generic stub (the health proto is not in
-// our schema): HealthCheckRequest.service is field 1; the reply's status SERVING is 08 01.
-inline grpc::Status HealthCheck(ServiceCluster& cluster, const std::string& service,
-                                std::string* reply) {
-  grpc::GenericStub stub(*MakeChannel({cluster.address(), ""}));
+// A unary call of `method` ("/package.Service/Method") with `body` as the request's bytes,
+// over a generic stub, without a token; its status, and the reply's bytes in `reply` (if not
+// null) when it succeeded.
+inline grpc::Status GenericUnaryCall(grpc::GenericStub& stub, const std::string& method,
+                                     const std::string& body, std::string* reply = nullptr) {
   grpc::ClientContext context;
-  PrepareCall(&context, "", std::chrono::seconds(10));
-  std::string request_bytes;
-  if (!service.empty()) {
-    request_bytes = std::string("\x0a", 1) + static_cast<char>(service.size()) + service;
-  }
-  grpc::Slice slice(request_bytes);
+  PrepareCall(&context, "", std::chrono::seconds(10) * TestTimeScale());
+  grpc::Slice slice(body);
   grpc::ByteBuffer request(&slice, 1), response;
   std::mutex mu;
   std::condition_variable cv;
   bool done = false;
   grpc::Status status;
-  stub.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,
-                 [&](grpc::Status s) {
-                   std::lock_guard<std::mutex> lock(mu);
-                   status = s;
-                   done = true;
-                   cv.notify_one();
-                 });
+  stub.UnaryCall(&context, method, grpc::StubOptions(), &request, &response, [&](grpc::Status s) {
+    std::lock_guard<std::mutex> lock(mu);
+    status = s;
+    done = true;
+    cv.notify_one();
+  });
   std::unique_lock<std::mutex> lock(mu);
   cv.wait(lock, [&] { return done; });
-  std::vector<grpc::Slice> slices;
-  reply->clear();
-  if (status.ok() && response.Dump(&slices).ok()) {
-    for (const grpc::Slice& s : slices) {
-      reply->append(reinterpret_cast<const char*>(s.begin()), s.size());
+  if (reply != nullptr) {
+    reply->clear();
+    std::vector<grpc::Slice> slices;
+    if (status.ok() && response.Dump(&slices).ok()) {
+      for (const grpc::Slice& s : slices) {
+        reply->append(reinterpret_cast<const char*>(s.begin()), s.size());
+      }
     }
   }
   return status;
+}
+
+// grpc.health.v1.Health/Check for `service` over a generic stub (the health proto is not in
+// our schema): HealthCheckRequest.service is field 1; the reply's status SERVING is 08 01.
+inline grpc::Status HealthCheck(ServiceCluster& cluster, const std::string& service,
+                                std::string* reply) {
+  grpc::GenericStub stub(*MakeChannel({cluster.address(), ""}));
+  std::string request_bytes;
+  if (!service.empty()) {
+    request_bytes = std::string("\x0a", 1) + static_cast<char>(service.size()) + service;
+  }
+  return GenericUnaryCall(stub, "/grpc.health.v1.Health/Check", request_bytes, reply);
+}
+
+// A task leased as `worker_id` through the worker API, as a hand-made worker (a forger, a liar)
+// does; asks up to 100 times (the job may not be scheduled yet). nullopt when none came.
+inline std::optional<pdsm::v1::Task> LeaseOneTask(ServiceCluster& cluster,
+                                                  const std::string& worker_id) {
+  const auto workers = cluster.WorkersStub();
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    grpc::ClientContext context;
+    PrepareCall(&context, "", std::chrono::seconds(10));
+    pdsm::v1::LeaseTaskRequest request;
+    request.set_worker_id(worker_id);
+    pdsm::v1::LeaseTaskResponse response;
+    const grpc::Status status = workers->LeaseTask(&context, request, &response);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    if (response.has_task() && response.task().tile_indices_size() > 0) return response.task();
+  }
+  return std::nullopt;
+}
+
+// FetchTile of tile `index` of a one-light job: its status, and the streamed bytes in `bytes`
+// (if not null).
+inline grpc::Status FetchTileBytes(ServiceCluster& cluster, const std::string& job_id, int index,
+                                   std::string* bytes = nullptr) {
+  grpc::ClientContext context;
+  PrepareCall(&context, "", std::chrono::seconds(10));
+  pdsm::v1::FetchTileRequest request;
+  request.set_job_id(job_id);
+  request.set_tile_index(index);
+  auto reader = cluster.JobsStub()->FetchTile(&context, request);
+  pdsm::v1::PdsmChunk chunk;
+  while (reader->Read(&chunk)) {
+    if (bytes != nullptr) *bytes += chunk.data();
+  }
+  return reader->Finish();
 }
 
 inline bool Ended(const pdsm::v1::Job& job) {

@@ -68,16 +68,8 @@ TEST(SparseWorld, TilesNoCasterReachesAreNeverFilesYetServedAndBakedExactly) {
   // A client fetching one gets it all lit, made on request.
   const int unreached = finished.tile_indices(finished.tile_indices_size() / 2);
   {
-    grpc::ClientContext context;
-    PrepareCall(&context, "", seconds(10));
-    pdsm::v1::FetchTileRequest request;
-    request.set_job_id(job_id);
-    request.set_tile_index(unreached);
-    auto reader = cluster.JobsStub()->FetchTile(&context, request);
     std::string bytes;
-    pdsm::v1::PdsmChunk chunk;
-    while (reader->Read(&chunk)) bytes += chunk.data();
-    ASSERT_TRUE(reader->Finish().ok());
+    ASSERT_TRUE(FetchTileBytes(cluster, job_id, unreached, &bytes).ok());
     const std::string copy = cluster.dir().File("fetched.tile");
     WriteText(copy, bytes);
     absl::StatusOr<PdsmTile> tile = ReadTileFile(copy);

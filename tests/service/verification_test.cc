@@ -24,17 +24,9 @@ TEST(Verification, APlausibleLiarIsOutvotedQuarantinedAndTheBakeStaysExact) {
   const auto workers = cluster.WorkersStub();
 
   // The liar takes the first task, so its answer is the one merged.
-  pdsm::v1::Task task;
-  for (int attempt = 0; attempt < 100 && task.tile_indices_size() == 0; ++attempt) {
-    grpc::ClientContext context;
-    PrepareCall(&context, "", seconds(10));
-    pdsm::v1::LeaseTaskRequest request;
-    request.set_worker_id("liar");
-    pdsm::v1::LeaseTaskResponse response;
-    ASSERT_TRUE(workers->LeaseTask(&context, request, &response).ok());
-    if (response.has_task()) task = response.task();
-  }
-  ASSERT_GT(task.tile_indices_size(), 0) << "no task leased";
+  const std::optional<pdsm::v1::Task> leased = LeaseOneTask(cluster, "liar");
+  ASSERT_TRUE(leased) << "no task leased";
+  const pdsm::v1::Task task = *leased;
 
   // Two honest workers join; the liar answers once both are active, so that its result waits
   // for their votes instead of being accepted unverified.
