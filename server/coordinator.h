@@ -117,6 +117,9 @@ class Coordinator {
 
   // ---- Worker API ----
   std::optional<pdsm::v1::Task> LeaseTask(const std::string& worker_id);
+  // Verification outvoted the worker: it gets no task again (WorkersService answers its
+  // LeaseTask PERMISSION_DENIED, so that a pdsm-worker exits saying why).
+  bool Quarantined(const std::string& worker_id) { return engine_.Quarantined(worker_id); }
   // The lease's length in ms. FAILED_PRECONDITION when the lease is not current.
   absl::StatusOr<int64_t> ExtendLease(const std::string& worker_id, uint64_t lease_id);
   // `tiles`: one per tile of the task, in its order. False when the result was dropped (late,

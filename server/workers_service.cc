@@ -68,6 +68,15 @@ grpc::ServerUnaryReactor* WorkersService::LeaseTask(grpc::CallbackServerContext*
     return Answer(context, s);
   }
   if (absl::Status s = CheckWorkerId(request->worker_id()); !s.ok()) return Answer(context, s);
+  if (coordinator_->Quarantined(request->worker_id())) {
+    // Not retryable: the worker exits with this line instead of idling on its allocation.
+    return Answer(context,
+                  grpc::Status(grpc::StatusCode::PERMISSION_DENIED,
+                               "this worker was quarantined: verification found its results "
+                               "differ from two other workers' for the same task (the "
+                               "coordinator's log says which); check the machine (memory, GPU "
+                               "driver, build) before starting a worker on it again"));
+  }
   std::optional<pdsm::v1::Task> task = coordinator_->LeaseTask(request->worker_id());
   if (task) {
     *response->mutable_task() = *std::move(task);

@@ -8,6 +8,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "core/assets/mesh_asset.h"
 #include "core/bake/plan_fingerprint.h"
@@ -45,6 +46,10 @@ void SleepUnless(std::chrono::milliseconds duration, const Stopping& stopping) {
 std::string Remedy(const absl::Status& status) {
   if (absl::IsUnimplemented(status)) {
     return "the coordinator does not speak this worker's API: run the same pdsm release on both";
+  }
+  // Verification outvoted this worker (docs/service.md): the token is fine, the machine is not.
+  if (absl::IsPermissionDenied(status) && absl::StrContains(status.message(), "quarantined")) {
+    return "do not restart it on this machine before the check the coordinator asks for";
   }
   return "check --token-file: it must hold the coordinator's worker token "
          "(its --worker-token-file)";

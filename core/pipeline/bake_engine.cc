@@ -751,6 +751,11 @@ void BakeEngine::SignOff(const std::string& worker_id) {
   scheduler_.SignOff(worker_id);
 }
 
+bool BakeEngine::Quarantined(const std::string& worker_id) const {
+  absl::MutexLock lock(&mu_);
+  return scheduler_.Quarantined(worker_id);
+}
+
 void BakeEngine::Tick() {
   std::vector<std::pair<JobPtr, std::string>> failed;
   std::vector<std::tuple<JobPtr, int, OpenGroupPtr>> completed;

@@ -200,6 +200,9 @@ class BakeEngine {
   // The worker is leaving: no longer active (Scheduler::SignOff).
   void SignOff(const std::string& worker_id);
 
+  // Verification has outvoted the worker (Scheduler::Quarantined).
+  bool Quarantined(const std::string& worker_id) const;
+
   // Expires overdue leases and fails jobs no active worker can run (Scheduler::Tick).
   void Tick();
 

@@ -67,6 +67,16 @@ TEST(Verification, APlausibleLiarIsOutvotedQuarantinedAndTheBakeStaysExact) {
   EXPECT_NE(cluster.Log("coordinator.log").find("worker liar quarantined by verification"),
             std::string::npos)
       << cluster.Log("coordinator.log");
+  // Asking for more work is refused in a way a pdsm-worker does not retry: it exits saying why.
+  grpc::ClientContext context;
+  PrepareCall(&context, "", seconds(10));
+  pdsm::v1::LeaseTaskRequest request;
+  request.set_worker_id("liar");
+  pdsm::v1::LeaseTaskResponse response;
+  const grpc::Status refused = workers->LeaseTask(&context, request, &response);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::PERMISSION_DENIED);
+  EXPECT_NE(refused.error_message().find("quarantined"), std::string::npos)
+      << refused.error_message();
 }
 
 }  // namespace
