@@ -8,6 +8,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/scene/scene_loader.h"
+#include "core/util/malloc_arenas.h"
 #include "rpc/tile_events_codec.h"
 
 namespace pdsm {
@@ -64,6 +65,7 @@ Coordinator::Coordinator(const CoordinatorOptions& options)
       query_cache_(options.query_cache_bytes),
       started_ms_(SteadyNowMs()),
       engine_(MakeEngineOptions(options, &pool_)),
+      budget_(options.limits.max_planned_bytes),
       // The ticker holds one thread for good; the others assemble.
       pool_(std::max(1, options.assembly_threads) + 1) {}
 
@@ -108,39 +110,60 @@ absl::StatusOr<pdsm::v1::Job> Coordinator::SubmitBake(const pdsm::v1::SubmitBake
   absl::StatusOr<JobRecord> stored = store_->CreateJob(*record, &created);
   if (!stored.ok()) return stored.status();
   if (created) {
+    const int64_t bytes = JobHeldBytes(*plans, request.scene());
+    const double mib = static_cast<double>(bytes) / (1 << 20);
     if (plans->size() == 1) {
-      spdlog::info("job {}: submitted \"{}\", {}x{}, {} samples, {} tiles, priority {}",
-                   stored->job_id, stored->scene_name, stored->width, stored->height,
-                   stored->samples, stored->tiles_total, stored->priority);
+      spdlog::info(
+          "job {}: submitted \"{}\", {}x{}, {} samples, {} tiles, priority {}, plans {:.1f} MiB",
+          stored->job_id, stored->scene_name, stored->width, stored->height, stored->samples,
+          stored->tiles_total, stored->priority, mib);
     } else {
-      spdlog::info("job {}: submitted \"{}\", {} lights, {} tiles, priority {}", stored->job_id,
-                   stored->scene_name, plans->size(), stored->tiles_total, stored->priority);
+      spdlog::info("job {}: submitted \"{}\", {} lights, {} tiles, priority {}, plans {:.1f} MiB",
+                   stored->job_id, stored->scene_name, plans->size(), stored->tiles_total,
+                   stored->priority, mib);
     }
-    if (absl::Status s = Activate(*stored, {}, *std::move(plans)); !s.ok()) return s;
+    if (budget_.Admit({.job_id = stored->job_id,
+                       .priority = stored->priority,
+                       .sequence = stored->sequence,
+                       .bytes = bytes})) {
+      if (absl::Status s = ActivateCounted(*stored, {}, *std::move(plans)); !s.ok()) return s;
+    } else {
+      // Its plans are dropped here: it is planned again when its turn comes.
+      spdlog::info("job {}: {}", stored->job_id, budget_.WaitingReason(stored->job_id));
+    }
   }
   return GetJob(stored->job_id);
 }
 
 void Coordinator::SubmitBakeAsync(const pdsm::v1::SubmitBakeRequest* request,
                                   std::function<void(absl::StatusOr<pdsm::v1::Job>)> done) {
-  admission_.Post([this, request, done = std::move(done)] { done(SubmitBake(*request)); });
+  admission_.Post([this, request, done = std::move(done)] {
+    done(SubmitBake(*request));
+    // Planning allocates the scene's meshes and each light's geometry, then frees them.
+    ReturnFreeHeapToSystem();
+  });
+}
+
+absl::Status Coordinator::ActivateCounted(const JobRecord& record,
+                                          const std::vector<int>& done_tiles,
+                                          std::vector<PlannedLight> plans) {
+  if (absl::Status s = Activate(record, done_tiles, std::move(plans)); !s.ok()) {
+    budget_.Release(record.job_id);
+    return s;
+  }
+  if (budget_.Activated(record.job_id)) CancelRunning(record.job_id);
+  return absl::OkStatus();
 }
 
 absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<int>& done_tiles,
-                                   std::optional<std::vector<PlannedLight>> plans) {
+                                   std::vector<PlannedLight> plans) {
   pdsm::v1::Scene scene;
   if (!scene.ParseFromString(record.scene)) {
     return absl::DataLossError(absl::StrCat("job ", record.job_id, ": stored scene is corrupt"));
   }
-  if (!plans) {
-    absl::StatusOr<std::vector<PlannedLight>> planned =
-        PlanJobLights(scene, absl::StrCat("job ", record.job_id), *assets_, nullptr);
-    if (!planned.ok()) return planned.status();
-    plans = *std::move(planned);
-  }
   const std::string job_id = record.job_id;
   auto job = std::make_shared<StoredJob>(
-      store_.get(), options_.data_dir, record, std::move(scene), *std::move(plans),
+      store_.get(), options_.data_dir, record, std::move(scene), std::move(plans),
       [this](const std::string& id) { Forget(id); },
       [this, job_id](const absl::Status& why) { EndLights(job_id, why); }, options_.fs);
   {
@@ -184,23 +207,68 @@ absl::Status Coordinator::Resume() {
   absl::StatusOr<std::vector<JobRecord>> jobs = store_->UnfinishedJobs();
   if (!jobs.ok()) return jobs.status();
   for (const JobRecord& record : *jobs) {
-    absl::StatusOr<std::vector<int>> done = store_->DoneTiles(record.job_id);
-    if (!done.ok()) return done.status();
-    if (absl::Status s = Activate(record, *done, std::nullopt); !s.ok()) {
-      // One unreadable job must not keep the others from resuming.
-      spdlog::error("job {}: cannot resume: {}", record.job_id, std::string(s.message()));
-      if (absl::Status f =
-              store_->SetState(record.job_id, pdsm::v1::FAILED,
-                               absl::StrCat("cannot resume: ", s.message()), UnixNowMs());
-          !f.ok()) {
-        return f;
-      }
+    budget_.Enqueue({.job_id = record.job_id,
+                     .priority = record.priority,
+                     .sequence = record.sequence,
+                     .bytes = -1});
+  }
+  ActivateWaiting();
+  ReturnFreeHeapToSystem();
+  return absl::OkStatus();
+}
+
+void Coordinator::ActivateWaiting() {
+  while (const std::optional<PlanBudget::Entry> next = budget_.TakeNext()) {
+    const std::string& job_id = next->job_id;
+    const std::string label = absl::StrCat("job ", job_id);
+    absl::StatusOr<JobRecord> record = store_->GetJob(job_id);
+    if (!record.ok() || IsTerminal(record->state)) {
+      budget_.Release(job_id);
       continue;
     }
-    spdlog::info("job {}: resumed with {} of {} tiles done", record.job_id, done->size(),
-                 record.tiles_total);
+    pdsm::v1::Scene scene;
+    absl::StatusOr<std::vector<PlannedLight>> plans =
+        scene.ParseFromString(record->scene)
+            ? PlanJobLights(scene, label, *assets_, nullptr)
+            : absl::DataLossError(absl::StrCat(label, ": stored scene is corrupt"));
+    absl::StatusOr<std::vector<int>> done = plans.ok() ? store_->DoneTiles(job_id) : plans.status();
+    if (!done.ok()) {
+      // One job that cannot be planned must not keep the others waiting.
+      spdlog::error("job {}: cannot be planned: {}", job_id, std::string(done.status().message()));
+      budget_.Release(job_id);
+      EndUnstarted(job_id, pdsm::v1::FAILED,
+                   absl::Status(done.status().code(),
+                                absl::StrCat("cannot be planned: ", done.status().message())));
+      continue;
+    }
+    switch (budget_.Planned(job_id, JobHeldBytes(*plans, scene))) {
+      case PlanBudget::Verdict::kWait:
+        spdlog::info("job {}: {}", job_id, budget_.WaitingReason(job_id));
+        return;
+      case PlanBudget::Verdict::kCancelled:
+        EndUnstarted(job_id, pdsm::v1::CANCELLED, absl::CancelledError("cancelled by request"));
+        continue;
+      case PlanBudget::Verdict::kActivate:
+        break;
+    }
+    if (absl::Status s = ActivateCounted(*record, *done, *std::move(plans)); !s.ok()) {
+      spdlog::error("job {}: cannot start: {}", job_id, std::string(s.message()));
+      EndUnstarted(job_id, pdsm::v1::FAILED,
+                   absl::Status(s.code(), absl::StrCat("cannot start: ", s.message())));
+      continue;
+    }
+    spdlog::info("job {}: running with {} of {} tiles done", job_id, done->size(),
+                 record->tiles_total);
   }
-  return absl::OkStatus();
+}
+
+void Coordinator::EndUnstarted(const std::string& job_id, pdsm::v1::JobState state,
+                               const absl::Status& why) {
+  if (absl::Status s = store_->SetState(job_id, state, std::string(why.message()), UnixNowMs());
+      !s.ok()) {
+    spdlog::error("job {}: cannot record it {}: {}", job_id, pdsm::v1::JobState_Name(state),
+                  std::string(s.message()));
+  }
 }
 
 std::shared_ptr<StoredJob> Coordinator::Active(const std::string& job_id) const {
@@ -210,25 +278,48 @@ std::shared_ptr<StoredJob> Coordinator::Active(const std::string& job_id) const 
 }
 
 void Coordinator::Forget(const std::string& job_id) {
-  absl::MutexLock lock(&mu_);
-  active_.erase(job_id);
+  {
+    absl::MutexLock lock(&mu_);
+    active_.erase(job_id);
+  }
+  budget_.Release(job_id);
+  // Planning is heavy: on the admission thread, one plan at a time, as submits are.
+  if (budget_.HasWaiting()) {
+    admission_.Post([this] {
+      ActivateWaiting();
+      ReturnFreeHeapToSystem();
+    });
+  }
 }
 
 absl::StatusOr<pdsm::v1::Job> Coordinator::CancelJob(const std::string& job_id) {
   absl::StatusOr<JobRecord> record = store_->GetJob(job_id);
   if (!record.ok()) return record.status();
   if (!IsTerminal(record->state)) {
-    const absl::Status why = absl::CancelledError("cancelled by request");
-    const std::shared_ptr<StoredJob> job = Active(job_id);
-    if (job) {
-      bool cancelled = false;
-      for (const JobLight& light : job->lights()) {
-        cancelled = engine_.Cancel(light.engine_id, why) || cancelled;
-      }
-      if (cancelled) job->RecordEnd(JobEnd::kCancelled, why);
+    switch (budget_.Cancel(job_id)) {
+      case PlanBudget::CancelOutcome::kWasWaiting:
+        spdlog::info("job {}: CANCELLED while it waited", job_id);
+        EndUnstarted(job_id, pdsm::v1::CANCELLED, absl::CancelledError("cancelled by request"));
+        break;
+      case PlanBudget::CancelOutcome::kActivating:
+        break;  // whoever is activating it cancels it (ActivateCounted, ActivateWaiting)
+      case PlanBudget::CancelOutcome::kNotHere:
+        CancelRunning(job_id);
+        break;
     }
   }
   return GetJob(job_id);
+}
+
+void Coordinator::CancelRunning(const std::string& job_id) {
+  const std::shared_ptr<StoredJob> job = Active(job_id);
+  if (!job) return;
+  const absl::Status why = absl::CancelledError("cancelled by request");
+  bool cancelled = false;
+  for (const JobLight& light : job->lights()) {
+    cancelled = engine_.Cancel(light.engine_id, why) || cancelled;
+  }
+  if (cancelled) job->RecordEnd(JobEnd::kCancelled, why);
 }
 
 // ---- Job views -------------------------------------------------------------------------
@@ -336,17 +427,21 @@ pdsm::v1::Job Coordinator::ToProto(const JobRecord& record) const {
   job.set_height(record.height);
   job.set_samples(record.samples);
   job.set_eta_seconds(record.state == pdsm::v1::SUCCEEDED ? 0 : -1);
-  // What a viewer needs to plan the job's PDSM itself (ListJobs' records carry no scene).
+  // Each light's size and settings, and the first's as the job's: what a viewer needs to plan
+  // the job's PDSM itself (ListJobs' records carry no scene).
+  absl::StatusOr<std::vector<JobLightSize>> sizes = absl::NotFoundError("no scene");
   if (!record.scene.empty()) {
-    absl::StatusOr<pdsm::v1::BakeParams> bake =
-        JobBakeParams(record.scene, absl::StrCat("job ", record.job_id));
-    if (bake.ok()) {
-      *job.mutable_bake() = *std::move(bake);
+    sizes = JobLightSizes(record.scene, absl::StrCat("job ", record.job_id));
+    if (sizes.ok()) {
+      *job.mutable_bake() = sizes->at(0).bake;
     } else {
-      spdlog::warn("{}", std::string(bake.status().message()));
+      spdlog::warn("{}", std::string(sizes.status().message()));
     }
   }
   const std::shared_ptr<StoredJob> active = Active(record.job_id);
+  if (!active && record.state == pdsm::v1::QUEUED) {
+    job.set_queued_reason(budget_.WaitingReason(record.job_id));
+  }
   if (active && !active->ended()) job.set_plan_fingerprint(active->fingerprint());
   std::vector<std::optional<JobProgress>> light_progress;
   if (active && !IsTerminal(record.state)) {
@@ -364,15 +459,7 @@ pdsm::v1::Job Coordinator::ToProto(const JobRecord& record) const {
     }
   }
   // Each light (GetJob and WatchJob: ListJobs' records carry no scene to size them from).
-  if (!record.scene.empty()) {
-    absl::StatusOr<std::vector<JobLightSize>> sizes =
-        JobLightSizes(record.scene, absl::StrCat("job ", record.job_id));
-    if (sizes.ok()) {
-      AddLightsProgress(record, *sizes, active.get(), light_progress, &job);
-    } else {
-      spdlog::warn("{}", std::string(sizes.status().message()));
-    }
-  }
+  if (sizes.ok()) AddLightsProgress(record, *sizes, active.get(), light_progress, &job);
   job.set_progress(job.samples_total() > 0
                        ? static_cast<double>(job.samples_done()) / job.samples_total()
                        : (job.state() == pdsm::v1::SUCCEEDED ? 1.0 : 0.0));
@@ -480,6 +567,10 @@ CoordinatorMetrics Coordinator::Metrics() {
   m.engine.jobs_started = m.engine.jobs_waiting = 0;
   CountActiveJobs(&m.engine.jobs_started, &m.engine.jobs_waiting, &m.job_progress);
   m.uptime_seconds = static_cast<double>(SteadyNowMs() - started_ms_) / 1000.0;
+  const PlanBudget::Usage planned = budget_.usage();
+  m.planned_bytes = planned.held_bytes;
+  m.max_planned_bytes = planned.limit_bytes;
+  m.jobs_waiting_for_memory = planned.jobs_waiting;
   return m;
 }
 
@@ -507,8 +598,12 @@ pdsm::v1::Stats Coordinator::GetStats() {
   pdsm::v1::Stats stats;
   int started = 0, waiting = 0;
   CountActiveJobs(&started, &waiting, nullptr);
+  const PlanBudget::Usage planned = budget_.usage();
   stats.set_jobs_running(started);
-  stats.set_jobs_queued(waiting);
+  stats.set_jobs_queued(waiting + planned.jobs_waiting);
+  stats.set_jobs_waiting_for_memory(planned.jobs_waiting);
+  stats.set_planned_bytes(planned.held_bytes);
+  stats.set_max_planned_bytes(planned.limit_bytes);
   stats.set_tasks_pending(s.scheduler.tasks_pending);
   stats.set_tasks_leased(s.scheduler.tasks_leased);
   stats.set_tiles_in_flight(s.scheduler.tiles_open);

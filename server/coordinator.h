@@ -7,6 +7,7 @@
 //   stored_job.h         where a running job's tiles and PDSM go (DATA_DIR/jobs/<id>/)
 //   coordinator_assets.h uploaded mesh blobs (DATA_DIR/assets/)
 //   query_cache.h        the PDSM QueryAttenuation reads
+//   plan_budget.h        which jobs hold their plans in memory, which wait for it
 // On start every unfinished job found in the data dir resumes with only its missing tiles.
 //
 // Thread-safe. Heavy work (tile assembly, the final file) runs on an internal pool, never on
@@ -44,6 +45,7 @@
 #include "server/job_admission.h"
 #include "server/job_lights.h"
 #include "server/job_store.h"
+#include "server/plan_budget.h"
 #include "server/query_cache.h"
 #include "server/stored_job.h"
 
@@ -141,14 +143,26 @@ class Coordinator {
 
  private:
   explicit Coordinator(const CoordinatorOptions& options);
+  // Every unfinished job of the data dir waits its turn (budget_), and the turns that fit
+  // are taken at once.
   absl::Status Resume();
-  // Hands the job to the engine. `plan`: the job's plan when the caller has it (a new job);
-  // otherwise planned from the record's scene.
   // Hands the job's lights to the engine, one engine job each (server/job_lights.h).
-  // `plans`: the job's plans when the caller has them (a new job); otherwise planned from the
-  // record's scene. `done_tiles`: the job's (not a light's) tiles stored already, ascending.
+  // `plans`: the job's plans (counted in budget_). `done_tiles`: the job's (not a light's)
+  // tiles stored already, ascending.
   absl::Status Activate(const JobRecord& record, const std::vector<int>& done_tiles,
-                        std::optional<std::vector<PlannedLight>> plans);
+                        std::vector<PlannedLight> plans);
+  // Activate for a job budget_ counts as activating; then cancels it if a cancel came
+  // meanwhile. On failure the job holds nothing.
+  absl::Status ActivateCounted(const JobRecord& record, const std::vector<int>& done_tiles,
+                               std::vector<PlannedLight> plans);
+  // Plans and activates waiting jobs while their turns fit (PlanBudget::TakeNext). A job that
+  // cannot be planned or activated FAILS (its error says why); the others go on. On the
+  // admission thread (or in Start, before it serves).
+  void ActivateWaiting();
+  // Records a job that never ran as ended (CANCELLED or FAILED) with `why`.
+  void EndUnstarted(const std::string& job_id, pdsm::v1::JobState state, const absl::Status& why);
+  // Cancels the job's lights in the engine (a cancel by request).
+  void CancelRunning(const std::string& job_id);
   // Ends every light of the job still in the engine as failed with `why`.
   void EndLights(const std::string& job_id, const absl::Status& why);
   std::shared_ptr<StoredJob> Active(const std::string& job_id) const;
@@ -187,6 +201,9 @@ class Coordinator {
   Histogram task_seconds_{SecondsBuckets()};  // of accepted results
   mutable absl::Mutex mu_;
   std::map<std::string, std::shared_ptr<StoredJob>> active_ ABSL_GUARDED_BY(mu_);
+  // Which jobs hold their plans, which wait for memory (--max-planned-mib). Every job of
+  // active_ is counted in it, from before its activation to Forget.
+  PlanBudget budget_;
   absl::Notification stopping_;
   // Declared last: destroyed (stopped, joined) first, while what its work uses still exists.
   // Runs the ticker and the engine's heavy work.

@@ -40,6 +40,7 @@ struct Flags {
   int64_t event_memory_mib = kDefaultEventMemoryBudget >> 20;
   int64_t query_cache_mib = kDefaultTileCacheBytes >> 20;
   int max_message_bytes = kDefaultMaxMessageBytes;
+  int64_t max_planned_mib = pdsm::kDefaultMaxPlannedBytes >> 20;
   CoordinatorOptions options;
 };
 
@@ -121,6 +122,7 @@ int Run(Flags& flags, const sigset_t& signals) {
       return 2;
     }
   }
+  flags.options.limits.max_planned_bytes = flags.max_planned_mib << 20;
   absl::StatusOr<std::unique_ptr<Coordinator>> coordinator = Coordinator::Start(flags.options);
   if (!coordinator.ok()) {
     spdlog::error("{}", std::string(coordinator.status().message()));
@@ -276,6 +278,12 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--max-triangles", o.limits.max_triangles, "Most triangles per job")
       ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--max-planned-mib", flags.max_planned_mib,
+                 "Memory the plans of the jobs this coordinator runs may hold (tiles, groups, "
+                 "surfaces-only receivers): a job needing more alone is refused, one that does "
+                 "not fit beside the running ones waits QUEUED")
+      ->check(CLI::Range(int64_t{1}, int64_t{1} << 30))
       ->capture_default_str();
   app.add_option("--max-asset-bytes", o.max_asset_bytes, "Largest mesh asset")
       ->check(CLI::PositiveNumber)

@@ -39,6 +39,15 @@ std::string RenderCoordinatorMetrics(const CoordinatorMetrics& m) {
             "(job, worker) pairs of jobs in progress where the worker plans the job differently "
             "(another build).",
             s.workers_incompatible);
+  out.Gauge("pdsm_planned_bytes",
+            "Bytes the plans of the running jobs hold (tiles, groups, samples, surfaces-only "
+            "receivers, the engine's per-tile records, scenes).",
+            static_cast<double>(m.planned_bytes));
+  out.Gauge("pdsm_planned_bytes_limit", "--max-planned-mib, in bytes.",
+            static_cast<double>(m.max_planned_bytes));
+  out.Gauge("pdsm_jobs_waiting_for_memory",
+            "Jobs QUEUED without their plans until these fit beside the running jobs'.",
+            m.jobs_waiting_for_memory);
   out.Gauge("pdsm_workers_quarantined",
             "Workers verification outvoted since the coordinator started; they get no tasks.",
             s.workers_quarantined);

@@ -23,6 +23,11 @@ struct CoordinatorMetrics {
   Histogram::Snapshot task_seconds;  // worker-reported seconds of accepted results
   std::vector<std::pair<std::string, double>> job_progress;  // jobs in progress: id, [0, 1]
   double uptime_seconds = 0;
+  // --max-planned-mib (server/plan_budget.h): held by the jobs running, the limit, and the
+  // jobs waiting until theirs fit.
+  int64_t planned_bytes = 0;
+  int64_t max_planned_bytes = 0;
+  int jobs_waiting_for_memory = 0;
 };
 
 // The Prometheus text of `m` (metric names: docs/service.md, "Metrics").

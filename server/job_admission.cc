@@ -11,6 +11,8 @@
 #include "absl/strings/str_format.h"
 #include "absl/synchronization/mutex.h"
 #include "core/bake/plan_fingerprint.h"
+#include "core/bake/plan_memory.h"
+#include "core/pipeline/bake_engine.h"
 #include "core/scene/scene.h"
 #include "core/scene/scene_loader.h"
 
@@ -94,7 +96,57 @@ absl::StatusOr<pdsm::v1::Scene> ReadSceneLights(const std::string& serialized_sc
   return scene;
 }
 
+int64_t SceneHeldBytes(const pdsm::v1::Scene& scene) {
+  // Parsed (StoredJob::scene) and serialized (JobRecord::scene).
+  return static_cast<int64_t>(scene.SpaceUsedLong() + scene.ByteSizeLong());
+}
+
+// What a light of this plan holds (JobHeldBytes without the scene).
+int64_t LightHeldBytes(const BakePlan& plan) {
+  return PlanHeldBytes(plan) + BakeEngine::JobHeldBytes(static_cast<int64_t>(plan.tiles.size()),
+                                                        static_cast<int64_t>(plan.groups.size()));
+}
+
+absl::Status PlannedBytesError(const std::string& label, const char* what, int64_t bytes,
+                               int64_t max_bytes, bool surfaces_only) {
+  return absl::ResourceExhaustedError(absl::StrFormat(
+      "%s: its plans %s %.1f MiB in this coordinator, above its limit of %.1f MiB "
+      "(--max-planned-mib): fewer tiles (a larger bake.tileSize)%s, or fewer lights per job",
+      label, what, static_cast<double>(bytes) / double{1 << 20},
+      static_cast<double>(max_bytes) / double{1 << 20},
+      surfaces_only ? ", bake.surfacesOnly off (it keeps the receivers for every light)" : ""));
+}
+
+// Within `max_bytes`: a lower bound of the job's JobHeldBytes, from its lights' settings and
+// its receiving meshes' sizes, before anything is planned. (PlanJobLights checks the exact
+// bytes as it plans.)
+absl::Status CheckMinPlannedBytes(const pdsm::v1::Scene& scene, const Scene& loaded,
+                                  const std::string& label, int64_t max_bytes) {
+  int64_t receiver_vertices = 0, receiver_triangles = 0;
+  for (const TriangleMesh& m : loaded.meshes) {
+    if (!Receives(m.role)) continue;
+    receiver_vertices += static_cast<int64_t>(m.positions_world.size());
+    receiver_triangles += static_cast<int64_t>(m.indices.size() / 3);
+  }
+  int64_t bytes = SceneHeldBytes(scene);
+  bool surfaces_only = false;
+  for (size_t i = 0; i < loaded.LightCount(); ++i) {
+    const BakeSettings bake = LightOf(loaded, i).bake;
+    surfaces_only = surfaces_only || bake.surfaces_only;
+    bytes += MinReleasedPlanBytes(bake, receiver_vertices, receiver_triangles) +
+             BakeEngine::JobHeldBytes(TileCount(bake), /*groups=*/1);
+  }
+  if (bytes <= max_bytes) return absl::OkStatus();
+  return PlannedBytesError(label, "would hold at least", bytes, max_bytes, surfaces_only);
+}
+
 }  // namespace
+
+int64_t JobHeldBytes(const std::vector<PlannedLight>& plans, const pdsm::v1::Scene& scene) {
+  int64_t bytes = SceneHeldBytes(scene);
+  for (const PlannedLight& light : plans) bytes += LightHeldBytes(*light.plan);
+  return bytes;
+}
 
 absl::StatusOr<std::vector<PlannedLight>> PlanJobLights(const pdsm::v1::Scene& scene,
                                                         const std::string& label,
@@ -135,9 +187,14 @@ absl::StatusOr<std::vector<PlannedLight>> PlanJobLights(const pdsm::v1::Scene& s
           absl::StrFormat("%s: meshes: %d triangles, above this coordinator's limit of %d", label,
                           triangles, limits->max_triangles));
     }
+    if (absl::Status s = CheckMinPlannedBytes(scene, *loaded, label, limits->max_planned_bytes);
+        !s.ok()) {
+      return s;
+    }
   }
   std::vector<PlannedLight> plans;
   plans.reserve(count);
+  int64_t held_bytes = SceneHeldBytes(scene);
   for (size_t i = 0; i < count; ++i) {
     // A one-light scene is planned as it stands (its light may have no name).
     const Scene one = count == 1 ? *std::move(loaded) : ForLight(*loaded, i);
@@ -145,6 +202,11 @@ absl::StatusOr<std::vector<PlannedLight>> PlanJobLights(const pdsm::v1::Scene& s
     if (!plan.ok()) return plan.status();
     std::string fingerprint = PlanFingerprint(*plan);
     ReleaseRenderGeometry(&*plan);
+    held_bytes += LightHeldBytes(*plan);
+    if (limits != nullptr && held_bytes > limits->max_planned_bytes) {
+      return PlannedBytesError(label, count == 1 ? "hold" : "hold (with the lights before it)",
+                               held_bytes, limits->max_planned_bytes, one.bake.surfaces_only);
+    }
     plans.push_back(
         PlannedLight{std::make_shared<const BakePlan>(*std::move(plan)), std::move(fingerprint)});
   }
@@ -173,13 +235,6 @@ absl::StatusOr<JobRecord> NewJobRecord(const pdsm::v1::SubmitBakeRequest& reques
     return absl::InternalError("cannot serialize the scene");
   }
   return record;
-}
-
-absl::StatusOr<pdsm::v1::BakeParams> JobBakeParams(const std::string& serialized_scene,
-                                                   const std::string& label) {
-  absl::StatusOr<pdsm::v1::Scene> scene = ReadSceneLights(serialized_scene, label);
-  if (!scene.ok()) return scene.status();
-  return EffectiveBakeParams(*scene, label);
 }
 
 absl::StatusOr<std::vector<JobLightSize>> JobLightSizes(const std::string& serialized_scene,

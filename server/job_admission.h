@@ -18,6 +18,9 @@
 
 namespace pdsm {
 
+// 4 GiB: a 10^6-triangle world of 55 lights holds ~340 MiB, a job of 2^18 tiles ~15 MiB.
+inline constexpr int64_t kDefaultMaxPlannedBytes = int64_t{4096} << 20;
+
 struct AdmissionLimits {
   int64_t max_job_pixels = int64_t{8192} * 8192;
   // Tiles are the unit of the plan, the job store and the tile files: checked before the plan
@@ -26,6 +29,10 @@ struct AdmissionLimits {
   int64_t max_job_tiles = int64_t{1} << 18;
   int max_samples = 65536;
   int64_t max_triangles = 20'000'000;
+  // What the plans of all the jobs the coordinator runs may hold (JobHeldBytes): a job whose
+  // plans alone exceed it is refused (PlanJobLights); one that does not fit beside the running
+  // jobs' waits (server/plan_budget.h).
+  int64_t max_planned_bytes = kDefaultMaxPlannedBytes;
 };
 
 // INVALID_ARGUMENT naming the field: the idempotency key (1 to 128 printable ASCII
@@ -34,8 +41,10 @@ absl::Status CheckSubmitRequest(const pdsm::v1::SubmitBakeRequest& request);
 
 // Loads `scene` (meshes from `assets`) and plans each of its lights as the local bake does
 // (the scene baking that light alone), in scene order; `label` prefixes errors. `limits`
-// null: none are checked; else each light within them, and the tiles of all the lights
-// together within max_job_tiles (the job store's unit). Each plan is fingerprinted and then
+// null: none are checked; else each light within them, and before anything is planned the
+// tiles of all the lights together within max_job_tiles (the job store's unit) and a lower
+// bound of JobHeldBytes (core/bake/plan_memory.h) within max_planned_bytes, then, as the
+// lights are planned, JobHeldBytes itself. Each plan is fingerprinted and then
 // released of its render geometry as soon as it is made, so that planning a world of many
 // lights never holds more than one light's geometry besides the scene.
 absl::StatusOr<std::vector<PlannedLight>> PlanJobLights(const pdsm::v1::Scene& scene,
@@ -43,21 +52,21 @@ absl::StatusOr<std::vector<PlannedLight>> PlanJobLights(const pdsm::v1::Scene& s
                                                         const CoordinatorAssets& assets,
                                                         const AdmissionLimits* limits);
 
+// What a job of these plans holds in the coordinator while it runs, in bytes: its plans
+// (core/bake/plan_memory.h), the engine's records of their tiles (BakeEngine::JobHeldBytes)
+// and its scene, parsed and serialized. What --max-planned-mib counts.
+int64_t JobHeldBytes(const std::vector<PlannedLight>& plans, const pdsm::v1::Scene& scene);
+
 // The record of a new job: a fresh random id, QUEUED, its tiles and samples summed over the
 // lights (`plans`, one per light in scene order; width, height and samples the first's), the
 // scene serialized.
 absl::StatusOr<JobRecord> NewJobRecord(const pdsm::v1::SubmitBakeRequest& request,
                                        const std::vector<PlannedLight>& plans, int64_t now_unix_ms);
 
-// The effective bake settings (EffectiveBakeParams, core/scene/scene_loader.h) of a job's
-// stored scene (of its first light), read from its serialized bytes without parsing the
-// meshes. DATA_LOSS when the bytes are not a scene; INVALID_ARGUMENT (prefixed with `label`)
-// for bake fields the loader refuses.
-absl::StatusOr<pdsm::v1::BakeParams> JobBakeParams(const std::string& serialized_scene,
-                                                   const std::string& label);
-
-// Each light of a job's stored scene, in scene order, as its plan sizes it, from the same
-// partial read as JobBakeParams (no meshes, no planning) and with its errors.
+// Each light of a job's stored scene, in scene order, as its plan sizes it, with its effective
+// bake settings (EffectiveBakeParams, core/scene/scene_loader.h), read from the serialized
+// bytes without parsing the meshes (no planning). DATA_LOSS when the bytes are not a scene;
+// INVALID_ARGUMENT (prefixed with `label`) for bake fields the loader refuses.
 struct JobLightSize {
   std::string name;  // "" for the light of a one-light scene that has none
   int width = 0, height = 0, samples = 0;

@@ -53,6 +53,7 @@ void PrintJob(const pdsm::v1::Job& job) {
     std::printf("\n  %dx%d, %d samples, priority %d, submitted %s\n", job.width(), job.height(),
                 job.samples(), job.priority(), LocalTime(job.created_unix_ms()).c_str());
   }
+  if (!job.queued_reason().empty()) std::printf("  %s\n", job.queued_reason().c_str());
   if (!job.error().empty()) std::printf("  error: %s\n", job.error().c_str());
   if (job.pdsm_bytes() > 0)
     std::printf("  PDSM: %llu bytes\n", static_cast<unsigned long long>(job.pdsm_bytes()));
@@ -122,17 +123,20 @@ int RunStats(const JobFlags& flags) {
     return kExitOk;
   }
   std::printf(
-      "jobs: %d running, %d queued\n"
+      "jobs: %d running, %d queued (%d of them waiting for coordinator memory)\n"
+      "planned memory: %.1f of %.0f MiB\n"
       "tasks: %d pending (queue depth), %d leased; %d tiles in flight\n"
       "workers: %d active, %d (job, worker) pairs incompatible (another build)\n"
       "throughput (last 60 s): %.2f tasks/s, %.3g events/s\n"
       "since start (%.0f s): %lld results accepted, %lld dropped, %lld leases expired\n"
       "verification: %d tasks awaiting a vote; since start %lld agreed, %lld decided against "
       "a worker, %lld unverified (no second worker); %d workers quarantined\n",
-      stats.jobs_running(), stats.jobs_queued(), stats.tasks_pending(), stats.tasks_leased(),
-      stats.tiles_in_flight(), stats.workers_active(), stats.workers_incompatible(),
-      stats.tasks_per_second(), stats.events_per_second(), stats.uptime_seconds(),
-      static_cast<long long>(stats.tasks_accepted()),
+      stats.jobs_running(), stats.jobs_queued(), stats.jobs_waiting_for_memory(),
+      static_cast<double>(stats.planned_bytes()) / (1 << 20),
+      static_cast<double>(stats.max_planned_bytes()) / (1 << 20), stats.tasks_pending(),
+      stats.tasks_leased(), stats.tiles_in_flight(), stats.workers_active(),
+      stats.workers_incompatible(), stats.tasks_per_second(), stats.events_per_second(),
+      stats.uptime_seconds(), static_cast<long long>(stats.tasks_accepted()),
       static_cast<long long>(stats.results_dropped()),
       static_cast<long long>(stats.leases_expired()), stats.tasks_awaiting_verification(),
       static_cast<long long>(stats.tasks_verified()),

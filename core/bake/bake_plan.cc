@@ -101,6 +101,8 @@ void MakeTiles(BakePlan* plan) {
   const int size = plan->header.tile_size;
   plan->tiles_x = (g.width + size - 1) / size;
   plan->tiles_y = (g.height + size - 1) / size;
+  // Reserved exactly: a coordinator keeps the tiles of every job it runs (plan_memory.h).
+  plan->tiles.reserve(static_cast<size_t>(plan->tiles_x) * static_cast<size_t>(plan->tiles_y));
   for (int ty = 0; ty < plan->tiles_y; ++ty) {
     for (int tx = 0; tx < plan->tiles_x; ++tx) {
       TileRect tile;
@@ -304,7 +306,13 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
 void ReleaseRenderGeometry(BakePlan* plan) {
   plan->casters = LightSpaceMesh{};
   plan->caster_clusters = std::vector<CasterCluster>{};
-  if (!plan->header.surfaces_only) plan->receivers = LightSpaceMesh{};
+  if (!plan->header.surfaces_only) {
+    plan->receivers = LightSpaceMesh{};
+  } else {
+    // Kept for as long as the job runs: without the slack their growth left.
+    plan->receivers.positions.shrink_to_fit();
+    plan->receivers.indices.shrink_to_fit();
+  }
 }
 
 }  // namespace pdsm

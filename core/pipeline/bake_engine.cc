@@ -134,6 +134,14 @@ struct BakeEngine::Job {
   std::vector<StoredTile> stored;  // by tile index
 };
 
+int64_t BakeEngine::JobHeldBytes(int64_t tiles, int64_t groups) {
+  // Per tile: its index in its group's GroupWork (grown by push_back: up to twice 4 bytes),
+  // its Job::StoredTile, its place in EngineJob::done_tiles. Per group: its GroupWork.
+  constexpr int64_t kPerTile = 2 * sizeof(int) + sizeof(Job::StoredTile) + sizeof(int);
+  constexpr int64_t kPerGroup = sizeof(GroupWork);
+  return int64_t{sizeof(Job)} + 4096 + tiles * kPerTile + groups * kPerGroup;
+}
+
 BakeEngine::BakeEngine(EngineOptions options)
     : options_(WithDefaults(std::move(options))),
       started_ms_(options_.now_ms()),

@@ -13,4 +13,6 @@ int LimitMallocArenas(int threads) {
   return mallopt(M_ARENA_MAX, arenas) == 1 ? arenas : 0;
 }
 
+void ReturnFreeHeapToSystem() { malloc_trim(0); }
+
 }  // namespace pdsm

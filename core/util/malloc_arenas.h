@@ -15,6 +15,12 @@ namespace pdsm {
 // threads start. Returns the cap in effect (0: glibc's own).
 int LimitMallocArenas(int threads);
 
+// Gives the free pages of every arena back to the system (glibc's malloc_trim). For a burst of
+// large temporary allocations freed again, which the arena would otherwise keep: the
+// coordinator's planning of a submit (a world of 10^6 triangles: RSS 167 MiB after planning,
+// for 0.6 MiB of plans kept). Costs a walk over the arenas' free lists.
+void ReturnFreeHeapToSystem();
+
 }  // namespace pdsm
 
 #endif  // PDSM_CORE_UTIL_MALLOC_ARENAS_H_

@@ -1,0 +1,62 @@
+#include "core/bake/plan_memory.h"
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+namespace pdsm {
+namespace {
+
+template <typename T>
+int64_t VectorBytes(const std::vector<T>& v) {
+  return static_cast<int64_t>(v.capacity() * sizeof(T));
+}
+
+int64_t VectorBytes(const std::vector<bool>& v) {
+  return static_cast<int64_t>((v.capacity() + 7) / 8);
+}
+
+// A string's heap block; short strings live inside the object.
+int64_t StringBytes(const std::string& s) {
+  return s.capacity() > std::string().capacity() ? static_cast<int64_t>(s.capacity() + 1) : 0;
+}
+
+int64_t MeshBytes(const LightSpaceMesh& mesh) {
+  return VectorBytes(mesh.positions) + VectorBytes(mesh.indices);
+}
+
+int64_t TileCount(const BakeSettings& bake) {
+  const int64_t tile = std::max(1, bake.tile_size);
+  return ((bake.width + tile - 1) / tile) * ((bake.height + tile - 1) / tile);
+}
+
+}  // namespace
+
+int64_t PlanHeldBytes(const BakePlan& plan) {
+  int64_t bytes = sizeof(BakePlan);
+  const PdsmHeader& h = plan.header;
+  bytes += StringBytes(h.scene_name) + StringBytes(h.light_name) + VectorBytes(h.tile_samples);
+  bytes += VectorBytes(plan.samples) + VectorBytes(plan.tiles) + VectorBytes(plan.groups);
+  for (const TileGroup& group : plan.groups) bytes += VectorBytes(group.tiles);
+  bytes += VectorBytes(plan.tile_has_casters);
+  bytes += MeshBytes(plan.casters) + VectorBytes(plan.caster_clusters) + MeshBytes(plan.receivers);
+  return bytes;
+}
+
+int64_t MinReleasedPlanBytes(const BakeSettings& bake, int64_t receiver_vertices,
+                             int64_t receiver_triangles) {
+  const int64_t tiles = TileCount(bake);
+  int64_t bytes = sizeof(BakePlan);
+  bytes += int64_t{bake.samples} * static_cast<int64_t>(sizeof(glm::dvec2));
+  // Tiles and groups are reserved exactly (bake_plan.cc, tile_groups.cc); one group at least.
+  bytes += tiles * static_cast<int64_t>(sizeof(TileRect) + sizeof(int)) + sizeof(TileGroup);
+  bytes += (tiles + 7) / 8;  // tile_has_casters
+  if (bake.surfaces_only) {
+    // Kept at their exact size (ReleaseRenderGeometry).
+    bytes += receiver_vertices * static_cast<int64_t>(sizeof(glm::vec3)) +
+             3 * receiver_triangles * static_cast<int64_t>(sizeof(uint32_t));
+  }
+  return bytes;
+}
+
+}  // namespace pdsm

@@ -1,0 +1,171 @@
+// What a job holds in the coordinator (JobHeldBytes, what --max-planned-mib counts), checked
+// against the heap: the plans PlanJobLights keeps and the engine's records of their tiles,
+// measured as the allocator's bytes in use grow. And the limit itself: a job is refused before
+// anything is planned when its smallest plans exceed it, and as it is planned when its plans do.
+#include <malloc.h>
+
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/bake/plan_memory.h"
+#include "core/pipeline/engine_test_support.h"
+#include "core/scene/scene_loader.h"
+#include "server/job_admission.h"
+#include "tests/test_support.h"
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define PDSM_SANITIZER_ALLOCATOR 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define PDSM_SANITIZER_ALLOCATOR 1
+#endif
+#endif
+#ifdef PDSM_SANITIZER_ALLOCATOR
+#include <sanitizer/allocator_interface.h>
+#endif
+
+namespace pdsm {
+namespace {
+
+using testing::TempDir;
+
+// Bytes the program's allocations hold now (the sanitizers replace malloc: ask theirs).
+int64_t HeapBytesInUse() {
+#ifdef PDSM_SANITIZER_ALLOCATOR
+  return static_cast<int64_t>(__sanitizer_get_current_allocated_bytes());
+#else
+  const struct mallinfo2 info = mallinfo2();
+  return static_cast<int64_t>(info.uordblks + info.hblkhd);  // small blocks + mmapped ones
+#endif
+}
+
+class JobMemoryTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    absl::StatusOr<std::unique_ptr<CoordinatorAssets>> assets =
+        CoordinatorAssets::Open(dir_.File("assets"), 1 << 20);
+    ASSERT_TRUE(assets.ok()) << assets.status();
+    assets_ = *std::move(assets);
+  }
+
+  // The plates example at `resolution`^2 in `tile`-pixel tiles.
+  static pdsm::v1::Scene Plates(int resolution, int tile, bool surfaces_only = false,
+                                int group_side = 0) {
+    pdsm::v1::BakeParams overrides;
+    overrides.add_resolution(resolution);
+    overrides.add_resolution(resolution);
+    overrides.set_tile_size(tile);
+    overrides.set_samples(16);
+    if (surfaces_only) overrides.set_surfaces_only(true);
+    if (group_side > 0) overrides.set_tile_group_size(group_side);
+    absl::StatusOr<pdsm::v1::Scene> scene =
+        ParseSceneFile(testing::ExamplePath("plates"), overrides);
+    EXPECT_TRUE(scene.ok()) << scene.status();
+    return scene.ok() ? *scene : pdsm::v1::Scene();
+  }
+
+  // Heap bytes that planning `scene` and adding its lights to an engine leave held, with what
+  // JobHeldBytes counts for them (less the scene, made before the measure).
+  void Measure(const pdsm::v1::Scene& scene, int64_t* measured, int64_t* counted) {
+    std::vector<std::function<void()>> queued;  // the engine's heavy work, never run here
+    EngineOptions options;
+    options.scheduler.verify_fraction = 0.02;  // the coordinator's default: per-tile records
+    options.executor = [&queued](std::function<void()> work) { queued.push_back(std::move(work)); };
+    auto engine = std::make_unique<BakeEngine>(std::move(options));
+    auto output = std::make_shared<testing::RecordingOutput>();
+    queued.reserve(16);
+    const int64_t before = HeapBytesInUse();
+    {
+      absl::StatusOr<std::vector<PlannedLight>> plans =
+          PlanJobLights(scene, "scene", *assets_, nullptr);
+      ASSERT_TRUE(plans.ok()) << plans.status();
+      for (size_t i = 0; i < plans->size(); ++i) {
+        EngineJob job;
+        job.job_id = "job/" + std::to_string(i);
+        job.plan = (*plans)[i].plan;
+        job.output = output;
+        ASSERT_TRUE(engine->AddJob(std::move(job)).ok());
+      }
+      // What the engine queued (storing the unreached tiles: transient) is not held.
+      queued.clear();
+      *counted = JobHeldBytes(*plans, pdsm::v1::Scene()) - JobHeldBytes({}, pdsm::v1::Scene());
+    }
+    *measured = HeapBytesInUse() - before;
+    engine.reset();
+  }
+
+  TempDir dir_;
+  std::unique_ptr<CoordinatorAssets> assets_;
+};
+
+TEST_F(JobMemoryTest, JobHeldBytesCountsWhatTheHeapHoldsForAJob) {
+  int64_t measured = 0, counted = 0;
+  Measure(Plates(64, 4), &measured, &counted);  // warms up what is made once per process
+  // 65,536 tiles: the per-tile records dominate, as on the coordinator's largest jobs.
+  Measure(Plates(1024, 4), &measured, &counted);
+  std::printf("2^16 tiles: %lld bytes held, %lld counted\n", static_cast<long long>(measured),
+              static_cast<long long>(counted));
+  ASSERT_GT(measured, 65536 * 24) << "the measure sees less than the tiles' rectangles";
+  // An upper bound, not far above: the engine's records are counted at their largest (a
+  // vector grown by push_back holds up to twice what it needs).
+  EXPECT_GE(counted, measured);
+  EXPECT_LE(counted, measured * 3 / 2);
+
+  // Surfaces only: the receivers are kept for every light too.
+  Measure(Plates(1024, 4, /*surfaces_only=*/true), &measured, &counted);
+  EXPECT_GE(counted, measured);
+  EXPECT_LE(counted, measured * 3 / 2);
+}
+
+TEST_F(JobMemoryTest, TheLowerBoundBeforePlanningNeverExceedsWhatAPlanHolds) {
+  for (const bool surfaces_only : {false, true}) {
+    for (const int tile : {1, 4, 16, 64}) {
+      const pdsm::v1::Scene message = Plates(256, tile, surfaces_only);
+      absl::StatusOr<Scene> scene = SceneFromProto(message, "scene", "", nullptr);
+      ASSERT_TRUE(scene.ok()) << scene.status();
+      int64_t vertices = 0, triangles = 0;
+      for (const TriangleMesh& m : scene->meshes) {
+        if (!Receives(m.role)) continue;
+        vertices += static_cast<int64_t>(m.positions_world.size());
+        triangles += static_cast<int64_t>(m.indices.size() / 3);
+      }
+      absl::StatusOr<BakePlan> plan = PlanBake(*scene);
+      ASSERT_TRUE(plan.ok()) << plan.status();
+      ReleaseRenderGeometry(&*plan);
+      const int64_t lower = MinReleasedPlanBytes(scene->bake, vertices, triangles);
+      EXPECT_LE(lower, PlanHeldBytes(*plan)) << "tile " << tile << " surfaces " << surfaces_only;
+      // Tight where the tiles dominate: the grouping is all it leaves out.
+      if (tile == 1) EXPECT_GE(lower, PlanHeldBytes(*plan) * 9 / 10);
+    }
+  }
+}
+
+TEST_F(JobMemoryTest, AJobWhosePlansExceedTheLimitIsRefusedNamingTheFlag) {
+  AdmissionLimits limits;
+  // Before planning: 2^18 tiles need at least ~7 MiB.
+  limits.max_planned_bytes = int64_t{2} << 20;
+  absl::Status refused = PlanJobLights(Plates(2048, 4), "scene", *assets_, &limits).status();
+  EXPECT_EQ(refused.code(), absl::StatusCode::kResourceExhausted) << refused;
+  EXPECT_NE(refused.message().find("would hold at least"), std::string::npos) << refused;
+  EXPECT_NE(refused.message().find("--max-planned-mib"), std::string::npos) << refused;
+
+  // As planned: a limit between the lower bound and what the plan holds (a group per tile,
+  // which the lower bound leaves out).
+  const pdsm::v1::Scene scene = Plates(1024, 4, /*surfaces_only=*/false, /*group_side=*/1);
+  absl::StatusOr<std::vector<PlannedLight>> plans =
+      PlanJobLights(scene, "scene", *assets_, nullptr);
+  ASSERT_TRUE(plans.ok()) << plans.status();
+  limits.max_planned_bytes = JobHeldBytes(*plans, scene) - 1;
+  refused = PlanJobLights(scene, "scene", *assets_, &limits).status();
+  EXPECT_EQ(refused.code(), absl::StatusCode::kResourceExhausted) << refused;
+  EXPECT_NE(refused.message().find("hold"), std::string::npos) << refused;
+  EXPECT_EQ(refused.message().find("at least"), std::string::npos) << refused;
+  limits.max_planned_bytes += 1;
+  EXPECT_TRUE(PlanJobLights(scene, "scene", *assets_, &limits).ok());
+}
+
+}  // namespace
+}  // namespace pdsm
