@@ -677,7 +677,7 @@ absl::StatusOr<bool> Coordinator::ReportResult(
                             .z_min = plan->z_clip_near};
   for (size_t i = 0; i < lease->tiles.size(); ++i) {
     absl::StatusOr<TileEvents> decoded =
-        TileEventsFromProto(tiles[static_cast<int>(i)], plan->tiles.at(lease->tiles[i]), bounds);
+        TileEventsFromProto(tiles[static_cast<int>(i)], plan->tile(lease->tiles[i]), bounds);
     if (!decoded.ok()) return decoded.status();
     events.push_back(*std::move(decoded));
   }

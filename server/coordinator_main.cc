@@ -280,9 +280,9 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   app.add_option("--max-planned-mib", flags.max_planned_mib,
-                 "Memory the plans of the jobs this coordinator runs may hold (tiles, groups, "
-                 "surfaces-only receivers): a job needing more alone is refused, one that does "
-                 "not fit beside the running ones waits QUEUED")
+                 "Memory the plans of the jobs this coordinator runs may hold (surfaces-only "
+                 "receivers, scenes, a bit per tile): a job needing more alone is refused, one "
+                 "that does not fit beside the running ones waits QUEUED")
       ->check(CLI::Range(int64_t{1}, int64_t{1} << 30))
       ->capture_default_str();
   app.add_option("--max-asset-bytes", o.max_asset_bytes, "Largest mesh asset")

@@ -40,8 +40,8 @@ std::string RenderCoordinatorMetrics(const CoordinatorMetrics& m) {
             "(another build).",
             s.workers_incompatible);
   out.Gauge("pdsm_planned_bytes",
-            "Bytes the plans of the running jobs hold (tiles, groups, samples, surfaces-only "
-            "receivers, the engine's per-tile records, scenes).",
+            "Bytes the plans of the running jobs hold (samples, surfaces-only receivers, scenes, "
+            "a bit per tile and a few words per group).",
             static_cast<double>(m.planned_bytes));
   out.Gauge("pdsm_planned_bytes_limit", "--max-planned-mib, in bytes.",
             static_cast<double>(m.max_planned_bytes));

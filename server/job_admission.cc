@@ -103,8 +103,8 @@ int64_t SceneHeldBytes(const pdsm::v1::Scene& scene) {
 
 // What a light of this plan holds (JobHeldBytes without the scene).
 int64_t LightHeldBytes(const BakePlan& plan) {
-  return PlanHeldBytes(plan) + BakeEngine::JobHeldBytes(static_cast<int64_t>(plan.tiles.size()),
-                                                        static_cast<int64_t>(plan.groups.size()));
+  return PlanHeldBytes(plan) + BakeEngine::JobHeldBytes(static_cast<int64_t>(plan.tile_count()),
+                                                        static_cast<int64_t>(plan.group_count()));
 }
 
 absl::Status PlannedBytesError(const std::string& label, const char* what, int64_t bytes,
@@ -222,7 +222,7 @@ absl::StatusOr<JobRecord> NewJobRecord(const pdsm::v1::SubmitBakeRequest& reques
   record.state = pdsm::v1::QUEUED;
   record.priority = request.priority();
   for (const PlannedLight& light : lights) {
-    const int tiles = static_cast<int>(light.plan->tiles.size());
+    const int tiles = static_cast<int>(light.plan->tile_count());
     record.tiles_total += tiles;
     record.samples_total += int64_t{light.plan->header.samples} * tiles;
   }

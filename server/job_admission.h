@@ -18,7 +18,9 @@
 
 namespace pdsm {
 
-// 4 GiB: a 10^6-triangle world of 55 lights holds ~340 MiB, a job of 2^18 tiles ~15 MiB.
+// 4 GiB. Most jobs hold little (the 10^6-triangle village of 55 lights 0.4 MiB, a job of 2^18
+// tiles 0.1 MiB); what is large is a surfaces-only bake's receivers, ~24 bytes a triangle per
+// light (that village surfaces-only: ~1.3 GiB), and meshes inline in the scene.
 inline constexpr int64_t kDefaultMaxPlannedBytes = int64_t{4096} << 20;
 
 struct AdmissionLimits {
@@ -53,7 +55,7 @@ absl::StatusOr<std::vector<PlannedLight>> PlanJobLights(const pdsm::v1::Scene& s
                                                         const AdmissionLimits* limits);
 
 // What a job of these plans holds in the coordinator while it runs, in bytes: its plans
-// (core/bake/plan_memory.h), the engine's records of their tiles (BakeEngine::JobHeldBytes)
+// (core/bake/plan_memory.h), the engine's records of their groups (BakeEngine::JobHeldBytes)
 // and its scene, parsed and serialized. What --max-planned-mib counts.
 int64_t JobHeldBytes(const std::vector<PlannedLight>& plans, const pdsm::v1::Scene& scene);
 

@@ -47,8 +47,8 @@ class PlanJobLightsTest : public ::testing::Test {
       EXPECT_EQ(slim.receivers.TriangleCount(),
                 full->header.surfaces_only ? full->receivers.TriangleCount() : 0u)
           << i;
-      EXPECT_EQ(slim.tiles.size(), full->tiles.size()) << i;
-      EXPECT_EQ(slim.groups.size(), full->groups.size()) << i;
+      EXPECT_EQ(slim.tile_count(), full->tile_count()) << i;
+      EXPECT_EQ(slim.group_side, full->group_side) << i;
       EXPECT_EQ(slim.tile_has_casters, full->tile_has_casters) << i;
       EXPECT_EQ(slim.header.geometry.s_min, full->header.geometry.s_min) << i;
       EXPECT_EQ(slim.header.geometry.z_far, full->header.geometry.z_far) << i;

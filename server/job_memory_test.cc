@@ -67,6 +67,26 @@ class JobMemoryTest : public ::testing::Test {
     return scene.ok() ? *scene : pdsm::v1::Scene();
   }
 
+  // The plates with a `side` x `side` grid of quads added below them as a receiver (ground
+  // at y = -0.5, 8 x 8 units): a surfaces-only plan keeps it.
+  static pdsm::v1::Scene PlatesOverGrid(int side) {
+    pdsm::v1::Scene scene = Plates(256, 16, /*surfaces_only=*/true);
+    pdsm::v1::InlineMesh* grid = scene.add_meshes()->mutable_inline_();
+    scene.mutable_meshes(scene.meshes_size() - 1)->set_role(pdsm::v1::RECEIVER_ONLY);
+    for (int j = 0; j <= side; ++j) {
+      for (int i = 0; i <= side; ++i) {
+        for (double v : {8.0 * i / side - 4, -0.5, 8.0 * j / side - 4}) grid->add_positions(v);
+      }
+    }
+    for (int j = 0; j < side; ++j) {
+      for (int i = 0; i < side; ++i) {
+        const uint32_t a = j * (side + 1) + i, b = a + 1, c = a + side + 1, d = c + 1;
+        for (uint32_t k : {a, c, b, b, c, d}) grid->add_indices(k);
+      }
+    }
+    return scene;
+  }
+
   // Heap bytes that planning `scene` and adding its lights to an engine leave held, with what
   // JobHeldBytes counts for them (less the scene, made before the measure).
   void Measure(const pdsm::v1::Scene& scene, int64_t* measured, int64_t* counted) {
@@ -101,21 +121,35 @@ class JobMemoryTest : public ::testing::Test {
   std::unique_ptr<CoordinatorAssets> assets_;
 };
 
-TEST_F(JobMemoryTest, JobHeldBytesCountsWhatTheHeapHoldsForAJob) {
+TEST_F(JobMemoryTest, AJobHoldsABitPerTileNotARecord) {
   int64_t measured = 0, counted = 0;
   Measure(Plates(64, 4), &measured, &counted);  // warms up what is made once per process
-  // 65,536 tiles: the per-tile records dominate, as on the coordinator's largest jobs.
+  // 65,536 tiles in few groups: tiles and groups are made on demand, and the engine keeps a
+  // stored bit per tile (it kept 3.35 MB of per-tile records before).
   Measure(Plates(1024, 4), &measured, &counted);
-  std::printf("2^16 tiles: %lld bytes held, %lld counted\n", static_cast<long long>(measured),
+  std::printf("65,536 tiles: %lld bytes held, %lld counted\n", static_cast<long long>(measured),
               static_cast<long long>(counted));
-  ASSERT_GT(measured, 65536 * 24) << "the measure sees less than the tiles' rectangles";
-  // An upper bound, not far above: the engine's records are counted at their largest (a
-  // vector grown by push_back holds up to twice what it needs).
+  EXPECT_LT(measured, 32 << 10);
   EXPECT_GE(counted, measured);
   EXPECT_LE(counted, measured * 3 / 2);
+}
 
-  // Surfaces only: the receivers are kept for every light too.
-  Measure(Plates(1024, 4, /*surfaces_only=*/true), &measured, &counted);
+TEST_F(JobMemoryTest, JobHeldBytesCountsWhatTheHeapHoldsForAJob) {
+  int64_t measured = 0, counted = 0;
+  Measure(Plates(64, 4), &measured, &counted);
+  // What is per group: a group per tile, 65,536 of them.
+  Measure(Plates(1024, 4, /*surfaces_only=*/false, /*group_side=*/1), &measured, &counted);
+  std::printf("65,536 groups: %lld bytes held, %lld counted\n", static_cast<long long>(measured),
+              static_cast<long long>(counted));
+  ASSERT_GT(measured, 65536 * 32) << "the measure misses the groups' entries";
+  EXPECT_GE(counted, measured);
+  EXPECT_LE(counted, measured * 3 / 2);
+  // Surfaces only: the receivers are kept too (a 200 x 200 grid: 40,401 vertices and 80,000
+  // triangles, 1.4 MB in light space).
+  Measure(PlatesOverGrid(200), &measured, &counted);
+  std::printf("surfaces only: %lld bytes held, %lld counted\n", static_cast<long long>(measured),
+              static_cast<long long>(counted));
+  ASSERT_GT(measured, 40401 * 12 + 80000 * 12) << "the measure misses the receivers";
   EXPECT_GE(counted, measured);
   EXPECT_LE(counted, measured * 3 / 2);
 }
@@ -145,8 +179,8 @@ TEST_F(JobMemoryTest, TheLowerBoundBeforePlanningNeverExceedsWhatAPlanHolds) {
 
 TEST_F(JobMemoryTest, AJobWhosePlansExceedTheLimitIsRefusedNamingTheFlag) {
   AdmissionLimits limits;
-  // Before planning: 2^18 tiles need at least ~7 MiB.
-  limits.max_planned_bytes = int64_t{2} << 20;
+  // Before planning: 2^18 tiles need at least their 32 KiB of bits.
+  limits.max_planned_bytes = 16 << 10;
   absl::Status refused = PlanJobLights(Plates(2048, 4), "scene", *assets_, &limits).status();
   EXPECT_EQ(refused.code(), absl::StatusCode::kResourceExhausted) << refused;
   EXPECT_NE(refused.message().find("would hold at least"), std::string::npos) << refused;

@@ -1,10 +1,10 @@
 // Which jobs' plans the coordinator holds in memory, within --max-planned-mib. A job holds its
-// plans (per light: tiles, groups, sample positions, a surfaces-only bake's receivers) and the
-// engine's records of its tiles from its activation to its end. A job whose plans do not fit
-// beside those held waits QUEUED without them (it was planned at submit, so its errors are the
-// submit's, then they were dropped) and is planned again when it is its turn and its bytes fit.
-// Turns go in scheduling order (priority, then submission), and a waiting job is never passed
-// over: a large job is not starved by a stream of small ones. A job alone always fits (when
+// plans (per light: sample positions, a surfaces-only bake's receivers, a bit per tile) and
+// the engine's few words per tile group from its activation to its end (JobHeldBytes). A job whose
+// plans do not fit beside those held waits QUEUED without them (it was planned at submit, so its
+// errors are the submit's, then they were dropped) and is planned again when it is its turn and its
+// bytes fit. Turns go in scheduling order (priority, then submission), and a waiting job is never
+// passed over: a large job is not starved by a stream of small ones. A job alone always fits (when
 // nothing is held), so a limit lowered across a restart cannot stall the queue.
 //
 // Bookkeeping only: the coordinator plans, activates, cancels and ends jobs, and tells this

@@ -98,7 +98,7 @@ std::vector<int> StoredJob::FinishedTiles(int light) const {
   const JobLight& l = lights_.at(light);
   // One read of the folder, not a stat per tile (2^18 of them on the largest job). Only
   // complete files count: "<n>.tile", not a temporary "<n>.tile.tmp-…".
-  std::vector<bool> stored(l.plan->tiles.size(), false);
+  std::vector<bool> stored(l.plan->tile_count(), false);
   std::error_code ec;
   for (const auto& entry : std::filesystem::directory_iterator(paths_.tiles, ec)) {
     const std::filesystem::path& path = entry.path();
@@ -108,7 +108,7 @@ std::vector<int> StoredJob::FinishedTiles(int light) const {
     if (index >= 0 && index < static_cast<int>(stored.size())) stored[index] = true;
   }
   std::vector<int> done;
-  for (const TileRect& rect : l.plan->tiles) {
+  for (const TileRect& rect : AllTiles(*l.plan)) {
     if (stored[rect.index] || IsUnreachedTile(*l.plan, rect.index)) done.push_back(rect.index);
   }
   return done;
@@ -119,7 +119,7 @@ absl::StatusOr<std::string> StoredJob::FinishedTileFile(int light, int tile) con
   const std::string path = paths_.Tile(l.tile_offset + tile);
   std::error_code ec;
   if (std::filesystem::exists(path, ec)) return path;
-  if (tile < 0 || tile >= static_cast<int>(l.plan->tiles.size()) ||
+  if (tile < 0 || tile >= static_cast<int>(l.plan->tile_count()) ||
       !IsUnreachedTile(*l.plan, tile)) {
     return absl::NotFoundError(
         absl::StrCat("job ", record_.job_id, ": tile ", tile, " is not assembled (yet)"));
@@ -186,7 +186,7 @@ absl::Status StoredJob::WriteFile() {
   std::error_code ec;
   std::filesystem::create_directories(paths_.dir, ec);
   const auto write_light = [&](const JobLight& light, PdsmWriter* writer) -> absl::Status {
-    for (const TileRect& rect : light.plan->tiles) {
+    for (const TileRect& rect : AllTiles(*light.plan)) {
       // A tile no caster reaches was never stored: it is made again, as the engine made it.
       absl::StatusOr<PdsmTile> tile =
           IsUnreachedTile(*light.plan, rect.index)

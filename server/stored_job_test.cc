@@ -29,7 +29,7 @@ std::shared_ptr<const BakePlan> TinyPlan() {
 
 // A tile of the plan whose every pixel holds one step to `a` at depth 5.
 PdsmTile Tile(const BakePlan& plan, int index, float a) {
-  const TileRect& r = plan.tiles.at(index);
+  const TileRect r = plan.tile(index);
   PdsmTile tile{.x0 = r.x0, .y0 = r.y0, .width = r.width, .height = r.height};
   tile.offsets.push_back(0);
   for (int p = 0; p < r.width * r.height; ++p) {
@@ -50,7 +50,7 @@ class StoredJobTest : public ::testing::Test {
     JobRecord record;
     record.job_id = "0123456789abcdef";
     record.idempotency_key = "k";
-    record.tiles_total = static_cast<int>(plan_->tiles.size());
+    record.tiles_total = static_cast<int>(plan_->tile_count());
     ASSERT_TRUE(store_->CreateJob(record, nullptr).ok());
     record_ = record;
   }
@@ -80,7 +80,7 @@ TEST_F(StoredJobTest, TileFileIsWholeOrAsBefore) {
 
 TEST_F(StoredJobTest, PdsmIsWholeOrAsBefore) {
   const JobPaths paths(dir_.path().string(), record_.job_id);
-  for (const TileRect& r : plan_->tiles) {
+  for (const TileRect& r : AllTiles(*plan_)) {
     ASSERT_TRUE(Job(nullptr)->LightOutput(0)->StoreTile(Tile(*plan_, r.index, 0.5f)).ok());
   }
   testing::WriteText(paths.pdsm, "a PDSM of an earlier run");

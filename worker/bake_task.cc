@@ -150,11 +150,11 @@ absl::Status TaskRunner::Prepare(const BakeTask& task) {
       group_->tiles == task.tiles) {
     return absl::OkStatus();
   }
-  if (task.group_index < 0 || task.group_index >= static_cast<int>(plan_.groups.size())) {
+  if (task.group_index < 0 || task.group_index >= static_cast<int>(plan_.group_count())) {
     return absl::InvalidArgumentError(absl::StrFormat("tile group %d: the plan has %d groups",
-                                                      task.group_index, plan_.groups.size()));
+                                                      task.group_index, plan_.group_count()));
   }
-  const std::vector<int>& of_group = plan_.groups[task.group_index].tiles;
+  const std::vector<int> of_group = plan_.group(task.group_index).tiles;
   for (int t : task.tiles) {
     if (!std::binary_search(of_group.begin(), of_group.end(), t)) {
       return absl::InvalidArgumentError(

@@ -26,17 +26,17 @@ BakePlan PlatesPlan() {
 
 TEST(GroupCache, ThreadsAskingForOneGroupShareOnePreparation) {
   const BakePlan plan = PlatesPlan();
-  ASSERT_EQ(plan.groups.size(), 1u);  // 4x4 tiles, one group
+  ASSERT_EQ(plan.group_count(), 1u);  // 4x4 tiles, one group
   GroupCache cache(plan);
   std::vector<std::shared_ptr<const PreparedGroup>> got(8);
   std::vector<std::thread> threads;
   for (size_t i = 0; i < got.size(); ++i) {
-    threads.emplace_back([&, i] { got[i] = cache.Get(0, plan.groups[0].tiles); });
+    threads.emplace_back([&, i] { got[i] = cache.Get(0, plan.group(0).tiles); });
   }
   for (std::thread& t : threads) t.join();
   for (const auto& g : got) EXPECT_EQ(g.get(), got[0].get());
-  EXPECT_EQ(got[0]->tiles, plan.groups[0].tiles);
-  EXPECT_EQ(got[0]->prepared.size(), plan.groups[0].tiles.size());
+  EXPECT_EQ(got[0]->tiles, plan.group(0).tiles);
+  EXPECT_EQ(got[0]->prepared.size(), plan.group(0).tiles.size());
   EXPECT_FALSE(got[0]->empty());
 }
 

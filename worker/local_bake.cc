@@ -44,8 +44,8 @@ class LocalWorker {
     if (!runner.ok()) return runner.status();
     runner_ = *std::move(runner);
     if (!output_->has_preview()) return absl::OkStatus();
-    for (size_t t = first; t < plan_.tiles.size(); t += stride) {
-      absl::StatusOr<std::vector<float>> depth = runner_->ReceiverDepth(plan_.tiles[t]);
+    for (size_t t = first; t < plan_.tile_count(); t += stride) {
+      absl::StatusOr<std::vector<float>> depth = runner_->ReceiverDepth(plan_.tile(t));
       if (!depth.ok()) return depth.status();
       output_->SetReceiverDepth(static_cast<int>(t), *std::move(depth));
     }
@@ -97,14 +97,14 @@ int ThreadCount(const BakePlan& plan, const LocalBakeOptions& options) {
   const int64_t wanted = options.threads > 0 ? options.threads : CoreCount();
   const int64_t batch = LocalBatch(plan, static_cast<int>(std::max<int64_t>(1, wanted)), options);
   const int64_t batches = (std::max(1, plan.header.samples) + batch - 1) / batch;
-  const int64_t tasks = std::max<int64_t>(1, static_cast<int64_t>(plan.groups.size()) * batches);
+  const int64_t tasks = std::max<int64_t>(1, static_cast<int64_t>(plan.group_count()) * batches);
   return static_cast<int>(std::clamp<int64_t>(wanted, 1, tasks));
 }
 
 // Tiles in the largest group.
 int LargestGroup(const BakePlan& plan) {
   size_t most = 1;
-  for (const TileGroup& g : plan.groups) most = std::max(most, g.tiles.size());
+  for (int g = 0; g < plan.group_count(); ++g) most = std::max(most, plan.group(g).tiles.size());
   return static_cast<int>(most);
 }
 
@@ -208,7 +208,7 @@ absl::StatusOr<BakeSummary> BakePlanned(
   summary.seconds = elapsed();
   summary.tiles = progress.tiles_total;
   summary.tiles_all_lit = progress.tiles_all_lit;
-  summary.groups = static_cast<int>(plan->groups.size());
+  summary.groups = static_cast<int>(plan->group_count());
   summary.casters = static_cast<int64_t>(plan->casters.TriangleCount());
   summary.tasks = progress.tasks_done;
   summary.tile_samples_total = progress.tile_samples_total;

@@ -9,7 +9,7 @@ LocalOutput::LocalOutput(const BakePlan& plan, PdsmWriter* writer, std::string p
     : plan_(plan),
       preview_path_(std::move(preview_path)),
       fs_(fs),
-      receiver_depth_(has_preview() ? plan.tiles.size() : 0),
+      receiver_depth_(has_preview() ? plan.tile_count() : 0),
       preview_(has_preview() ? plan.geometry().width : 0,
                has_preview() ? plan.geometry().height : 0),
       writer_(writer) {}

@@ -84,7 +84,7 @@ PreparedGroup PrepareGroup(const BakePlan& plan, int group_index, const std::vec
   std::vector<std::vector<uint32_t>> triangles;
   for (int t : tiles) {
     PreparedTile prepared;
-    prepared.rect = plan.tiles.at(t);
+    prepared.rect = plan.tile(t);
     TileReach reach = ComputeTileReach(plan, prepared.rect);
     prepared.has_casters = !reach.triangles.empty();
     if (!reach.empty()) {

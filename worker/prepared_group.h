@@ -48,7 +48,7 @@ struct PreparedGroup {
   bool empty() const { return triangles.empty(); }
 };
 
-// REQUIRES: `tiles` are tiles of plan.groups[group_index].
+// REQUIRES: `tiles` are tiles of plan.group(group_index).
 PreparedGroup PrepareGroup(const BakePlan& plan, int group_index, const std::vector<int>& tiles);
 
 // The lattice window holding every block's clipped ray segments for this sample: the one

@@ -167,7 +167,7 @@ absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::Lo
   context->fingerprint = PlanFingerprint(context->plan) + options_.test_fingerprint_salt;
   context->groups = std::make_unique<GroupCache>(context->plan);
   spdlog::info("job {}{}: planned, {} tiles, {} samples", job_id,
-               light.empty() ? "" : absl::StrCat(" light ", light), context->plan.tiles.size(),
+               light.empty() ? "" : absl::StrCat(" light ", light), context->plan.tile_count(),
                context->plan.samples.size());
   return std::shared_ptr<const JobContext>(std::move(context));
 }

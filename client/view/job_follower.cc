@@ -90,7 +90,7 @@ PartialPdsm AssemblePartialPdsm(const BakePlan& plan, const std::map<int, PdsmTi
   const int width = plan.header.geometry.width, height = plan.header.geometry.height;
   const size_t pixels = static_cast<size_t>(width) * height;
   std::vector<const PdsmTile*> tile_of(pixels, nullptr);
-  for (const TileRect& rect : plan.tiles) {
+  for (const TileRect& rect : AllTiles(plan)) {
     auto it = tiles.find(rect.index);
     if (it == tiles.end()) continue;
     for (int y = rect.y0; y < rect.y0 + rect.height; ++y) {

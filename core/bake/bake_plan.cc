@@ -101,19 +101,6 @@ void MakeTiles(BakePlan* plan) {
   const int size = plan->header.tile_size;
   plan->tiles_x = (g.width + size - 1) / size;
   plan->tiles_y = (g.height + size - 1) / size;
-  // Reserved exactly: a coordinator keeps the tiles of every job it runs (plan_memory.h).
-  plan->tiles.reserve(static_cast<size_t>(plan->tiles_x) * static_cast<size_t>(plan->tiles_y));
-  for (int ty = 0; ty < plan->tiles_y; ++ty) {
-    for (int tx = 0; tx < plan->tiles_x; ++tx) {
-      TileRect tile;
-      tile.index = static_cast<int>(plan->tiles.size());
-      tile.x0 = tx * size;
-      tile.y0 = ty * size;
-      tile.width = std::min(size, g.width - tile.x0);
-      tile.height = std::min(size, g.height - tile.y0);
-      plan->tiles.push_back(tile);
-    }
-  }
 }
 
 void FillHeader(const Scene& scene, BakePlan* plan) {
@@ -298,9 +285,37 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
   }
   plan.caster_clusters = ClusterCasters(&plan.casters);
   plan.tile_group_size = scene.bake.tile_group_size;
-  plan.groups = GroupTiles(plan);
+  plan.group_side = GroupSideInTiles(plan);
   plan.tile_has_casters = TilesCastersMayReach(plan);
   return plan;
+}
+
+TileRect BakePlan::tile(int index) const {
+  const int size = header.tile_size;
+  TileRect rect;
+  rect.index = index;
+  rect.x0 = (index % tiles_x) * size;
+  rect.y0 = (index / tiles_x) * size;
+  rect.width = std::min(size, header.geometry.width - rect.x0);
+  rect.height = std::min(size, header.geometry.height - rect.y0);
+  return rect;
+}
+
+TileGroup BakePlan::group(int index) const {
+  const int tx0 = (index % groups_x()) * group_side, ty0 = (index / groups_x()) * group_side;
+  const int tx1 = std::min(tiles_x, tx0 + group_side), ty1 = std::min(tiles_y, ty0 + group_side);
+  TileGroup group;
+  group.index = index;
+  group.tiles.reserve(static_cast<size_t>(tx1 - tx0) * static_cast<size_t>(ty1 - ty0));
+  for (int ty = ty0; ty < ty1; ++ty) {
+    for (int tx = tx0; tx < tx1; ++tx) group.tiles.push_back(ty * tiles_x + tx);
+  }
+  const TileRect first = tile(group.tiles.front()), last = tile(group.tiles.back());
+  group.x0 = first.x0;
+  group.y0 = first.y0;
+  group.width = last.x0 + last.width - first.x0;
+  group.height = last.y0 + last.height - first.y0;
+  return group;
 }
 
 void ReleaseRenderGeometry(BakePlan* plan) {

@@ -41,13 +41,17 @@ struct BakePlan {
   // Perspective rays are scanned from no nearer than this (ScanFloor in bake_plan.cc: where a
   // tile's shadow map reaches kShadowMapTexelBudget, or a ray kMaxRayTexels); 0 for the sun.
   double z_scan_floor = 0;
-  std::vector<TileRect> tiles;  // row-major grid of header.tile_size
+  // The tiles: a row-major grid of header.tile_size (edge tiles cut), made on demand by tile()
+  // so that a plan holds nothing per tile but a bit (a coordinator keeps the plan of every
+  // job it runs: core/bake/plan_memory.h).
   int tiles_x = 0, tiles_y = 0;
-  std::vector<TileGroup> groups;  // the unit of rendering and of tasks (tile_groups.h)
+  // The tile groups, the unit of rendering and of tasks (tile_groups.h): squares of
+  // group_side x group_side tiles of the grid, row-major (edge groups cut), made by group().
+  int group_side = 1;
   // Per tile: may a caster shadow it (TilesCastersMayReach)? The others are all lit and get
   // no task at all.
   std::vector<bool> tile_has_casters;
-  int tile_group_size = 0;  // the scene's bake.tileGroupSize (0: chosen by GroupTiles)
+  int tile_group_size = 0;  // the scene's bake.tileGroupSize (0: chosen by GroupSideInTiles)
   LightSpaceMesh casters;   // triangles in spatial order, cut into caster_clusters
   std::vector<CasterCluster> caster_clusters;
   LightSpaceMesh receivers;
@@ -58,6 +62,44 @@ struct BakePlan {
   int TileIndexAt(int x0, int y0) const {
     return (y0 / header.tile_size) * tiles_x + x0 / header.tile_size;
   }
+  int tile_count() const { return tiles_x * tiles_y; }
+  // REQUIRES: 0 <= index < tile_count().
+  TileRect tile(int index) const;
+  int groups_x() const { return (tiles_x + group_side - 1) / group_side; }
+  int groups_y() const { return (tiles_y + group_side - 1) / group_side; }
+  int group_count() const { return groups_x() * groups_y(); }
+  // Its tiles listed, row-major. REQUIRES: 0 <= index < group_count().
+  TileGroup group(int index) const;
+  // The group holding tile `tile`. REQUIRES: 0 <= tile < tile_count().
+  int GroupOfTile(int tile) const {
+    return (tile / tiles_x / group_side) * groups_x() + (tile % tiles_x) / group_side;
+  }
+};
+
+// Every tile of a plan in index order, made as it is iterated (nothing stored):
+// `for (const TileRect& tile : AllTiles(plan))`. The plan must outlive the loop.
+class AllTiles {
+ public:
+  class Iterator {
+   public:
+    Iterator(const BakePlan* plan, int index) : plan_(plan), index_(index) {}
+    TileRect operator*() const { return plan_->tile(index_); }
+    Iterator& operator++() {
+      ++index_;
+      return *this;
+    }
+    bool operator!=(const Iterator& other) const { return index_ != other.index_; }
+
+   private:
+    const BakePlan* plan_;
+    int index_;
+  };
+  explicit AllTiles(const BakePlan& plan) : plan_(&plan) {}
+  Iterator begin() const { return {plan_, 0}; }
+  Iterator end() const { return {plan_, plan_->tile_count()}; }
+
+ private:
+  const BakePlan* plan_;
 };
 
 // The constant depth bias used when the scene sets none: float32 depths round at about
@@ -90,7 +132,8 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene);
 // Frees what only a shadow-map renderer uses: the casters and their clusters, and the
 // receivers unless the plan is surfaces-only (the tile assembly places its depth windows with
 // them). What is left tiles, groups, numbers and assembles the bake as before; a coordinator
-// keeps that much of each light of each job (a world's 10^6 triangles are ~40 MB per light).
+// keeps that much of each light of each job (a world's 10^6 triangles are ~40 MB per light,
+// the rest a few KB).
 // Take PlanFingerprint first: it covers the geometry.
 void ReleaseRenderGeometry(BakePlan* plan);
 

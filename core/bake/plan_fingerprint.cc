@@ -55,8 +55,11 @@ std::string PlanFingerprint(const BakePlan& plan) {
   f.Add(plan.lattice.pitch_s), f.Add(plan.lattice.pitch_t);
   f.Add(plan.z_clip_near), f.Add(plan.z_clip_far);
   f.Add(plan.tiles_x), f.Add(plan.tiles_y);
-  f.Add(plan.groups.size());  // tasks are per group: the cut must agree too
-  for (const TileGroup& g : plan.groups) f.Add(g.x0), f.Add(g.y0), f.Add(g.width), f.Add(g.height);
+  f.Add(plan.group_count());  // tasks are per group: the cut must agree too
+  for (int i = 0; i < plan.group_count(); ++i) {
+    const TileGroup g = plan.group(i);
+    f.Add(g.x0), f.Add(g.y0), f.Add(g.width), f.Add(g.height);
+  }
   for (const glm::vec3& p : plan.casters.positions) f.Add(p);
   for (uint32_t i : plan.casters.indices) f.Add(i);
   f.Add(plan.z_scan_floor);

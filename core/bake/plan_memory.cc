@@ -36,9 +36,8 @@ int64_t PlanHeldBytes(const BakePlan& plan) {
   int64_t bytes = sizeof(BakePlan);
   const PdsmHeader& h = plan.header;
   bytes += StringBytes(h.scene_name) + StringBytes(h.light_name) + VectorBytes(h.tile_samples);
-  bytes += VectorBytes(plan.samples) + VectorBytes(plan.tiles) + VectorBytes(plan.groups);
-  for (const TileGroup& group : plan.groups) bytes += VectorBytes(group.tiles);
-  bytes += VectorBytes(plan.tile_has_casters);
+  // Tiles and groups are made on demand (BakePlan::tile, group): a bit per tile is all.
+  bytes += VectorBytes(plan.samples) + VectorBytes(plan.tile_has_casters);
   bytes += MeshBytes(plan.casters) + VectorBytes(plan.caster_clusters) + MeshBytes(plan.receivers);
   return bytes;
 }
@@ -48,8 +47,6 @@ int64_t MinReleasedPlanBytes(const BakeSettings& bake, int64_t receiver_vertices
   const int64_t tiles = TileCount(bake);
   int64_t bytes = sizeof(BakePlan);
   bytes += int64_t{bake.samples} * static_cast<int64_t>(sizeof(glm::dvec2));
-  // Tiles and groups are reserved exactly (bake_plan.cc, tile_groups.cc); one group at least.
-  bytes += tiles * static_cast<int64_t>(sizeof(TileRect) + sizeof(int)) + sizeof(TileGroup);
   bytes += (tiles + 7) / 8;  // tile_has_casters
   if (bake.surfaces_only) {
     // Kept at their exact size (ReleaseRenderGeometry).

@@ -54,7 +54,7 @@ TEST_P(ReceiverWindowsTest, EveryReceiverPointIsInsideItsFourPixelsWindows) {
   ASSERT_TRUE(plan.ok()) << plan.status();
   const PdsmGeometry& g = plan->geometry();
   std::map<int, TileWindows> windows;
-  for (const TileRect& tile : plan->tiles)
+  for (const TileRect& tile : AllTiles(*plan))
     windows.emplace(tile.index, ComputeReceiverWindows(*plan, tile));
 
   std::mt19937_64 rng(3);
@@ -110,7 +110,7 @@ TEST_P(ReceiverWindowsTest, WindowsAreSortedDisjointAndThin) {
   const PdsmGeometry& g = plan->geometry();
   double covered = 0;
   size_t pixels_with_windows = 0;
-  for (const TileRect& tile : plan->tiles) {
+  for (const TileRect& tile : AllTiles(*plan)) {
     const TileWindows tw = ComputeReceiverWindows(*plan, tile);
     ASSERT_EQ(tw.offsets.size(), static_cast<size_t>(tile.width) * tile.height + 1);
     for (size_t p = 0; p + 1 < tw.offsets.size(); ++p) {

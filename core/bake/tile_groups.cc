@@ -44,33 +44,4 @@ int GroupSideInTiles(const BakePlan& plan) {
   return side;
 }
 
-std::vector<TileGroup> GroupTiles(const BakePlan& plan) {
-  const int side = GroupSideInTiles(plan);
-  std::vector<TileGroup> groups;
-  groups.reserve(static_cast<size_t>((plan.tiles_y + side - 1) / side) *
-                 static_cast<size_t>((plan.tiles_x + side - 1) / side));
-  for (int gy = 0; gy < plan.tiles_y; gy += side) {
-    for (int gx = 0; gx < plan.tiles_x; gx += side) {
-      TileGroup group;
-      group.index = static_cast<int>(groups.size());
-      // Reserved exactly: a coordinator keeps the groups of every job it runs.
-      group.tiles.reserve(static_cast<size_t>(std::min(plan.tiles_y, gy + side) - gy) *
-                          static_cast<size_t>(std::min(plan.tiles_x, gx + side) - gx));
-      for (int ty = gy; ty < std::min(plan.tiles_y, gy + side); ++ty) {
-        for (int tx = gx; tx < std::min(plan.tiles_x, gx + side); ++tx) {
-          group.tiles.push_back(ty * plan.tiles_x + tx);
-        }
-      }
-      const TileRect& first = plan.tiles[group.tiles.front()];
-      const TileRect& last = plan.tiles[group.tiles.back()];
-      group.x0 = first.x0;
-      group.y0 = first.y0;
-      group.width = last.x0 + last.width - first.x0;
-      group.height = last.y0 + last.height - first.y0;
-      groups.push_back(std::move(group));
-    }
-  }
-  return groups;
-}
-
 }  // namespace pdsm

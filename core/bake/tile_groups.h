@@ -22,18 +22,17 @@ struct BakePlan;
 // MiB even where casters reach every tile.
 inline constexpr int64_t kMaxGroupPixels = int64_t{1} << 22;
 
+// A group as BakePlan::group() makes it.
 struct TileGroup {
   int index = 0;
   int x0 = 0, y0 = 0, width = 0, height = 0;  // PDSM pixels covered by its tiles
-  std::vector<int> tiles;                     // indices into plan.tiles, row-major
+  std::vector<int> tiles;                     // tile indices, row-major
 };
 
 // The group side in tiles: plan.tile_group_size when set, else the largest the budgets allow
-// (>= 1).
+// (>= 1). PlanBake stores it in plan.group_side; every tile is then in exactly one group.
+// REQUIRES: the plan's tile grid, samples, lattice and scan floor set.
 int GroupSideInTiles(const BakePlan& plan);
-
-// The groups of plan.tiles, row-major; every tile in exactly one. REQUIRES: plan.tiles set.
-std::vector<TileGroup> GroupTiles(const BakePlan& plan);
 
 }  // namespace pdsm
 

@@ -286,7 +286,7 @@ bool DrawnDepths(const BakePlan& plan, double box_lo_z, double box_hi_z, double*
 }
 
 std::vector<bool> TilesCastersMayReach(const BakePlan& plan) {
-  std::vector<bool> reached(plan.tiles.size(), false);
+  std::vector<bool> reached(plan.tile_count(), false);
   const PdsmGeometry& g = plan.geometry();
   const bool sun = g.projection == Projection::kOrthographic;
   const SampleExtent e = ExtentOf(plan);

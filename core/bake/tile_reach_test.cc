@@ -141,16 +141,16 @@ glm::dvec3 TowardSample(const BakePlan& plan, const glm::dvec3& q, const glm::dv
 }
 
 struct RandomRay {
-  const TileRect* tile;
+  TileRect tile;
   double s, t;
 };
 
 RandomRay PickRay(const BakePlan& plan, std::mt19937_64& rng) {
-  std::uniform_int_distribution<size_t> tile_dist(0, plan.tiles.size() - 1);
-  const TileRect& tile = plan.tiles[tile_dist(rng)];
+  std::uniform_int_distribution<size_t> tile_dist(0, plan.tile_count() - 1);
+  const TileRect tile = plan.tile(static_cast<int>(tile_dist(rng)));
   std::uniform_int_distribution<int> x_dist(tile.x0, tile.x0 + tile.width - 1);
   std::uniform_int_distribution<int> y_dist(tile.y0, tile.y0 + tile.height - 1);
-  return {&tile, plan.geometry().PixelCenterS(x_dist(rng)),
+  return {tile, plan.geometry().PixelCenterS(x_dist(rng)),
           plan.geometry().PixelCenterT(y_dist(rng))};
 }
 
@@ -210,10 +210,10 @@ TEST_P(BakePlanTest, TilesCoverTheImageExactlyOnce) {
     const BakePlan plan = Plan(scene);
     ASSERT_EQ(plan.tiles_x, (size.width + size.tile - 1) / size.tile);
     ASSERT_EQ(plan.tiles_y, (size.height + size.tile - 1) / size.tile);
-    ASSERT_EQ(plan.tiles.size(), static_cast<size_t>(plan.tiles_x) * plan.tiles_y);
+    ASSERT_EQ(plan.tile_count(), static_cast<size_t>(plan.tiles_x) * plan.tiles_y);
     std::vector<int> covered(static_cast<size_t>(size.width) * size.height, 0);
-    for (size_t k = 0; k < plan.tiles.size(); ++k) {
-      const TileRect& tile = plan.tiles[k];
+    for (size_t k = 0; k < plan.tile_count(); ++k) {
+      const TileRect tile = plan.tile(static_cast<int>(k));
       EXPECT_EQ(tile.index, static_cast<int>(k));
       // Row-major grid.
       EXPECT_EQ(tile.x0, static_cast<int>(k % plan.tiles_x) * size.tile);
@@ -301,7 +301,7 @@ TEST_P(TileReachTest, CentreSampleMapsARayToOnePoint) {
 TEST_P(TileReachTest, ShadowMapWindowHoldsEveryRaySegment) {
   const BakePlan plan = Plan(MakeScene(GetParam(), 7));
   const ShadowMapLattice& lattice = plan.lattice;
-  for (const TileRect& tile : plan.tiles) {
+  for (const TileRect& tile : AllTiles(plan)) {
     const TileReach reach = ComputeTileReach(plan, tile);
     for (double z_near : {plan.z_clip_near, reach.empty() ? plan.z_clip_near : reach.z_near}) {
       for (const glm::dvec2& sample : plan.samples) {
@@ -367,9 +367,9 @@ void CheckConservativeCulling(LightShape shape, double far_factor) {
     std::uniform_int_distribution<size_t> sample_dist(0, plan.samples.size() - 1);
     for (int trial = 0; trial < 10000; ++trial) {
       const RandomRay ray = PickRay(plan, rng);
-      auto it = reaches.find(ray.tile->index);
+      auto it = reaches.find(ray.tile.index);
       if (it == reaches.end()) {
-        it = reaches.emplace(ray.tile->index, ComputeTileReach(plan, *ray.tile)).first;
+        it = reaches.emplace(ray.tile.index, ComputeTileReach(plan, ray.tile)).first;
       }
       const TileReach& reach = it->second;
       const double z = g.z_near + unit(rng) * (far_factor * g.z_far - g.z_near);
@@ -385,7 +385,7 @@ void CheckConservativeCulling(LightShape shape, double far_factor) {
         const bool kept = std::find(reach.triangles.begin(), reach.triangles.end(),
                                     static_cast<uint32_t>(k)) != reach.triangles.end();
         ASSERT_TRUE(kept) << "seed " << seed << " trial " << trial << ": triangle " << k
-                          << " shadows tile " << ray.tile->index << " ray (" << ray.s << ", "
+                          << " shadows tile " << ray.tile.index << " ray (" << ray.s << ", "
                           << ray.t << ") at z " << z << " from sample (" << sample.x << ", "
                           << sample.y << ") but was culled";
         // The shadowed point is no nearer than the reach's z_near, where the tile's rays start.
@@ -411,7 +411,7 @@ TEST_P(TileReachTest, CullingIsConservative) {
 TEST_P(TileReachTest, ReachIsUniqueAndItsDepthBoundsItsTriangles) {
   const BakePlan plan = Plan(MakeScene(GetParam(), 21));
   size_t kept = 0;
-  for (const TileRect& tile : plan.tiles) {
+  for (const TileRect& tile : AllTiles(plan)) {
     const TileReach reach = ComputeTileReach(plan, tile);
     kept += reach.triangles.size();
     std::vector<uint32_t> sorted = reach.triangles;
@@ -438,7 +438,7 @@ TEST_P(TileReachTest, ReachIsUniqueAndItsDepthBoundsItsTriangles) {
     }
   }
   // Culling culls: with 40 small casters over 12 tiles, far fewer than all pairs are kept.
-  EXPECT_LT(kept, plan.tiles.size() * plan.casters.TriangleCount() * 3 / 4);
+  EXPECT_LT(kept, plan.tile_count() * plan.casters.TriangleCount() * 3 / 4);
   EXPECT_GT(kept, 0u);
 }
 
@@ -454,7 +454,7 @@ TEST_P(TileReachTest, CasterFarToTheSideIsCulled) {
   const BakePlan plan = Plan(scene);
   ASSERT_EQ(plan.casters.TriangleCount(), 1u);
   int kept_left = 0, culled_right = 0, right_tiles = 0;
-  for (const TileRect& tile : plan.tiles) {
+  for (const TileRect& tile : AllTiles(plan)) {
     const TileReach reach = ComputeTileReach(plan, tile);
     if (tile.x0 == 0 && !reach.empty()) ++kept_left;
     if (tile.x0 + tile.width == plan.geometry().width) {
@@ -490,7 +490,7 @@ TEST(ScanFloor, NearLightOccluderStaysWithinTheBudgets) {
   const double tile_y = plan.header.tile_size * g.PixelPitchT() / plan.lattice.pitch_t + 2;
   const double budget = std::max(static_cast<double>(kShadowMapTexelBudget), 4 * tile_x * tile_y);
   int64_t largest = 0;
-  for (const TileRect& tile : plan.tiles) {
+  for (const TileRect& tile : AllTiles(plan)) {
     const TileReach reach = ComputeTileReach(plan, tile);
     for (const RayBlock& b : reach.blocks) EXPECT_GE(b.z_begin, plan.z_scan_floor);
     for (const glm::dvec2& sample : plan.samples) {
@@ -528,7 +528,7 @@ TEST_P(TileReachTest, ClustersGiveTheBruteForceReachExactly) {
     }
     brute.caster_clusters = {all};
     int compared_blocks = 0;
-    for (const TileRect& tile : plan.tiles) {
+    for (const TileRect& tile : AllTiles(plan)) {
       const TileReach a = ComputeTileReach(plan, tile), b = ComputeTileReach(brute, tile);
       ASSERT_EQ(a.triangles, b.triangles) << "seed " << seed << " tile " << tile.index;
       ASSERT_EQ(a.blocks.size(), b.blocks.size()) << "seed " << seed << " tile " << tile.index;
@@ -554,8 +554,8 @@ TEST_P(TileReachTest, TilesCastersMayReachIsASupersetOfTileHasCasters) {
     scene.bake.width = 256;
     scene.bake.height = 192;
     const BakePlan plan = Plan(scene);
-    ASSERT_EQ(plan.tile_has_casters.size(), plan.tiles.size());
-    for (const TileRect& tile : plan.tiles) {
+    ASSERT_EQ(plan.tile_has_casters.size(), plan.tile_count());
+    for (const TileRect& tile : AllTiles(plan)) {
       const bool has = TileHasCasters(plan, tile);
       if (has) EXPECT_TRUE(plan.tile_has_casters[tile.index]) << "tile " << tile.index;
       exact += has;
@@ -613,7 +613,7 @@ TEST(CasterClusters, EveryTriangleOnceInSpatialRunsWithTheirBounds) {
 TEST_P(TileReachTest, NoCastersMeansEmptyReach) {
   const BakePlan plan = Plan(MakeScene(GetParam(), 1, 0));
   EXPECT_FALSE(plan.has_casters());
-  for (const TileRect& tile : plan.tiles) EXPECT_TRUE(ComputeTileReach(plan, tile).empty());
+  for (const TileRect& tile : AllTiles(plan)) EXPECT_TRUE(ComputeTileReach(plan, tile).empty());
 }
 
 std::string ShapeName(const testing::TestParamInfo<LightShape>& info) {

@@ -28,9 +28,19 @@ EngineOptions WithDefaults(EngineOptions options) {
   return options;
 }
 
-// `direct` receives the tiles to do that no caster can reach (plan.tile_has_casters): they
-// need no task and are stored all lit at once.
-JobSpec SchedulerSpec(const EngineJob& job, std::vector<int>* direct) {
+// The tiles of `group` a caster may reach (plan.tile_has_casters; every tile when it is empty).
+std::vector<int> CasterTiles(const BakePlan& plan, int group) {
+  std::vector<int> tiles = plan.group(group).tiles;
+  const std::vector<bool>& casters = plan.tile_has_casters;
+  if (!casters.empty()) std::erase_if(tiles, [&](int t) { return !casters[t]; });
+  return tiles;
+}
+
+// `direct` receives the tiles to do that no caster can reach: they need no task and are
+// stored all lit at once. `work_tiles` counts the tiles given tasks. A group with none of its
+// tiles done is listed without its tiles (JobSpec::tiles_of lists them when it opens): a job
+// holds per-tile lists only for the groups it has open, and a resumed job's partly done ones.
+JobSpec SchedulerSpec(const EngineJob& job, std::vector<int>* direct, int* work_tiles) {
   const PdsmHeader& header = job.plan->header;
   JobSpec spec;
   spec.job_id = job.job_id;
@@ -39,30 +49,32 @@ JobSpec SchedulerSpec(const EngineJob& job, std::vector<int>* direct) {
   spec.samples = header.samples;
   spec.samples_per_task = job.samples_per_task > 0 ? job.samples_per_task : header.samples;
   if (header.adaptive()) spec.adaptive_min_samples = std::max(1, header.adaptive_min_samples);
-  std::vector<bool> done(job.plan->tiles.size(), false);
+  spec.tiles_of = [plan = job.plan](int group) { return CasterTiles(*plan, group); };
+  std::vector<bool> done(job.plan->tile_count(), false);
   for (int t : job.done_tiles) {
     if (t >= 0 && t < static_cast<int>(done.size())) done[t] = true;
   }
   const std::vector<bool>& casters = job.plan->tile_has_casters;
-  for (const TileGroup& group : job.plan->groups) {
-    GroupWork work{group.index, {}};
-    for (int t : group.tiles) {
-      if (done[t]) continue;
-      if (casters.empty() || casters[t]) {
+  *work_tiles = 0;
+  for (int g = 0; g < job.plan->group_count(); ++g) {
+    GroupWork work{g, {}};
+    bool partly_done = false;
+    for (int t : job.plan->group(g).tiles) {
+      const bool reached = casters.empty() || casters[t];
+      if (done[t]) {
+        partly_done = partly_done || reached;
+      } else if (reached) {
         work.tiles.push_back(t);
       } else {
         direct->push_back(t);
       }
     }
-    if (!work.tiles.empty()) spec.groups.push_back(std::move(work));
+    if (work.tiles.empty()) continue;
+    *work_tiles += static_cast<int>(work.tiles.size());
+    if (!partly_done) work.tiles = {};  // tiles_of lists the same tiles
+    spec.groups.push_back(std::move(work));
   }
   return spec;
-}
-
-int TileCount(const JobSpec& spec) {
-  int tiles = 0;
-  for (const GroupWork& g : spec.groups) tiles += static_cast<int>(g.tiles.size());
-  return tiles;
 }
 
 }  // namespace
@@ -125,21 +137,25 @@ struct BakeEngine::Job {
   std::map<int, std::set<std::string>> contributors;  // group -> workers merged since it started
   std::map<int, int64_t> merged_samples;  // group -> samples_done its merged results added
   std::set<int> tainted;                  // open groups to start over when their stage completes
-  struct StoredTile {
-    bool stored = false;
-    bool all_lit = false;
+  // What a group's stored tiles added to `progress`, by group index, and which tiles are
+  // stored, by tile index: a group is withdrawn whole (ForgetGroup gets every tile it was
+  // given work for), so sums per group suffice, and a job holds a bit per tile.
+  struct StoredSums {
+    int tiles = 0;                // added to tiles_done
+    int all_lit = 0;              // added to tiles_all_lit
     int64_t tile_samples = 0;     // added to tile_samples_total
     int64_t samples_skipped = 0;  // added to samples_done
   };
-  std::vector<StoredTile> stored;  // by tile index
+  std::vector<StoredSums> stored_sums;
+  std::vector<bool> stored;
 };
 
 int64_t BakeEngine::JobHeldBytes(int64_t tiles, int64_t groups) {
-  // Per tile: its index in its group's GroupWork (grown by push_back: up to twice 4 bytes),
-  // its Job::StoredTile, its place in EngineJob::done_tiles. Per group: its GroupWork.
-  constexpr int64_t kPerTile = 2 * sizeof(int) + sizeof(Job::StoredTile) + sizeof(int);
-  constexpr int64_t kPerGroup = sizeof(GroupWork);
-  return int64_t{sizeof(Job)} + 4096 + tiles * kPerTile + groups * kPerGroup;
+  // Per tile: its stored bit (a byte's worth, rounded up). Per group: its GroupWork (a list
+  // of its tiles only while it is open, or partly done before a restart: not counted) and
+  // its Job::StoredSums.
+  constexpr int64_t kPerGroup = sizeof(GroupWork) + sizeof(Job::StoredSums);
+  return int64_t{sizeof(Job)} + 4096 + (tiles + 7) / 8 + groups * kPerGroup;
 }
 
 BakeEngine::BakeEngine(EngineOptions options)
@@ -165,17 +181,23 @@ absl::Status BakeEngine::AddJob(EngineJob spec) {
   }
   auto job = std::make_shared<Job>();
   std::vector<int> direct;
-  const JobSpec scheduled = SchedulerSpec(spec, &direct);
+  int work_tiles = 0;
+  const JobSpec scheduled = SchedulerSpec(spec, &direct, &work_tiles);
+  // Read once: a resumed job's list of them is not kept.
+  spec.done_tiles = std::vector<int>();
   job->direct_left = static_cast<int>(direct.size());
   JobProgress& p = job->progress;
-  p.tiles_total = static_cast<int>(spec.plan->tiles.size());
-  p.tiles_done = p.tiles_total - TileCount(scheduled) - job->direct_left;
+  p.tiles_total = static_cast<int>(spec.plan->tile_count());
+  p.tiles_done = p.tiles_total - work_tiles - job->direct_left;
   p.samples_total = int64_t{spec.plan->header.samples} * p.tiles_total;
   p.samples_done = int64_t{spec.plan->header.samples} * p.tiles_done;
   p.samples_at_add = p.samples_done;
   p.added_ms = options_.now_ms();
   p.started = spec.started;
-  if (options_.scheduler.verify_fraction > 0) job->stored.resize(spec.plan->tiles.size());
+  if (options_.scheduler.verify_fraction > 0) {
+    job->stored.resize(spec.plan->tile_count());
+    job->stored_sums.resize(spec.plan->group_count());
+  }
   job->spec = std::move(spec);
   if (!options_.spill_dir.empty()) {
     job->spill = std::make_unique<EventSpill>(options_.spill_dir, options_.fs);
@@ -463,15 +485,18 @@ std::vector<int> BakeEngine::ForgetGroup(Job& job, int group_index, const std::v
   job.contributors.erase(group_index);
   std::vector<int> stored;
   for (int t : tiles) {
-    if (t < 0 || t >= static_cast<int>(job.stored.size()) || !job.stored[t].stored) continue;
-    const Job::StoredTile& record = job.stored[t];
-    --p.tiles_done;
-    if (record.all_lit) --p.tiles_all_lit;
-    p.tile_samples_total -= record.tile_samples;
-    p.samples_done -= record.samples_skipped;
-    ++p.tiles_recomputed;
-    job.stored[t] = {};
+    if (t < 0 || t >= static_cast<int>(job.stored.size()) || !job.stored[t]) continue;
+    job.stored[t] = false;
     stored.push_back(t);
+  }
+  if (group_index >= 0 && group_index < static_cast<int>(job.stored_sums.size())) {
+    Job::StoredSums& sums = job.stored_sums[group_index];
+    p.tiles_done -= sums.tiles;
+    p.tiles_all_lit -= sums.all_lit;
+    p.tile_samples_total -= sums.tile_samples;
+    p.samples_done -= sums.samples_skipped;
+    p.tiles_recomputed += sums.tiles;
+    sums = {};
   }
   return stored;
 }
@@ -656,10 +681,12 @@ bool BakeEngine::StoreTile(const JobPtr& job, int tile_index, StageVerdict verdi
       verdict.tile_samples > 0 ? verdict.tile_samples : job->spec.plan->header.samples;
   p.tile_samples_total += tile_samples;
   if (tile_index >= 0 && tile_index < static_cast<int>(job->stored.size())) {
-    job->stored[tile_index] = {.stored = true,
-                               .all_lit = tile->vertices.empty(),
-                               .tile_samples = tile_samples,
-                               .samples_skipped = verdict.samples_skipped};
+    job->stored[tile_index] = true;
+    Job::StoredSums& sums = job->stored_sums[job->spec.plan->GroupOfTile(tile_index)];
+    ++sums.tiles;
+    if (tile->vertices.empty()) ++sums.all_lit;
+    sums.tile_samples += tile_samples;
+    sums.samples_skipped += verdict.samples_skipped;
   }
   // Every spill of a tile's lists comes before it is stored, so the last tile's count is final.
   if (job->spill) p.spilled_bytes = job->spill->bytes_written();

@@ -158,12 +158,13 @@ class BakeEngine {
   BakeEngine(const BakeEngine&) = delete;
   BakeEngine& operator=(const BakeEngine&) = delete;
 
-  // An upper bound of the heap bytes the engine holds for a job of `tiles` tiles in `groups`
-  // tile groups from AddJob to its end, besides its plan and its open groups' results (those
-  // are bounded by SchedulerOptions::max_open_tiles and the event memory budget): the
-  // scheduler's list of each unopened group's tiles, verification's record of each stored
-  // tile, a resumed job's done tiles. What a coordinator counts against --max-planned-mib
-  // (server/plan_budget.h); the coordinator's memory test checks it against the heap.
+  // The heap bytes the engine holds for a job of `tiles` tiles in `groups` tile groups from
+  // AddJob to its end, besides its plan, its open groups (bounded by
+  // SchedulerOptions::max_open_tiles and the event memory budget) and the tiles no caster
+  // reaches until they are stored: a bit per tile and a few words per group (the scheduler's
+  // entry of each group, verification's sums of each group's stored tiles). What a
+  // coordinator counts against --max-planned-mib (server/plan_budget.h); the coordinator's
+  // memory test checks it against the heap.
   static int64_t JobHeldBytes(int64_t tiles, int64_t groups);
 
   // Starts scheduling the job. A job with every tile done goes straight to Finish (through the

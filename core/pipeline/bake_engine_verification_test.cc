@@ -29,7 +29,7 @@ using testing::SmallPlan;
 // wrong: every pixel lit. Only comparison with another worker can tell.
 std::vector<TileEvents> AllLit(const BakePlan& plan, const TaskLease& lease) {
   std::vector<TileEvents> out;
-  for (int tile : lease.tiles) out.push_back(NoShadowEvents(plan.tiles.at(tile)));
+  for (int tile : lease.tiles) out.push_back(NoShadowEvents(plan.tile(tile)));
   return out;
 }
 

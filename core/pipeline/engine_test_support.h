@@ -34,21 +34,14 @@ inline std::shared_ptr<const BakePlan> SmallPlan(int tiles_x, int samples,
   h.adaptive_min_samples = adaptive_min_samples;
   plan->tiles_x = tiles_x;
   plan->tiles_y = 1;
-  for (int t = 0; t < tiles_x; ++t) {
-    plan->tiles.push_back(TileRect{.index = t, .x0 = 2 * t, .y0 = 0, .width = 2, .height = 1});
-    if (t % group_size == 0) {
-      plan->groups.push_back(TileGroup{static_cast<int>(plan->groups.size()), 2 * t, 0, 0, 1, {}});
-    }
-    plan->groups.back().tiles.push_back(t);
-    plan->groups.back().width += 2;
-  }
+  plan->group_side = group_size;
   return plan;
 }
 
 // The events of samples [begin, end) of tile `tile`: in pixel 0 sample k is in shadow from
 // depth 2 + k % 3 to 8 (so the answer depends on every sample); pixel 1 is lit.
 inline TileEvents BatchEvents(const BakePlan& plan, int tile, int begin, int end) {
-  const TileRect& r = plan.tiles.at(tile);
+  const TileRect r = plan.tile(tile);
   TileEvents out{.tile_index = tile, .x0 = r.x0, .y0 = r.y0, .width = r.width, .height = r.height};
   std::vector<Event> pixel;
   for (int k = begin; k < end; ++k) {

@@ -41,10 +41,12 @@ void Scheduler::AddJob(const JobSpec& spec) {
   job.samples = std::max(1, spec.samples);
   job.samples_per_task = std::max(1, spec.samples_per_task);
   job.adaptive_min_samples = std::clamp(spec.adaptive_min_samples, 0, job.samples);
+  job.tiles_of = spec.tiles_of;
+  job.group_order.reserve(spec.groups.size());  // a coordinator counts it (JobHeldBytes)
   std::set<int> seen;
   for (const GroupWork& group : spec.groups) {
-    // A repeat is the same group; a group with no tile has no work.
-    if (!group.tiles.empty() && seen.insert(group.group_index).second) {
+    // A repeat is the same group; a group without its own list needs tiles_of.
+    if ((!group.tiles.empty() || job.tiles_of) && seen.insert(group.group_index).second) {
       job.group_order.push_back(group);
     }
   }
@@ -90,19 +92,27 @@ bool Scheduler::MayTake(const Task& task, const std::string& worker_id) {
          std::none_of(task.votes.begin(), task.votes.end(), is_worker);
 }
 
+std::vector<int> Scheduler::WorkTiles(const Job& job, const GroupWork& work) {
+  std::vector<int> tiles = work.tiles.empty() ? job.tiles_of(work.group_index) : work.tiles;
+  std::sort(tiles.begin(), tiles.end());
+  tiles.erase(std::unique(tiles.begin(), tiles.end()), tiles.end());
+  return tiles;
+}
+
 bool Scheduler::OpenGroup(Job& job) {
   if (job.next_group >= job.group_order.size()) return false;
   const GroupWork& work = job.group_order[job.next_group];
+  // Listed once while it waits for room (Lease asks again and again).
+  if (job.next_group_tiles.empty()) job.next_group_tiles = WorkTiles(job, work);
   // The tile budget holds unless no group is open at all: a group larger than the budget
   // still gets its turn.
-  const int tiles = static_cast<int>(work.tiles.size());
+  const int tiles = static_cast<int>(job.next_group_tiles.size());
   if (tiles_open_ > 0 && tiles_open_ + tiles > options_.max_open_tiles) return false;
   const int position = static_cast<int>(job.next_group++);
   Group& group = job.groups[work.group_index];
   group.position = position;
-  group.tiles = work.tiles;
-  std::sort(group.tiles.begin(), group.tiles.end());
-  group.tiles.erase(std::unique(group.tiles.begin(), group.tiles.end()), group.tiles.end());
+  group.tiles = std::move(job.next_group_tiles);
+  job.next_group_tiles.clear();
   tiles_open_ += static_cast<int>(group.tiles.size());
   AddTasks(job, group, 0);
   return true;
@@ -376,13 +386,11 @@ std::optional<std::vector<int>> Scheduler::RequeueGroup(const std::string& job_i
     if (job.group_order[i].group_index == group_index) latest = i;
   }
   if (!latest || *latest >= job.next_group) return std::nullopt;
-  GroupWork again = job.group_order[*latest];
+  const GroupWork again = job.group_order[*latest];
   job.group_order.push_back(again);
   ++job.groups_left;
   job.tasks_left += static_cast<int64_t>(StageBatches(job, 0).size());
-  std::sort(again.tiles.begin(), again.tiles.end());
-  again.tiles.erase(std::unique(again.tiles.begin(), again.tiles.end()), again.tiles.end());
-  return again.tiles;
+  return WorkTiles(job, again);
 }
 
 std::optional<std::vector<int>> Scheduler::RestartGroup(const std::string& job_id,
@@ -393,9 +401,7 @@ std::optional<std::vector<int>> Scheduler::RestartGroup(const std::string& job_i
   const auto group_it = job.groups.find(group_index);
   if (group_it == job.groups.end() || group_it->second.tasks_left > 0) return std::nullopt;
   Group& group = group_it->second;
-  std::vector<int> tiles = job.group_order[group.position].tiles;
-  std::sort(tiles.begin(), tiles.end());
-  tiles.erase(std::unique(tiles.begin(), tiles.end()), tiles.end());
+  std::vector<int> tiles = WorkTiles(job, job.group_order[group.position]);
   tiles_open_ += static_cast<int>(tiles.size()) - static_cast<int>(group.tiles.size());
   group.tiles = tiles;
   group.tasks.clear();  // all done: no lease, pending entry or vote refers to them

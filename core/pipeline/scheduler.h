@@ -24,6 +24,7 @@
 #define PDSM_CORE_PIPELINE_SCHEDULER_H_
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <random>
@@ -54,10 +55,12 @@ struct SchedulerOptions {
   uint64_t verify_seed = 0;
 };
 
-// A group's tiles still to do (a resumed job lists only its unfinished ones).
+// A group's tiles still to do (a resumed job lists only its unfinished ones). Empty: every
+// tile of the group there is work for, listed by JobSpec::tiles_of when the group opens, so
+// that the groups a job has not opened yet hold no per-tile list.
 struct GroupWork {
   int group_index = 0;
-  std::vector<int> tiles;  // non-empty
+  std::vector<int> tiles;
 };
 
 struct JobSpec {
@@ -71,6 +74,9 @@ struct JobSpec {
   // stages of these first samples; after each stage completes the service assembles the tiles
   // that are done and calls AddStage() for the others. 0: one stage holding all `samples`.
   int adaptive_min_samples = 0;
+  // The tiles of a group whose GroupWork lists none (non-empty, any order). Required when
+  // one does; called under the scheduler's caller's lock, so it must be quick and lock-free.
+  std::function<std::vector<int>(int group_index)> tiles_of;
 };
 
 struct TaskLease {
@@ -272,12 +278,14 @@ class Scheduler {
     int adaptive_min_samples = 0;        // 0: fixed-count job
     std::vector<GroupWork> group_order;  // groups in the order they open
     size_t next_group = 0;               // next group of group_order to open
-    std::map<int, Group> groups;         // open groups by group index
-    std::set<TaskRef> pending;           // tasks of open groups waiting for a worker
-    std::set<TaskRef> awaiting;          // verified tasks with votes, not yet decided
-    std::set<uint64_t> leases;           // current leases
-    int64_t tasks_left = 0;              // not yet accepted, open or not
-    int groups_left = 0;                 // not yet assembled
+    std::vector<int> next_group_tiles;   // its tiles, once listed (WorkTiles), until it opens
+    std::function<std::vector<int>(int)> tiles_of;  // JobSpec::tiles_of
+    std::map<int, Group> groups;                    // open groups by group index
+    std::set<TaskRef> pending;                      // tasks of open groups waiting for a worker
+    std::set<TaskRef> awaiting;                     // verified tasks with votes, not yet decided
+    std::set<uint64_t> leases;                      // current leases
+    int64_t tasks_left = 0;                         // not yet accepted, open or not
+    int groups_left = 0;                            // not yet assembled
     std::map<std::string, int> worker_failures;
     std::set<std::string> incompatible_workers;  // plan their own way: get none of its tasks
     std::string last_failure;
@@ -303,6 +311,8 @@ class Scheduler {
   void Quarantine(const std::string& worker_id);
   ResultOutcome OutcomeOf(const Job& job, TaskRef task) const;
   bool OpenGroup(Job& job);
+  // The group's tiles, ascending, without repeats: its own list, or JobSpec::tiles_of's.
+  static std::vector<int> WorkTiles(const Job& job, const GroupWork& work);
   // The sample ranges of a group's stage, cut into batches of samples_per_task.
   static std::vector<std::pair<int, int>> StageBatches(const Job& job, int stage);
   void AddTasks(Job& job, Group& group, int stage);

@@ -106,7 +106,7 @@ absl::StatusOr<PdsmTile> AssemblePlanTile(const BakePlan& plan, const TileParts&
   }
   std::optional<TileWindows> windows;
   if (plan.header.surfaces_only) {
-    windows = ComputeReceiverWindows(plan, plan.tiles.at(parts.shape.tile_index));
+    windows = ComputeReceiverWindows(plan, plan.tile(parts.shape.tile_index));
   }
   std::vector<SpilledRunReader> readers;
   readers.reserve(parts.spilled.size());

@@ -25,7 +25,7 @@ TileEvents NoShadowEvents(const TileRect& rect) {
 }
 
 UnreachedTile MakeUnreachedTile(const BakePlan& plan, int tile_index) {
-  const TileEvents none = NoShadowEvents(plan.tiles[tile_index]);
+  const TileEvents none = NoShadowEvents(plan.tile(tile_index));
   std::vector<TileParts> ranges;
   for (size_t k = 0; k < StageRanges(plan.header, 0).size(); ++k) {
     ranges.push_back(TileParts{.in_memory = {none}, .spilled = {}, .shape = none});

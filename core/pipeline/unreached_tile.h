@@ -15,7 +15,7 @@
 namespace pdsm {
 
 // True when the plan knows that no caster reaches tile `tile_index` (a plan without the
-// per-tile flags reaches every tile). REQUIRES: tile_index in [0, plan.tiles.size()).
+// per-tile flags reaches every tile). REQUIRES: tile_index in [0, plan.tile_count()).
 bool IsUnreachedTile(const BakePlan& plan, int tile_index);
 
 // The result a task returns for tile `rect` when no sample shadows any of its rays: every

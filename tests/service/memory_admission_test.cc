@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include "absl/strings/str_cat.h"
+
 #include "tests/service/service_cluster.h"
 
 namespace pdsm::testing {
@@ -15,20 +17,34 @@ namespace {
 
 using std::chrono::seconds;
 
-// A 40 x 40 ground under one small square at 512^2 in 2-pixel tiles: 65,536 tiles, which
-// the coordinator keeps ~4 MiB of records for, and few of which a caster reaches (quick).
-std::string WriteManyTilesScene(const TempDir& dir) {
-  const std::string path = dir.File("many_tiles.json");
+// A surfaces-only bake over a 40 x 40 ground of 200 x 200 quads (an OBJ, uploaded as an
+// asset): its plan keeps the ground's 40,401 vertices and 80,000 triangles, 1.4 MB, which
+// the coordinator counts against --max-planned-mib; a small square casts.
+std::string WriteGroundScene(const TempDir& dir) {
+  constexpr int kSide = 200;
+  std::string obj;
+  for (int j = 0; j <= kSide; ++j) {
+    for (int i = 0; i <= kSide; ++i) {
+      absl::StrAppend(&obj, "v ", 40.0 * i / kSide - 20, " 0 ", 40.0 * j / kSide - 20, "\n");
+    }
+  }
+  for (int j = 0; j < kSide; ++j) {
+    for (int i = 0; i < kSide; ++i) {
+      const int a = j * (kSide + 1) + i + 1, b = a + 1, c = a + kSide + 1, d = c + 1;
+      absl::StrAppend(&obj, "f ", a, " ", c, " ", b, "\nf ", b, " ", c, " ", d, "\n");
+    }
+  }
+  WriteText(dir.File("ground.obj"), obj);
+  const std::string path = dir.File("ground.json");
   WriteText(path, R"({
-  "name": "many tiles",
+  "name": "ground",
   "meshes": [
-    {"inline": {"positions": [-20,0,-20, 20,0,-20, 20,0,20, -20,0,20], "indices": [0,1,2, 0,2,3]},
-     "role": "RECEIVER_ONLY"},
+    {"path": "ground.obj", "role": "RECEIVER_ONLY"},
     {"inline": {"positions": [-0.5,2,-0.5, 0.5,2,-0.5, 0.5,2,0.5, -0.5,2,0.5],
                 "indices": [0,1,2, 0,2,3]}}
   ],
   "light": {"rect": {"center": [0,10,0], "normal": [0,-1,0], "up": [0,0,1], "size": [1,1]}},
-  "bake": {"resolution": [512,512], "samples": 4, "tileSize": 2}
+  "bake": {"resolution": [256,256], "samples": 4, "tileSize": 16, "surfacesOnly": true}
 })");
   return path;
 }
@@ -39,18 +55,18 @@ bool Waits(const pdsm::v1::Job& job) {
 }
 
 TEST(MemoryAdmission, JobsThatDoNotFitWaitTheirTurnAcrossARestartAndBakeExactly) {
-  // One such job fits in 6 MiB, two do not.
-  ServiceCluster cluster(CoordinatorArgs({"--max-planned-mib", "6"}));
+  // One such job fits in 2 MiB, two do not.
+  ServiceCluster cluster(CoordinatorArgs({"--max-planned-mib", "2"}));
   ASSERT_TRUE(cluster.StartCoordinator());
-  const std::string scene = WriteManyTilesScene(cluster.dir());
+  const std::string scene = WriteGroundScene(cluster.dir());
   const std::string expected = LocalBakeBytes(cluster.dir(), scene);
 
   // No worker yet: nothing ends, so what is held stays held.
   const std::string first = cluster.Submit(scene);
   pdsm::v1::Stats stats = cluster.Stats();
-  EXPECT_GT(stats.planned_bytes(), int64_t{3} << 20) << "65,536 tiles hold more than 3 MiB";
-  EXPECT_LE(stats.planned_bytes(), int64_t{6} << 20);
-  EXPECT_EQ(stats.max_planned_bytes(), int64_t{6} << 20);
+  EXPECT_GT(stats.planned_bytes(), 40401 * 12 + 80000 * 12) << "the ground is held";
+  EXPECT_LE(stats.planned_bytes(), int64_t{2} << 20) << "more than the ground is held";
+  EXPECT_EQ(stats.max_planned_bytes(), int64_t{2} << 20);
   const std::string second = cluster.Submit(scene);
   const std::string third = cluster.Submit(scene);
   pdsm::v1::Job job;
@@ -60,7 +76,7 @@ TEST(MemoryAdmission, JobsThatDoNotFitWaitTheirTurnAcrossARestartAndBakeExactly)
   ASSERT_TRUE(cluster.GetJob(second, &job).ok());
   EXPECT_TRUE(Waits(job)) << job.queued_reason();
   EXPECT_EQ(job.plan_fingerprint(), "") << "a waiting job holds no plan";
-  EXPECT_EQ(job.tiles_total(), 65536) << "sized from its scene all the same";
+  EXPECT_EQ(job.tiles_total(), 256) << "sized from its scene all the same";
   ASSERT_TRUE(cluster.GetJob(third, &job).ok());
   EXPECT_TRUE(Waits(job)) << job.queued_reason();
   EXPECT_NE(job.queued_reason().find("1 job waits ahead of it"), std::string::npos)
@@ -99,12 +115,13 @@ TEST(MemoryAdmission, JobsThatDoNotFitWaitTheirTurnAcrossARestartAndBakeExactly)
 }
 
 TEST(MemoryAdmission, AJobThatCanNeverFitIsRefusedNamingTheFlag) {
-  ServiceCluster cluster(CoordinatorArgs({"--max-planned-mib", "2"}));
+  ServiceCluster cluster(CoordinatorArgs({"--max-planned-mib", "1"}));
   ASSERT_TRUE(cluster.StartCoordinator());
-  const CommandResult r = cluster.Pdsm("submit " + WriteManyTilesScene(cluster.dir()));
+  const CommandResult r = cluster.Pdsm("submit " + WriteGroundScene(cluster.dir()));
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_NE(r.err.find("above its limit of 2.0 MiB (--max-planned-mib)"), std::string::npos)
+  EXPECT_NE(r.err.find("above its limit of 1.0 MiB (--max-planned-mib)"), std::string::npos)
       << r.err;
+  EXPECT_NE(r.err.find("bake.surfacesOnly off"), std::string::npos) << r.err;
   EXPECT_EQ(cluster.Stats().planned_bytes(), 0);
 }
 
