@@ -56,11 +56,6 @@ absl::Status CheckLightLimits(const BakeSettings& bake, const std::string& label
   return absl::OkStatus();
 }
 
-int64_t TileCount(const BakeSettings& bake) {
-  const int tile = std::max(1, bake.tile_size);
-  return ((int64_t{bake.width} + tile - 1) / tile) * ((int64_t{bake.height} + tile - 1) / tile);
-}
-
 // The scene's lights and bake, without its meshes (skipped by length: they may be large
 // inline arrays).
 absl::StatusOr<pdsm::v1::Scene> ReadSceneLights(const std::string& serialized_scene,
@@ -134,7 +129,7 @@ absl::Status CheckMinPlannedBytes(const pdsm::v1::Scene& scene, const Scene& loa
     const BakeSettings bake = LightOf(loaded, i).bake;
     surfaces_only = surfaces_only || bake.surfaces_only;
     bytes += MinReleasedPlanBytes(bake, receiver_vertices, receiver_triangles) +
-             BakeEngine::JobHeldBytes(TileCount(bake), /*groups=*/1);
+             BakeEngine::JobHeldBytes(TileCountOf(bake), /*groups=*/1);
   }
   if (bytes <= max_bytes) return absl::OkStatus();
   return PlannedBytesError(label, "would hold at least", bytes, max_bytes, surfaces_only);
@@ -171,7 +166,7 @@ absl::StatusOr<std::vector<PlannedLight>> PlanJobLights(const pdsm::v1::Scene& s
       const std::string light_label =
           count == 1 ? label : absl::StrFormat("%s: lights[%d] \"%s\"", label, i, light.name);
       if (absl::Status s = CheckLightLimits(light.bake, light_label, *limits); !s.ok()) return s;
-      tiles += TileCount(light.bake);
+      tiles += TileCountOf(light.bake);
       if (tiles > limits->max_job_tiles) {
         return absl::ResourceExhaustedError(absl::StrFormat(
             "%s: bake.tileSize: %d makes %d tiles%s, above this coordinator's limit of %d (a "

@@ -290,6 +290,11 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
   return plan;
 }
 
+int64_t TileCountOf(const BakeSettings& bake) {
+  const int64_t tile = std::max(1, bake.tile_size);
+  return ((bake.width + tile - 1) / tile) * ((bake.height + tile - 1) / tile);
+}
+
 TileRect BakePlan::tile(int index) const {
   const int size = header.tile_size;
   TileRect rect;

@@ -124,6 +124,10 @@ inline constexpr double kMaxWindowTangent = 11.430052302761343;
 // tan(cone half-angle) (the square around its cone). The sun's window is not a tangent.
 double MaxWindowTangent(const LightSpec& light);
 
+// The tiles a bake of these settings is cut into, known before planning: its resolution in
+// tiles of tile_size (a tile size below 1 counts as 1).
+int64_t TileCountOf(const BakeSettings& bake);
+
 // A scene with nothing in front of the light gets a default frustum (window [-1, 1]^2,
 // depths [1, 2]) and bakes to an all-lit PDSM. Errors: INVALID_ARGUMENT for a frustum
 // override the projection cannot use.

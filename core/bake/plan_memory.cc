@@ -25,11 +25,6 @@ int64_t MeshBytes(const LightSpaceMesh& mesh) {
   return VectorBytes(mesh.positions) + VectorBytes(mesh.indices);
 }
 
-int64_t TileCount(const BakeSettings& bake) {
-  const int64_t tile = std::max(1, bake.tile_size);
-  return ((bake.width + tile - 1) / tile) * ((bake.height + tile - 1) / tile);
-}
-
 }  // namespace
 
 int64_t PlanHeldBytes(const BakePlan& plan) {
@@ -44,7 +39,7 @@ int64_t PlanHeldBytes(const BakePlan& plan) {
 
 int64_t MinReleasedPlanBytes(const BakeSettings& bake, int64_t receiver_vertices,
                              int64_t receiver_triangles) {
-  const int64_t tiles = TileCount(bake);
+  const int64_t tiles = TileCountOf(bake);
   int64_t bytes = sizeof(BakePlan);
   bytes += int64_t{bake.samples} * static_cast<int64_t>(sizeof(glm::dvec2));
   bytes += (tiles + 7) / 8;  // tile_has_casters
