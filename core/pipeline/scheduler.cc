@@ -446,7 +446,8 @@ std::vector<JobFailure> Scheduler::Tick(int64_t now_ms) {
     const LeaseMap::iterator it = leases_.find(deadlines_.begin()->second);
     ++leases_expired_;
     const std::string reason = absl::StrCat("lease expired on worker ", it->second.worker_id);
-    if (std::optional<JobFailure> failure = FailTask(it, reason, /*handed_back=*/false)) {
+    if (std::optional<JobFailure> failure =
+            FailTask(it, reason, /*handed_back=*/false, /*expired=*/true)) {
       failures.push_back(*std::move(failure));
     }
   }
@@ -564,11 +565,13 @@ void Scheduler::Requeue(Job& job, TaskRef task) {
 }
 
 std::optional<JobFailure> Scheduler::FailTask(LeaseMap::iterator it, const std::string& reason,
-                                              bool handed_back) {
+                                              bool handed_back, bool expired) {
   const LeaseInfo lease = TakeLease(it);
   Job& job = jobs_.at(lease.job_id);
   if (!handed_back) {
-    std::optional<JobFailure> failure = CountFailure(job, lease.task, lease.worker_id, reason);
+    std::optional<JobFailure> failure =
+        expired ? CountExpiry(job, lease.task, lease.worker_id, reason)
+                : CountFailure(job, lease.task, lease.worker_id, reason);
     if (failure) {
       RemoveJob(lease.job_id);
       return failure;
@@ -583,17 +586,34 @@ std::optional<JobFailure> Scheduler::CountFailure(Job& job, TaskRef task,
                                                   const std::string& reason) {
   ++job.worker_failures[worker_id];
   job.last_failure = reason;
-  std::vector<std::pair<std::string, std::string>>& failures =
-      GroupOf(job, task).tasks[task.second].failures;
-  failures.emplace_back(worker_id, reason);
-  if (static_cast<int>(failures.size()) < options_.max_task_failures) return std::nullopt;
+  GroupOf(job, task).tasks[task.second].failures.emplace_back(worker_id, reason);
+  return TaskFailedTooOften(job, task);
+}
 
-  const int64_t begin = GroupOf(job, task).tasks[task.second].sample_begin;
-  const int64_t end = GroupOf(job, task).tasks[task.second].sample_end;
+std::optional<JobFailure> Scheduler::CountExpiry(Job& job, TaskRef task,
+                                                 const std::string& worker_id,
+                                                 const std::string& reason) {
+  job.last_failure = reason;
+  GroupOf(job, task).tasks[task.second].expired_on.insert(worker_id);
+  return TaskFailedTooOften(job, task);
+}
+
+std::optional<JobFailure> Scheduler::TaskFailedTooOften(const Job& job, TaskRef task) const {
+  const Task& t = GroupOf(job, task).tasks[task.second];
+  std::vector<std::string> expired_only;
+  for (const std::string& worker : t.expired_on) {
+    const auto failed = [&](const auto& failure) { return failure.first == worker; };
+    if (std::none_of(t.failures.begin(), t.failures.end(), failed)) expired_only.push_back(worker);
+  }
+  const size_t workers = t.failures.size() + expired_only.size();
+  if (static_cast<int>(workers) < options_.max_task_failures) return std::nullopt;
   std::string why =
-      absl::StrCat("tile group ", job.group_order[task.first].group_index, " samples [", begin,
-                   ", ", end, ") failed on ", failures.size(), " workers:");
-  for (const auto& [worker, what] : failures) absl::StrAppend(&why, " ", worker, ": ", what, ";");
+      absl::StrCat("tile group ", job.group_order[task.first].group_index, " samples [",
+                   t.sample_begin, ", ", t.sample_end, ") failed on ", workers, " workers:");
+  for (const auto& [worker, what] : t.failures) absl::StrAppend(&why, " ", worker, ": ", what, ";");
+  for (const std::string& worker : expired_only) {
+    absl::StrAppend(&why, " lease expired on worker ", worker, ";");
+  }
   why.pop_back();
   return JobFailure{job.key.job_id, std::move(why)};
 }

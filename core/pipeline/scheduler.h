@@ -188,9 +188,13 @@ class Scheduler {
   // until they expire.
   void SignOff(const std::string& worker_id);
 
-  // Re-queues tasks whose lease has expired (a failure of their holder: a dead or stalled
-  // worker) and fails jobs that can no longer progress: a task failed on too many workers, or
-  // every active worker excluded. Call periodically.
+  // Re-queues tasks whose lease has expired and fails jobs that can no longer progress: a task
+  // failed on too many workers, or every active worker excluded. An expiry says the holder
+  // went quiet (dead, stopped, cut off), not that it cannot do the task: it counts towards the
+  // task's max_task_failures once per distinct worker (a task that kills every process it
+  // reaches, each a new worker id, still fails its job), but never towards the worker's
+  // exclusion, and the worker may take the task again, so that a farm of one worker whose
+  // machine pauses (a suspended VM, a network cut) finishes its jobs. Call periodically.
   std::vector<JobFailure> Tick(int64_t now_ms);
 
   // Verified tasks waiting for a second result that no active worker can give (every able one
@@ -248,6 +252,9 @@ class Scheduler {
     // (worker, reason) of each failure; the workers are distinct since a task never goes back
     // to a worker it failed on.
     std::vector<std::pair<std::string, std::string>> failures;
+    // Workers whose lease of it expired (Tick): counted with `failures` (once per worker, and
+    // not again when the worker also failed it), but not keeping it from them.
+    std::set<std::string> expired_on;
     bool verify = false;  // drawn for verification
     bool merged = false;  // a result of it has been merged (the first vote)
     // (worker, digest) of each result of a verified task, distinct workers, until decided.
@@ -323,10 +330,17 @@ class Scheduler {
   LeaseMap::iterator FindCurrent(const std::string& worker_id, uint64_t lease_id);
   LeaseInfo TakeLease(LeaseMap::iterator it);
   void Requeue(Job& job, TaskRef task);
+  // Takes the lease back and requeues its task, counting `reason` against the worker and
+  // the task unless `handed_back`, or as an expiry when `expired`.
   std::optional<JobFailure> FailTask(LeaseMap::iterator it, const std::string& reason,
-                                     bool handed_back);
+                                     bool handed_back, bool expired = false);
   std::optional<JobFailure> CountFailure(Job& job, TaskRef task, const std::string& worker_id,
                                          const std::string& reason);
+  // The worker's lease of the task expired (Tick).
+  std::optional<JobFailure> CountExpiry(Job& job, TaskRef task, const std::string& worker_id,
+                                        const std::string& reason);
+  // The job's failure once the task has failed (or expired) on max_task_failures workers.
+  std::optional<JobFailure> TaskFailedTooOften(const Job& job, TaskRef task) const;
   bool Excluded(const Job& job, const std::string& worker_id) const;
   bool FailedAllRemaining(const Job& job, const std::string& worker_id) const;
   std::optional<JobFailure> CheckStuck(const Job& job) const;

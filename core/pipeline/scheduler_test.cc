@@ -236,10 +236,58 @@ TEST(SchedulerTest, ExpiredLeaseIsReissued) {
   ASSERT_TRUE(second);
   EXPECT_EQ(second->group_index, 0);
   EXPECT_NE(second->lease_id, first.lease_id);
-  // The expiry counted against "a": it never gets this task back.
+  // An expiry is not a failure of "a": it may take the task again.
   EXPECT_EQ(scheduler.Fail("b", second->lease_id, "x", /*handed_back=*/true, 1000), std::nullopt);
-  EXPECT_FALSE(scheduler.Lease("a", 1000));
-  EXPECT_TRUE(scheduler.Lease("c", 1000));
+  EXPECT_TRUE(scheduler.Lease("a", 1000));
+}
+
+// Issue #17: one worker whose leases kept expiring (a machine that pauses) was excluded, and
+// with no other worker active the job failed ("no worker can run the job").
+TEST(SchedulerTest, ALoneWorkerWhoseLeasesKeepExpiringStillFinishesTheJob) {
+  Scheduler scheduler(SmallOptions());  // lease_ms 1000, 3 failures per task and per worker
+  scheduler.AddJob(MakeJob("j", {0, 1, 2, 3}));
+  int64_t now = 0;
+  for (int i = 0; i < 6; ++i) {  // twice each of three tasks, and the first one more often
+    ASSERT_TRUE(scheduler.Lease("a", now)) << i;
+    now += 1000;
+    EXPECT_TRUE(scheduler.Tick(now).empty()) << "expiry " << i << " failed the job";
+  }
+  EXPECT_EQ(scheduler.Stats(now).leases_expired, 6);
+  int done = 0;
+  while (std::optional<TaskLease> lease = scheduler.Lease("a", now)) {
+    if (scheduler.Complete("a", lease->lease_id, now).kind == ResultOutcome::kStageComplete) {
+      scheduler.GroupAssembled("j", lease->group_index);
+      ++done;
+    }
+  }
+  EXPECT_EQ(done, 4);
+  EXPECT_TRUE(scheduler.Tick(now).empty());
+  EXPECT_TRUE(scheduler.JobComplete("j"));
+}
+
+// What expiries still catch: a task whose every holder goes quiet, each a new process (a task
+// that crashes its worker), fails its job after max_task_failures of them.
+TEST(SchedulerTest, ATaskWhoseLeaseExpiresOnThreeWorkersFailsTheJob) {
+  Scheduler scheduler(SmallOptions());
+  scheduler.AddJob(MakeJob("j", {7}));
+  int64_t now = 0;
+  for (const char* worker : {"a", "b"}) {
+    ASSERT_TRUE(scheduler.Lease(worker, now));
+    now += 1000;
+    EXPECT_TRUE(scheduler.Tick(now).empty());
+  }
+  // "a" again counts once.
+  ASSERT_TRUE(scheduler.Lease("a", now));
+  now += 1000;
+  EXPECT_TRUE(scheduler.Tick(now).empty());
+  ASSERT_TRUE(scheduler.Lease("c", now));
+  now += 1000;
+  const std::vector<JobFailure> failures = scheduler.Tick(now);
+  ASSERT_EQ(failures.size(), 1u);
+  EXPECT_THAT(failures[0].reason, HasSubstr("tile group 7"));
+  EXPECT_THAT(failures[0].reason, HasSubstr("failed on 3 workers"));
+  EXPECT_THAT(failures[0].reason, HasSubstr("lease expired on worker c"));
+  EXPECT_FALSE(scheduler.HasJob("j"));
 }
 
 TEST(SchedulerTest, LateResultIsDroppedAndTheReissuedOneAccepted) {

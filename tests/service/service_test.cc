@@ -210,6 +210,39 @@ TEST(Service, StalledWorkerLosesItsLeaseAndItsLateResultChangesNothing) {
   EXPECT_TRUE(FetchBytes(cluster, job_id) == expected);
 }
 
+// Issue #17: a lone worker whose leases expired three times was excluded from its job, which
+// then failed ("no worker can run the job"). An expiry is not held against the worker now.
+TEST(Service, ALoneWorkerStoppedPastItsLeaseThreeTimesStillFinishesTheJob) {
+  ServiceCluster cluster(
+      CoordinatorArgs({"--samples-per-task", "8", "--lease-seconds", LeaseSeconds(1)}));
+  ASSERT_TRUE(cluster.StartCoordinator());
+  const std::string scene = WriteServiceScene(cluster.dir(), 128, 256, 32, 1024);
+  const std::string expected = LocalBakeBytes(cluster.dir(), scene);
+  const size_t worker = cluster.AddWorker();
+  const std::string job_id = cluster.Submit(scene);
+  for (int round = 0; round < 3; ++round) {
+    // Stopped while it holds a task, for longer than the lease.
+    const auto leased_by = std::chrono::steady_clock::now() + seconds(60) * TestTimeScale();
+    while (cluster.Stats().tasks_leased() == 0 && std::chrono::steady_clock::now() < leased_by) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    ASSERT_GT(cluster.Stats().tasks_leased(), 0) << "round " << round;
+    cluster.worker(worker).Signal(SIGSTOP);
+    const int64_t expired = cluster.Stats().leases_expired();
+    const auto expired_by = std::chrono::steady_clock::now() + seconds(30) * TestTimeScale();
+    while (cluster.Stats().leases_expired() == expired &&
+           std::chrono::steady_clock::now() < expired_by) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    cluster.worker(worker).Signal(SIGCONT);
+    ASSERT_GT(cluster.Stats().leases_expired(), expired) << "round " << round;
+  }
+  const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
+  ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error();
+  EXPECT_GE(cluster.Stats().leases_expired(), 3);
+  EXPECT_TRUE(FetchBytes(cluster, job_id) == expected);
+}
+
 TEST(Service, TerminatedWorkerHandsBackItsTaskAndExitsZero) {
   // Leases of 30 s: a task that was not handed back would sit out its lease, and the expiry
   // would show in the stats.
