@@ -226,19 +226,25 @@ void Coordinator::ActivateWaiting() {
       budget_.Release(job_id);
       continue;
     }
+    // A job that cannot start fails, saying why; it must not keep the others waiting.
+    const auto cannot = [&](const char* what, const absl::Status& why) {
+      spdlog::error("job {}: {}: {}", job_id, what, std::string(why.message()));
+      budget_.Release(job_id);
+      EndUnstarted(job_id, pdsm::v1::FAILED,
+                   absl::Status(why.code(), absl::StrCat(what, ": ", why.message())));
+    };
     pdsm::v1::Scene scene;
     absl::StatusOr<std::vector<PlannedLight>> plans =
         scene.ParseFromString(record->scene)
             ? PlanJobLights(scene, label, *assets_, nullptr)
             : absl::DataLossError(absl::StrCat(label, ": stored scene is corrupt"));
-    absl::StatusOr<std::vector<int>> done = plans.ok() ? store_->DoneTiles(job_id) : plans.status();
+    if (!plans.ok()) {
+      cannot("cannot be planned", plans.status());
+      continue;
+    }
+    absl::StatusOr<std::vector<int>> done = store_->DoneTiles(job_id);
     if (!done.ok()) {
-      // One job that cannot be planned must not keep the others waiting.
-      spdlog::error("job {}: cannot be planned: {}", job_id, std::string(done.status().message()));
-      budget_.Release(job_id);
-      EndUnstarted(job_id, pdsm::v1::FAILED,
-                   absl::Status(done.status().code(),
-                                absl::StrCat("cannot be planned: ", done.status().message())));
+      cannot("cannot read its finished tiles", done.status());
       continue;
     }
     switch (budget_.Planned(job_id, JobHeldBytes(*plans, scene))) {
@@ -252,9 +258,7 @@ void Coordinator::ActivateWaiting() {
         break;
     }
     if (absl::Status s = ActivateCounted(*record, *done, *std::move(plans)); !s.ok()) {
-      spdlog::error("job {}: cannot start: {}", job_id, std::string(s.message()));
-      EndUnstarted(job_id, pdsm::v1::FAILED,
-                   absl::Status(s.code(), absl::StrCat("cannot start: ", s.message())));
+      cannot("cannot start", s);  // ActivateCounted released it already; again is harmless
       continue;
     }
     spdlog::info("job {}: running with {} of {} tiles done", job_id, done->size(),
