@@ -70,7 +70,7 @@ for phase in "${phases[@]}"; do
       status=0
       (cd build-tsan && LD_PRELOAD=$root/build-tsan/libpdsm_tsan_absl.so \
         ctest --output-on-failure -j "$jobs" --timeout 1800 \
-        -R '^(SchedulerTest|BakeEngine\.|BakeEngineVerification|SchedulerVerification|Verification\.|WorkQueue|StageAccumulator|JudgeStage|EventSpill|SpilledRunReader|PdsmTileCache|Service|HostileRequests|JobStoreTest|StoredJob|AssetStoreTest)' \
+        -R '^(SchedulerTest|BakeEngine\.|BakeEngineVerification|SchedulerVerification|Verification\.|WorkQueue|StageAccumulator|JudgeStage|EventSpill|SpilledRunReader|PdsmTileCache|Service|HostileRequests|JobStoreTest|StoredJob|AssetStoreTest|PlanBudget|MemoryAdmission)' \
         -E '^Service\.StalledWorkerLosesItsLease') || status=$?
       print_reports tsan || status=1
       [[ $status == 0 ]] || exit "$status"
