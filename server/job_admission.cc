@@ -217,7 +217,7 @@ absl::StatusOr<JobRecord> NewJobRecord(const pdsm::v1::SubmitBakeRequest& reques
   record.state = pdsm::v1::QUEUED;
   record.priority = request.priority();
   for (const PlannedLight& light : lights) {
-    const int tiles = static_cast<int>(light.plan->tile_count());
+    const int tiles = light.plan->tile_count();
     record.tiles_total += tiles;
     record.samples_total += int64_t{light.plan->header.samples} * tiles;
   }

@@ -38,7 +38,7 @@ struct JobLight {
   std::string fingerprint;  // PlanFingerprint of the whole plan (PlannedLight)
   int tile_offset = 0;      // its first tile's index among the job's tiles
   std::string engine_id;    // EngineJobId(job_id, index, light count)
-  int tile_count() const { return static_cast<int>(plan->tile_count()); }
+  int tile_count() const { return plan->tile_count(); }
 };
 
 // The job's lights from their plans (one per light, in scene order). REQUIRES: non-empty.

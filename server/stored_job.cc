@@ -119,8 +119,7 @@ absl::StatusOr<std::string> StoredJob::FinishedTileFile(int light, int tile) con
   const std::string path = paths_.Tile(l.tile_offset + tile);
   std::error_code ec;
   if (std::filesystem::exists(path, ec)) return path;
-  if (tile < 0 || tile >= static_cast<int>(l.plan->tile_count()) ||
-      !IsUnreachedTile(*l.plan, tile)) {
+  if (tile < 0 || tile >= l.plan->tile_count() || !IsUnreachedTile(*l.plan, tile)) {
     return absl::NotFoundError(
         absl::StrCat("job ", record_.job_id, ": tile ", tile, " is not assembled (yet)"));
   }

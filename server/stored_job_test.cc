@@ -50,7 +50,7 @@ class StoredJobTest : public ::testing::Test {
     JobRecord record;
     record.job_id = "0123456789abcdef";
     record.idempotency_key = "k";
-    record.tiles_total = static_cast<int>(plan_->tile_count());
+    record.tiles_total = plan_->tile_count();
     ASSERT_TRUE(store_->CreateJob(record, nullptr).ok());
     record_ = record;
   }

@@ -9,6 +9,7 @@
 #include "absl/strings/str_format.h"
 #include "core/bake/receiver_windows.h"
 #include "core/bake/tile_reach.h"
+#include "core/pipeline/unreached_tile.h"
 #include "worker/scan_convert.h"
 
 namespace pdsm {
@@ -16,17 +17,6 @@ namespace {
 
 double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-TileEvents EmptyTileEvents(const TileRect& tile) {
-  TileEvents out;
-  out.tile_index = tile.index;
-  out.x0 = tile.x0;
-  out.y0 = tile.y0;
-  out.width = tile.width;
-  out.height = tile.height;
-  out.offsets.assign(out.PixelCount() + 1, 0);
-  return out;
 }
 
 // Depths of the shadow maps a task holds at once (16 MiB): a chunk of samples is rendered,
@@ -65,7 +55,7 @@ TileEvents ScanTile(const BakePlan& plan, const PreparedTile& tile,
   const TileRect& rect = tile.rect;
   const std::vector<int> block_of = BlockOfPixel(tile);
   const TileWindows* windows = tile.windows ? &*tile.windows : nullptr;
-  TileEvents out = EmptyTileEvents(rect);
+  TileEvents out = NoShadowEvents(rect);
   std::vector<ShadowMapView> views;
   for (size_t m = 0; m < map_count; ++m) {
     views.push_back(ShadowMapView{maps[m].depth.data(), plan.lattice, maps[m].window});
@@ -150,7 +140,7 @@ absl::Status TaskRunner::Prepare(const BakeTask& task) {
       group_->tiles == task.tiles) {
     return absl::OkStatus();
   }
-  if (task.group_index < 0 || task.group_index >= static_cast<int>(plan_.group_count())) {
+  if (task.group_index < 0 || task.group_index >= plan_.group_count()) {
     return absl::InvalidArgumentError(absl::StrFormat("tile group %d: the plan has %d groups",
                                                       task.group_index, plan_.group_count()));
   }
@@ -192,7 +182,7 @@ absl::StatusOr<std::vector<TileEvents>> TaskRunner::Run(const BakeTask& task, Ta
   std::vector<TileEvents> results;
   const PreparedGroup& group = *group_;
   for (const PreparedTile& tile : group.prepared) {
-    results.push_back(EmptyTileEvents(tile.rect));
+    results.push_back(NoShadowEvents(tile.rect));
     // Counted once per tile, at the batch that starts its samples.
     if (!tile.has_casters && task.sample_begin == 0) ++stats->tiles_skipped;
   }

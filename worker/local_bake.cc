@@ -44,10 +44,10 @@ class LocalWorker {
     if (!runner.ok()) return runner.status();
     runner_ = *std::move(runner);
     if (!output_->has_preview()) return absl::OkStatus();
-    for (size_t t = first; t < plan_.tile_count(); t += stride) {
+    for (int t = first; t < plan_.tile_count(); t += stride) {
       absl::StatusOr<std::vector<float>> depth = runner_->ReceiverDepth(plan_.tile(t));
       if (!depth.ok()) return depth.status();
-      output_->SetReceiverDepth(static_cast<int>(t), *std::move(depth));
+      output_->SetReceiverDepth(t, *std::move(depth));
     }
     return absl::OkStatus();
   }
@@ -208,7 +208,7 @@ absl::StatusOr<BakeSummary> BakePlanned(
   summary.seconds = elapsed();
   summary.tiles = progress.tiles_total;
   summary.tiles_all_lit = progress.tiles_all_lit;
-  summary.groups = static_cast<int>(plan->group_count());
+  summary.groups = plan->group_count();
   summary.casters = static_cast<int64_t>(plan->casters.TriangleCount());
   summary.tasks = progress.tasks_done;
   summary.tile_samples_total = progress.tile_samples_total;

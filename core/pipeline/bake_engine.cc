@@ -187,7 +187,7 @@ absl::Status BakeEngine::AddJob(EngineJob spec) {
   spec.done_tiles = std::vector<int>();
   job->direct_left = static_cast<int>(direct.size());
   JobProgress& p = job->progress;
-  p.tiles_total = static_cast<int>(spec.plan->tile_count());
+  p.tiles_total = spec.plan->tile_count();
   p.tiles_done = p.tiles_total - work_tiles - job->direct_left;
   p.samples_total = int64_t{spec.plan->header.samples} * p.tiles_total;
   p.samples_done = int64_t{spec.plan->header.samples} * p.tiles_done;
