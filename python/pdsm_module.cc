@@ -51,10 +51,13 @@ class File {
 
   const std::string& path() const { return cache_->reader().path(); }
 
-  // Light names in file order ("" for the one light of a file whose light has no name).
+  // Light names in file order ("" for the one light of a file whose light has no name); a
+  // sphere light once, by its name (its faces are parts: header_json has one per part).
   std::vector<std::string> lights() const {
     std::vector<std::string> names;
-    for (const PdsmHeader& h : cache_->reader().headers()) names.push_back(h.light_name);
+    for (const PdsmLightParts& l : LightsOfParts(cache_->reader().headers())) {
+      names.push_back(l.name);
+    }
     return names;
   }
 
@@ -66,24 +69,24 @@ class File {
     return out;
   }
 
-  // The parts `light` selects: None -> every light; a name; an index.
-  std::vector<int> Parts(const std::optional<std::variant<int, std::string>>& light) const {
-    const int count = cache_->reader().light_count();
-    std::vector<int> parts;
-    if (!light) {
-      for (int p = 0; p < count; ++p) parts.push_back(p);
-    } else if (const int* index = std::get_if<int>(&*light)) {
+  // The lights `light` selects: None -> every light; a name; an index into lights().
+  std::vector<PdsmLightParts> Lights(
+      const std::optional<std::variant<int, std::string>>& light) const {
+    const std::vector<PdsmHeader>& headers = cache_->reader().headers();
+    std::vector<PdsmLightParts> all = LightsOfParts(headers);
+    if (!light) return all;
+    const int count = static_cast<int>(all.size());
+    if (const int* index = std::get_if<int>(&*light)) {
       if (*index < -count || *index >= count) {
         throw py::index_error(absl::StrCat("light ", *index, ": the file has ", count,
                                            count == 1 ? " light" : " lights"));
       }
-      parts.push_back(*index < 0 ? *index + count : *index);
-    } else {
-      absl::StatusOr<int> part = cache_->reader().FindLight(std::get<std::string>(*light));
-      if (!part.ok()) throw py::value_error(std::string(part.status().message()));
-      parts.push_back(*part);
+      return {all[*index < 0 ? *index + count : *index]};
     }
-    return parts;
+    absl::StatusOr<PdsmLightParts> found =
+        FindLightParts(headers, cache_->reader().path(), std::get<std::string>(*light));
+    if (!found.ok()) throw py::value_error(std::string(found.status().message()));
+    return {*std::move(found)};
   }
 
   py::array_t<double> Attenuation(
@@ -98,7 +101,7 @@ class File {
       throw py::value_error(
           absl::StrCat("points: an array of shape (n, 3) (world x, y, z), not ", shape));
     }
-    const std::vector<int> parts = Parts(light);
+    const std::vector<PdsmLightParts> lights = Lights(light);
     const size_t n = static_cast<size_t>(points.shape(0));
     std::vector<glm::dvec3> world(n);
     const double* p = points.data();
@@ -106,12 +109,12 @@ class File {
     absl::StatusOr<std::vector<double>> values;
     {
       py::gil_scoped_release unlocked;
-      values = AttenuationAt(*cache_, parts, world);
+      values = AttenuationAt(*cache_, lights, world);
     }
     if (!values.ok()) Raise(values.status());
     // One light selected, or a file of one: (n,); every light of several: (n, lights).
-    const bool columns = !light && parts.size() > 1;
-    py::array_t<double> out = columns ? py::array_t<double>({n, parts.size()})
+    const bool columns = !light && lights.size() > 1;
+    py::array_t<double> out = columns ? py::array_t<double>({n, lights.size()})
                                       : py::array_t<double>(static_cast<py::ssize_t>(n));
     std::copy(values->begin(), values->end(), out.mutable_data());
     return out;

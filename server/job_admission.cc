@@ -15,6 +15,7 @@
 #include "core/pipeline/bake_engine.h"
 #include "core/scene/scene.h"
 #include "core/scene/scene_loader.h"
+#include "core/scene/sphere_faces.h"
 
 namespace pdsm {
 
@@ -241,15 +242,25 @@ absl::StatusOr<std::vector<JobLightSize>> JobLightSizes(const std::string& seria
   for (int i = 0; i < count; ++i) {
     absl::StatusOr<pdsm::v1::BakeParams> bake = EffectiveBakeParams(*scene, label, i);
     if (!bake.ok()) return bake.status();
+    const pdsm::v1::Light& light = scene->lights_size() > 0 ? scene->lights(i) : scene->light();
     JobLightSize size;
-    size.name = scene->lights_size() > 0 ? scene->lights(i).name() : scene->light().name();
+    size.name = light.name();
     size.width = static_cast<int>(bake->resolution(0));
     size.height = static_cast<int>(bake->resolution(1));
     size.samples = static_cast<int>(bake->samples());
     const int tile = std::max<int>(1, static_cast<int>(bake->tile_size()));
     size.tiles = ((size.width + tile - 1) / tile) * ((size.height + tile - 1) / tile);
     size.bake = *std::move(bake);
-    sizes.push_back(std::move(size));
+    if (!light.has_sphere()) {
+      sizes.push_back(std::move(size));
+      continue;
+    }
+    // A sphere bakes as its faces, each a light of the job (core/scene/sphere_faces.h).
+    for (const SphereFace& face : SphereFaces()) {
+      JobLightSize face_size = size;
+      face_size.name = SphereFaceName(light.name(), face);
+      sizes.push_back(std::move(face_size));
+    }
   }
   return sizes;
 }

@@ -23,17 +23,17 @@ absl::StatusOr<QueryAnswer> QueryCache::Query(const std::string& job_id,
     cache_ = cache;
   }
   const PdsmReader& reader = cache->reader();
-  std::vector<int> parts;
+  std::vector<PdsmLightParts> lights;
   if (light.empty()) {
-    for (int p = 0; p < reader.light_count(); ++p) parts.push_back(p);
+    lights = LightsOfParts(reader.headers());
   } else {
-    absl::StatusOr<int> part = reader.FindLight(light);
-    if (!part.ok()) return part.status();
-    parts.push_back(*part);
+    absl::StatusOr<PdsmLightParts> found = FindLightParts(reader.headers(), reader.path(), light);
+    if (!found.ok()) return found.status();
+    lights.push_back(*std::move(found));
   }
   QueryAnswer answer;
-  for (const int p : parts) answer.lights.push_back(reader.headers()[p].light_name);
-  absl::StatusOr<std::vector<double>> values = AttenuationAt(*cache, parts, points_world);
+  for (const PdsmLightParts& l : lights) answer.lights.push_back(l.name);
+  absl::StatusOr<std::vector<double>> values = AttenuationAt(*cache, lights, points_world);
   if (!values.ok()) return values.status();
   answer.attenuation = *std::move(values);
   return answer;

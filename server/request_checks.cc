@@ -20,15 +20,18 @@ absl::Status CheckJobId(absl::string_view id) {
 }
 
 absl::Status CheckLightName(absl::string_view name) {
-  constexpr size_t kMaxLightNameBytes = 64;
+  // A light's name (64 bytes at most), or a sphere light's face: "NAME@+x".
+  constexpr size_t kMaxLightNameBytes = 64 + 3;
   if (name.size() > kMaxLightNameBytes) {
     return absl::InvalidArgumentError(
         absl::StrCat("light: at most ", kMaxLightNameBytes, " characters (got ", name.size(), ")"));
   }
   for (const char c : name) {
-    if (!absl::ascii_isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-' && c != '.') {
+    if (!absl::ascii_isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-' && c != '.' &&
+        c != '@' && c != '+') {
       return absl::InvalidArgumentError(
-          "light: only letters, digits, '_', '-' and '.' are allowed");
+          "light: only letters, digits, '_', '-', '.', and '@' and '+' of a sphere's face "
+          "(\"lamp@+x\"), are allowed");
     }
   }
   return absl::OkStatus();

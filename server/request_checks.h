@@ -24,7 +24,8 @@ inline constexpr size_t kMaxReasonBytes = 4096;
 absl::Status CheckJobId(absl::string_view id);
 
 // INVALID_ARGUMENT "light: ..." unless `name` is empty or what a scene's light name may be
-// (docs/scene_format.md): 1 to 64 characters of [A-Za-z0-9_.-]. The message does not repeat it.
+// (docs/scene_format.md): 1 to 64 characters of [A-Za-z0-9_.-], or a sphere light's face, that
+// name and "@+x" (core/scene/sphere_faces.h). The message does not repeat it.
 absl::Status CheckLightName(absl::string_view name);
 
 // INVALID_ARGUMENT "worker_id: ..." unless `id` has 1 to kMaxWorkerIdBytes printable ASCII

@@ -9,8 +9,12 @@
 #include <glm/glm.hpp>
 
 #include "core/pdsm/pdsm_file.h"
+#include "core/pdsm/pdsm_lights.h"
 #include "core/pdsm/pdsm_query.h"
+#include "core/pdsm/pdsm_tile_cache.h"
+#include "core/reference/reference_attenuation.h"
 #include "core/scene/scene_loader.h"
+#include "core/scene/sphere_faces.h"
 #include "core/scene/world_file.h"
 #include "tests/test_support.h"
 #include "worker/local_bake.h"
@@ -38,7 +42,7 @@ TEST(WorldFile, LightsComeFromTheFileInWorldSpaceWithTheirExtras) {
   EXPECT_EQ(scene->name(), "world");
   ASSERT_EQ(scene->meshes_size(), 1);
   EXPECT_EQ(scene->meshes(0).path(), "world.gltf");
-  ASSERT_EQ(scene->lights_size(), 2);
+  ASSERT_EQ(scene->lights_size(), 3);
 
   // The sun: its node's rotation takes -Z onto (0.35, -1, 0.25); 2 degrees from its extras.
   const pdsm::v1::Light& sun = scene->lights(0);
@@ -61,10 +65,14 @@ TEST(WorldFile, LightsComeFromTheFileInWorldSpaceWithTheirExtras) {
   EXPECT_DOUBLE_EQ(spot.spot().radius(), 0.3);
   EXPECT_EQ(spot.bake().samples(), 32);
 
-  // The point light cannot be baked yet: named, once.
-  ASSERT_EQ(warnings.size(), 1u);
-  EXPECT_NE(warnings[0].find("point lights"), std::string::npos) << warnings[0];
-  EXPECT_NE(warnings[0].find("bulb"), std::string::npos) << warnings[0];
+  // The point light: a sphere at its node's translation, radius and samples from its extras.
+  const pdsm::v1::Light& bulb = scene->lights(2);
+  EXPECT_EQ(bulb.name(), "bulb");
+  ASSERT_TRUE(bulb.has_sphere());
+  EXPECT_NEAR(glm::length(Vec3(bulb.sphere().center()) - glm::dvec3(0, 3, 3)), 0, 1e-6);
+  EXPECT_DOUBLE_EQ(bulb.sphere().radius(), 0.2);
+  EXPECT_EQ(bulb.bake().samples(), 32);
+  EXPECT_TRUE(warnings.empty()) << warnings[0];
 }
 
 TEST(WorldFile, BakesWithItsLightsAndTheSunShadowsTheGroundBehindTheBox) {
@@ -76,8 +84,8 @@ TEST(WorldFile, BakesWithItsLightsAndTheSunShadowsTheGroundBehindTheBox) {
   std::vector<std::string> warnings;
   absl::StatusOr<Scene> scene = LoadSceneFile(WorldPath(), overrides, &warnings);
   ASSERT_TRUE(scene.ok()) << scene.status();
-  EXPECT_EQ(warnings.size(), 1u);
-  ASSERT_EQ(scene->LightCount(), 2u);
+  EXPECT_TRUE(warnings.empty());
+  ASSERT_EQ(scene->LightCount(), 2u + kSphereFaceCount);  // the sun, the spot, the bulb's faces
   TempDir dir;
   LocalBakeOptions options;
   options.output_path = dir.File("world.exr");
@@ -92,6 +100,28 @@ TEST(WorldFile, BakesWithItsLightsAndTheSunShadowsTheGroundBehindTheBox) {
   absl::StatusOr<PdsmImage> spot = ReadPdsm(options.output_path, "spot");
   ASSERT_TRUE(spot.ok()) << spot.status();
   EXPECT_EQ(spot->header.samples, 16) << "the command line's samples win over the extras'";
+  // The bulb (radius 0.2 at (0, 3, 3)): the box (x -2..-1, z 1..2, top at 1) hides it from the
+  // ground at (-2.5, 0, 0.5), seen across its -x and -y faces' boundary; (3, 0, 3), on the +x
+  // and -y faces' boundary, is lit.
+  absl::StatusOr<PdsmReader> reader = PdsmReader::Open(options.output_path);
+  ASSERT_TRUE(reader.ok()) << reader.status();
+  absl::StatusOr<PdsmLightParts> bulb =
+      FindLightParts(reader->headers(), options.output_path, "bulb");
+  ASSERT_TRUE(bulb.ok()) << bulb.status();
+  EXPECT_EQ(bulb->parts.size(), size_t{kSphereFaceCount});
+  PdsmTileCache cache(*std::move(reader), 16 << 20);
+  const std::vector<glm::dvec3> points = {{-2.5, 0, 0.5}, {3, 0, 3}};
+  absl::StatusOr<std::vector<double>> a = AttenuationAt(cache, {&*bulb, 1}, points);
+  ASSERT_TRUE(a.ok()) << a.status();
+  ReferenceOptions embree;
+  absl::StatusOr<std::vector<double>> ref =
+      ReferenceAttenuation(ForLight(*scene, 2), points, embree);
+  ASSERT_TRUE(ref.ok()) << ref.status();
+  EXPECT_GT((*a)[0], 0.5);
+  EXPECT_EQ((*a)[1], 0.0);
+  for (size_t i = 0; i < points.size(); ++i) {
+    EXPECT_NEAR((*a)[i], (*ref)[i], 0.1) << points[i].x << "," << points[i].z;
+  }
 }
 
 TEST(WorldFile, AWorldWithoutALightToBakeIsRefusedNamingTheFile) {

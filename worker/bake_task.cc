@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "absl/strings/str_format.h"
+#include "core/bake/face_samples.h"
 #include "core/bake/receiver_windows.h"
 #include "core/bake/tile_reach.h"
 #include "core/pipeline/unreached_tile.h"
@@ -191,13 +192,17 @@ absl::StatusOr<std::vector<TileEvents>> TaskRunner::Run(const BakeTask& task, Ta
   // The batch's samples in chunks whose maps fit kScanMapTexels together (one map at least):
   // each chunk's maps are rendered, then every ray is scanned through all of them at once.
   ShadowMapCamera camera = BakeCamera(plan_);
+  // A sphere face's group sees the sphere's outline from its own direction.
+  std::vector<glm::dvec2> face_samples;
+  if (IsSphereFacePlan(plan_)) face_samples = FaceGroupSamples(plan_, task.group_index);
+  const std::vector<glm::dvec2>& samples = face_samples.empty() ? plan_.samples : face_samples;
   std::vector<ChunkMap> maps;
   bool first_chunk = true;
   for (int k = task.sample_begin; k < task.sample_end;) {
     size_t map_count = 0;
     int64_t chunk_texels = 0;
     for (; k < task.sample_end; ++k) {
-      const glm::dvec2& sample = plan_.samples.at(k);
+      const glm::dvec2& sample = samples.at(k);
       const ShadowMapWindow window = GroupWindow(plan_, group, sample);
       const int64_t texels = int64_t{window.width} * window.height;
       if (texels > kMaxShadowMapTexels) {

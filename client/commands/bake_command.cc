@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -17,6 +18,7 @@
 #include "core/bake/receiver_coverage.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/scene/scene_loader.h"
+#include "core/scene/sphere_faces.h"
 #include "core/util/output_path.h"
 #include "worker/local_bake.h"
 
@@ -57,13 +59,27 @@ PreviewPaths PreviewPathsOf(const BakeFlags& flags) {
   return {camera.string(), fs::path(camera).replace_extension(".light.png").string()};
 }
 
+// "3 lights", or "3 lights in 8 parts" when a sphere's faces are parts of their own.
+std::string LightsText(const std::vector<BakeSummary>& lights) {
+  size_t count = 0;
+  std::string_view sphere;  // the sphere whose faces are being counted
+  for (const BakeSummary& light : lights) {
+    const std::string_view of = SphereOfFace(light.light_name);
+    if (of.empty() || of != sphere) ++count;
+    sphere = of;
+  }
+  if (count == lights.size()) return absl::StrFormat("%d lights", count);
+  return absl::StrFormat("%d %s in %d parts", count, count == 1 ? "light" : "lights",
+                         lights.size());
+}
+
 void PrintSummary(const Scene& scene, const BakeFlags& flags,
                   const std::vector<PreviewPaths>& previews, const BakeSummary& s) {
   // What the file holds: one light's size, or how many lights (each on its own line below).
   const std::string what = s.lights.empty()
                                ? absl::StrFormat("%dx%d PDSM, %d samples", scene.bake.width,
                                                  scene.bake.height, scene.bake.samples)
-                               : absl::StrFormat("%d lights", s.lights.size());
+                               : LightsText(s.lights);
   std::fprintf(
       stderr,
       "baked \"%s\": %s, %d tiles (%d all lit), %lld tasks\n"
@@ -122,7 +138,7 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags,
                  static_cast<long long>(light.assembly.vertices));
   }
   std::printf("pdsm: %s (%s%s)\n", flags.output_path.c_str(), HumanBytes(s.file_bytes).c_str(),
-              s.lights.empty() ? "" : absl::StrFormat(", %d lights", s.lights.size()).c_str());
+              s.lights.empty() ? "" : absl::StrCat(", ", LightsText(s.lights)).c_str());
   for (const PreviewPaths& light : previews) {
     if (!light.camera.empty()) {
       std::printf("preview: %s (camera view, the baked soft shadows)\n", light.camera.c_str());
@@ -139,7 +155,10 @@ void WarnAboutUncoveredReceivers(const Scene& scene, const PdsmHeader& header) {
   // A light whose reach is bounded on purpose lights only that: a spot's cone, an explicit
   // bake.frustum (a world's local lights: otherwise each of them warned that ~100% of the
   // world's ground was outside it; bench/large_world.py).
-  if (scene.light.is_spot() || scene.bake.frustum.has_value()) return;
+  // A sphere's face: the sphere's other faces hold the rest.
+  if (scene.light.is_spot() || scene.light.is_sphere_face() || scene.bake.frustum.has_value()) {
+    return;
+  }
   const double outside = ReceiverAreaOutsideFrustum(scene, header.geometry);
   if (outside < 1e-3) return;
   const std::string light =

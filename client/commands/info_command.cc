@@ -30,6 +30,10 @@ std::string LightSizeText(const PdsmHeader& h) {
         return absl::StrFormat("radius %.6g, cone %.6g deg off its axis", h.light_radius,
                                h.cone_half_angle_deg);
       }
+      if (h.face_tangent > 0) {
+        return absl::StrFormat("radius %.6g, the directions |s|, |t| <= %.6g about the face's axis",
+                               h.light_radius, h.face_tangent);
+      }
       return absl::StrFormat("radius %.6g", h.light_radius);
     case LightShape::kSun:
       return absl::StrFormat("%.6g deg across", SunDiameterDegrees(h));

@@ -41,27 +41,28 @@ constexpr size_t kValuesPerChunk = size_t{1} << 22;
 absl::Status QueryLocal(const QueryFlags& flags, const std::vector<QueryPoint>& points) {
   absl::StatusOr<PdsmReader> reader = PdsmReader::Open(flags.pdsm_path);
   if (!reader.ok()) return reader.status();
-  std::vector<int> parts;
-  if (flags.light.empty() && reader->light_count() > 1) {
-    for (int p = 0; p < reader->light_count(); ++p) parts.push_back(p);
+  std::vector<PdsmLightParts> lights;
+  if (flags.light.empty()) {
+    lights = LightsOfParts(reader->headers());
   } else {
-    absl::StatusOr<int> part = reader->FindLight(flags.light);
-    if (!part.ok()) return part.status();
-    parts.push_back(*part);
+    absl::StatusOr<PdsmLightParts> light =
+        FindLightParts(reader->headers(), reader->path(), flags.light);
+    if (!light.ok()) return light.status();
+    lights.push_back(*std::move(light));
   }
   PdsmTileCache cache(*std::move(reader), flags.cache_mib << 20);
-  const size_t chunk = std::max<size_t>(4096, kValuesPerChunk / parts.size());
+  const size_t chunk = std::max<size_t>(4096, kValuesPerChunk / lights.size());
   std::vector<glm::dvec3> world;
   for (size_t begin = 0; begin < points.size(); begin += chunk) {
     const size_t end = std::min(points.size(), begin + chunk);
     world.clear();
     for (size_t i = begin; i < end; ++i) world.push_back(points[i].world);
-    absl::StatusOr<std::vector<double>> values = AttenuationAt(cache, parts, world);
+    absl::StatusOr<std::vector<double>> values = AttenuationAt(cache, lights, world);
     if (!values.ok()) return values.status();
     for (size_t i = begin; i < end; ++i) {
       PrintAttenuationLine(
           points[i],
-          std::span<const double>(values->data() + (i - begin) * parts.size(), parts.size()));
+          std::span<const double>(values->data() + (i - begin) * lights.size(), lights.size()));
     }
   }
   return absl::OkStatus();

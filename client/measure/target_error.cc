@@ -200,6 +200,14 @@ absl::StatusOr<TargetErrorResult> BakeToTargetError(const TargetErrorOptions& op
   absl::StatusOr<Scene> scene = LoadSceneFile(options.scene_path);
   if (scene.ok()) scene = OneLight(*std::move(scene), "", "pdsm bake --target-error");
   if (!scene.ok()) return scene.status();
+  if (scene->light.is_sphere_face()) {
+    // It would tune and bake one face: the others need their own points.
+    return absl::InvalidArgumentError(
+        absl::StrCat(options.scene_path,
+                     ": light: --target-error does not take a sphere light yet; bake it "
+                     "with chosen knobs (pdsm compare --light NAME@+x measures a face against the "
+                     "true sphere)"));
+  }
   // The pattern is a knob too: --sampling, else the scene's (whose default is the measured
   // best, Sobol; docs/accuracy.md, "Sampling patterns").
   std::string sampling = options.sampling;

@@ -83,13 +83,16 @@ absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
   if (scene.ok()) scene = OneLight(*std::move(scene), options.light, "pdsm-view", "--light");
   if (!scene.ok()) return scene.status();
   view.scene = *std::move(scene);
+  // A sphere light, named or a scene's only light, is shaded with one face (OneLight): its part.
+  const std::string light =
+      view.scene.light.is_sphere_face() ? view.scene.light_name : options.light;
   if (!options.job_id.empty() && (!options.headless || options.partial)) {
     // Shown while it runs: the geometry from the local plan, tiles as they finish.
     if (absl::Status s = StartFromPlan(options, job, &view); !s.ok()) return s;
   } else {
-    absl::StatusOr<PdsmImage> pdsm =
-        options.job_id.empty() ? LoadPdsmFile(options.pdsm_path, options.light)
-                               : FetchJobPdsm(options.service, options.job_id, options.light);
+    absl::StatusOr<PdsmImage> pdsm = options.job_id.empty()
+                                         ? LoadPdsmFile(options.pdsm_path, light)
+                                         : FetchJobPdsm(options.service, options.job_id, light);
     if (!pdsm.ok()) return pdsm.status();
     view.pdsm = *std::move(pdsm);
   }

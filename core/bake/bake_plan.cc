@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "absl/strings/str_format.h"
+#include "core/bake/face_samples.h"
 #include "core/bake/tile_reach.h"
 #include "core/sampling/light_samples.h"
 
@@ -27,6 +28,9 @@ struct WindowFit {
   double s_lo = kInf, s_hi = -kInf, t_lo = kInf, t_hi = -kInf;
   double z_near_casters = kInf, z_far_all = -kInf;
   double z_near_receivers = kInf;
+  // The nearest caster depth anywhere in front of the light, inside the window or not: where
+  // the window is stretched by geometry near the light plane (the refit in PlanBake).
+  double z_near_casters_anywhere = kInf;
   bool empty() const { return s_lo > s_hi; }
 };
 
@@ -47,10 +51,65 @@ int ClipTriangleNear(const glm::dvec3 tri[3], double z_min, glm::dvec3 out[4]) {
   return n;
 }
 
-// `max_tangent`: perspective windows stop at |s|, |t| <= it (kMaxWindowTangent, or a spot's
-// cone).
+// The part of convex polygon `in` (n vertices) where `side(p)` <= 0, `side` affine
+// (Sutherland–Hodgman against one plane). `out` holds n + 1 vertices.
+template <typename Side>
+int ClipPolygon(const glm::dvec3* in, int n, Side side, glm::dvec3* out) {
+  int m = 0;
+  for (int k = 0; k < n; ++k) {
+    const glm::dvec3& p = in[k];
+    const glm::dvec3& q = in[(k + 1) % n];
+    const double fp = side(p), fq = side(q);
+    if (fp <= 0) out[m++] = p;
+    if ((fp <= 0) != (fq <= 0)) out[m++] = p + (fp / (fp - fq)) * (q - p);
+  }
+  return m;
+}
+
+// The nearest depth of polygon `poly` (n <= 4 vertices, z > 0) inside the pyramid |x| <=
+// max_tangent z + reach_x, |y| <= max_tangent z + reach_y; +inf when none of it is inside.
+// With reach 0 that is the window's own pyramid (what a receiver needs resolved); with the
+// light's half extents it holds every point between a sample and a point in the window (what
+// a caster can shadow there: x' = a + (x - a) z' / z).
+double NearestDepthInPyramid(const glm::dvec3* poly, int n, double max_tangent, double reach_x,
+                             double reach_y) {
+  glm::dvec3 a[8], b[8];
+  n = ClipPolygon(
+      poly, n, [&](const glm::dvec3& p) { return p.x - max_tangent * p.z - reach_x; }, a);
+  n = ClipPolygon(
+      a, n, [&](const glm::dvec3& p) { return -p.x - max_tangent * p.z - reach_x; }, b);
+  n = ClipPolygon(
+      b, n, [&](const glm::dvec3& p) { return p.y - max_tangent * p.z - reach_y; }, a);
+  n = ClipPolygon(
+      a, n, [&](const glm::dvec3& p) { return -p.y - max_tangent * p.z - reach_y; }, b);
+  double z = kInf;
+  for (int k = 0; k < n; ++k) z = std::min(z, b[k].z);
+  return z;
+}
+
+// How far from its centre a light's samples reach across its plane: the half extents along x
+// and y (a sphere face's groups stretch its disk by up to 1 / cos of its widest direction:
+// core/bake/face_samples.h).
+glm::dvec2 LightReach(const LightSpec& light) {
+  const double t = light.face_tangent;
+  switch (light.shape) {
+    case LightShape::kRect:
+      return {light.half_width, light.half_height};
+    case LightShape::kDisk:
+      return glm::dvec2(light.radius * std::sqrt(1 + 2 * t * t));
+    case LightShape::kSun:
+      break;
+  }
+  return {0, 0};
+}
+
+// `max_tangent`: perspective windows stop at |s|, |t| <= it (kMaxWindowTangent, a spot's cone
+// or a sphere's face); `reach`: LightReach. A perspective triangle's s, t outside the window
+// count at its edge, while its depths count only where it lies inside the window's pyramid
+// (receivers) or can shadow a point in it (casters): a ground that crosses a sideways light's
+// plane far below the light once made the nearest caster 1e-5 away (bench/sphere_faces.py).
 void FitTriangle(const glm::dvec3 tri[3], bool casts, bool receives, Projection projection,
-                 double z_min, double max_tangent, WindowFit* fit) {
+                 double z_min, double max_tangent, const glm::dvec2& reach, WindowFit* fit) {
   glm::dvec3 clipped[4];
   const int n = projection == Projection::kPerspective ? ClipTriangleNear(tri, z_min, clipped) : 3;
   if (projection == Projection::kOrthographic) std::copy(tri, tri + 3, clipped);
@@ -65,9 +124,22 @@ void FitTriangle(const glm::dvec3 tri[3], bool casts, bool receives, Projection 
     fit->s_hi = std::max(fit->s_hi, s);
     fit->t_lo = std::min(fit->t_lo, t);
     fit->t_hi = std::max(fit->t_hi, t);
-    if (casts) fit->z_near_casters = std::min(fit->z_near_casters, p.z);
-    if (receives) fit->z_near_receivers = std::min(fit->z_near_receivers, p.z);
+    if (casts) fit->z_near_casters_anywhere = std::min(fit->z_near_casters_anywhere, p.z);
+    if (projection == Projection::kOrthographic) {
+      if (casts) fit->z_near_casters = std::min(fit->z_near_casters, p.z);
+      if (receives) fit->z_near_receivers = std::min(fit->z_near_receivers, p.z);
+    }
     fit->z_far_all = std::max(fit->z_far_all, p.z);
+  }
+  if (projection == Projection::kPerspective && n > 0) {
+    if (casts) {
+      fit->z_near_casters = std::min(
+          fit->z_near_casters, NearestDepthInPyramid(clipped, n, max_tangent, reach.x, reach.y));
+    }
+    if (receives) {
+      fit->z_near_receivers =
+          std::min(fit->z_near_receivers, NearestDepthInPyramid(clipped, n, max_tangent, 0, 0));
+    }
   }
 }
 
@@ -112,6 +184,7 @@ void FillHeader(const Scene& scene, BakePlan* plan) {
   h.light_half_height = scene.light.half_height;
   h.light_radius = scene.light.radius;
   h.cone_half_angle_deg = scene.light.cone_half_angle_deg;
+  h.face_tangent = scene.light.face_tangent;
   h.tan_half_angle = scene.light.tan_half_angle;
   h.samples = scene.bake.samples;
   h.shadow_map_resolution = scene.bake.shadow_map_resolution;
@@ -144,6 +217,8 @@ double ScanFloor(const BakePlan& plan, double z_near_receivers) {
     a_max = std::max(a_max, std::abs(sample.x));
     b_max = std::max(b_max, std::abs(sample.y));
   }
+  a_max *= FaceSampleStretch(plan);  // a sphere face's groups stretch them
+  b_max *= FaceSampleStretch(plan);
   const double tile = plan.header.tile_size;
   const double x = tile * g.PixelPitchS() / plan.lattice.pitch_s + 2;
   const double y = tile * g.PixelPitchT() / plan.lattice.pitch_t + 2;
@@ -166,6 +241,7 @@ double ScanFloor(const BakePlan& plan, double z_near_receivers) {
 WindowFit FitScene(const Scene& scene, const PdsmGeometry& g, double z_min, bool receivers_only) {
   WindowFit fit;
   const double max_tangent = MaxWindowTangent(scene.light);
+  const glm::dvec2 reach = LightReach(scene.light);
   for (const TriangleMesh& mesh : scene.meshes) {
     if (receivers_only && !Receives(mesh.role)) continue;
     for (size_t k = 0; k + 2 < mesh.indices.size(); k += 3) {
@@ -174,7 +250,7 @@ WindowFit FitScene(const Scene& scene, const PdsmGeometry& g, double z_min, bool
                                  g.frame.LightFromWorld(mesh.positions_world[mesh.indices[k + 2]])};
       if (std::max({tri[0].z, tri[1].z, tri[2].z}) < z_min) continue;  // behind the light
       FitTriangle(tri, Casts(mesh.role), Receives(mesh.role), g.projection, z_min, max_tangent,
-                  &fit);
+                  reach, &fit);
     }
   }
   return fit;
@@ -204,6 +280,7 @@ void SetLattice(const Scene& scene, BakePlan* plan) {
 double DefaultDepthBias(double z_far) { return 1e-5 * std::abs(z_far); }
 
 double MaxWindowTangent(const LightSpec& light) {
+  if (light.is_sphere_face()) return std::min(kMaxWindowTangent, light.face_tangent);
   if (!light.is_spot()) return kMaxWindowTangent;
   return std::min(kMaxWindowTangent, std::tan(light.cone_half_angle_deg * std::numbers::pi / 180));
 }
@@ -264,10 +341,14 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
       GenerateLightSamples(scene.light, scene.bake.samples, scene.bake.sampling, scene.bake.seed);
   MakeTiles(&plan);
   plan.z_scan_floor = ScanFloor(plan, fit.z_near_receivers);
-  if (!scene.bake.frustum && plan.z_scan_floor > g.z_near) {
+  const double z_nearest_anywhere =
+      std::isfinite(fit.z_near_casters_anywhere) ? fit.z_near_casters_anywhere : fit.z_far_all;
+  if (!scene.bake.frustum && plan.z_scan_floor > std::min(g.z_near, z_nearest_anywhere)) {
     // Casters nearer than the floor (within about 1e-3 of the light plane) would stretch the
     // fitted window towards tan 85 degrees, leaving the receivers a few pixels. Fit it to what
-    // lies beyond the floor: the receivers (their whole extent) when there are any.
+    // lies beyond the floor: the receivers (their whole extent) when there are any. (Such a
+    // caster may lie where it shadows nothing in the window, and so not be z_near: it still
+    // stretched the window.)
     const WindowFit refit = FitScene(scene, g, plan.z_scan_floor, /*receivers_only=*/true);
     if (!refit.empty()) {
       SetWindow(refit, &g);

@@ -120,8 +120,9 @@ inline constexpr double kMaxRayTexels = 512;
 // Widest field of view a perspective PDSM is fitted to: |s|, |t| <= tan(85 degrees).
 inline constexpr double kMaxWindowTangent = 11.430052302761343;
 
-// The widest |s|, |t| a PDSM of `light` is fitted to: kMaxWindowTangent, or a spot's
-// tan(cone half-angle) (the square around its cone). The sun's window is not a tangent.
+// The widest |s|, |t| a PDSM of `light` is fitted to: kMaxWindowTangent, a spot's
+// tan(cone half-angle) (the square around its cone), or a sphere face's face_tangent. The
+// sun's window is not a tangent.
 double MaxWindowTangent(const LightSpec& light);
 
 // The tiles a bake of these settings is cut into, known before planning: its resolution in

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/bake/bake_plan.h"
+#include "core/bake/face_samples.h"
 
 namespace pdsm {
 namespace {
@@ -18,6 +19,8 @@ double GroupWindowTexels(const BakePlan& plan, int side_tiles) {
     a_max = std::max(a_max, std::abs(s.x));
     b_max = std::max(b_max, std::abs(s.y));
   }
+  a_max *= FaceSampleStretch(plan);
+  b_max *= FaceSampleStretch(plan);
   const double z_first = std::max({plan.z_scan_floor, plan.z_clip_near, 1e-300});
   const double reach = g.projection == Projection::kPerspective
                            ? 1.0 / z_first
@@ -39,6 +42,11 @@ int GroupSideInTiles(const BakePlan& plan) {
     const int next = 2 * side;
     if (int64_t{next} * next * tile_pixels > kMaxGroupPixels) break;
     if (GroupWindowTexels(plan, next) > static_cast<double>(kShadowMapTexelBudget)) break;
+    // A sphere face's group uses the sphere's outline seen from its centre direction: keep
+    // its rays within kMaxFaceGroupTangent of that direction (core/bake/face_samples.h).
+    const double span = next * plan.header.tile_size *
+                        std::max(plan.geometry().PixelPitchS(), plan.geometry().PixelPitchT());
+    if (IsSphereFacePlan(plan) && span > kMaxFaceGroupTangent) break;
     side = next;
   }
   return side;

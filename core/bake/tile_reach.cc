@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "core/bake/face_samples.h"
+
 namespace pdsm {
 namespace {
 
@@ -32,7 +34,9 @@ SampleExtent ExtentOf(const BakePlan& plan) {
     lo = glm::min(lo, sample);
     hi = glm::max(hi, sample);
   }
-  return {glm::min(lo, glm::dvec2(0.0)), glm::max(hi, glm::dvec2(0.0))};
+  // A sphere face's groups stretch the samples (core/bake/face_samples.h).
+  const double stretch = FaceSampleStretch(plan);
+  return {stretch * glm::min(lo, glm::dvec2(0.0)), stretch * glm::max(hi, glm::dvec2(0.0))};
 }
 
 // A linear function f(p) = dot(coef, p) + constant of light-space points; the region that can

@@ -87,6 +87,7 @@ constexpr char kAttrTileSamples[] = "pdsmTileSamples";
 constexpr char kAttrZValidMin[] = "pdsmZValidMin";
 constexpr char kAttrSurfacesOnly[] = "pdsmSurfacesOnly";
 constexpr char kAttrConeHalfAngle[] = "pdsmConeHalfAngleDeg";
+constexpr char kAttrSphereFaceTangent[] = "pdsmSphereFaceTangent";
 
 constexpr char kAttenuationNote[] =
     "channel 'attenuation' = A(z), the fraction of the light hidden from the point at depth "
@@ -226,6 +227,11 @@ void ReadLight(AttributeReader& in, PdsmHeader* h) {
   if (in.status().ok() && !(h->cone_half_angle_deg >= 0 && h->cone_half_angle_deg <= 90)) {
     in.Fail(absl::StrFormat("attribute %s = %g is not an angle in [0, 90] degrees",
                             kAttrConeHalfAngle, h->cone_half_angle_deg));
+  }
+  h->face_tangent = in.GetOptional<double>(kAttrSphereFaceTangent, 0.0);
+  if (in.status().ok() && !(h->face_tangent >= 0 && h->face_tangent <= 1e6)) {
+    in.Fail(absl::StrFormat("attribute %s = %g is not a tangent >= 0", kAttrSphereFaceTangent,
+                            h->face_tangent));
   }
   h->tan_half_angle = in.Get<double>(kAttrLightTanHalfAngle);
 }
@@ -394,6 +400,9 @@ Imf::Header ExrHeaderFromPdsm(const PdsmHeader& h,
   if (h.surfaces_only) exr.insert(kAttrSurfacesOnly, Imf::IntAttribute(1));
   if (h.cone_half_angle_deg > 0) {
     exr.insert(kAttrConeHalfAngle, Imf::DoubleAttribute(h.cone_half_angle_deg));
+  }
+  if (h.face_tangent > 0) {
+    exr.insert(kAttrSphereFaceTangent, Imf::DoubleAttribute(h.face_tangent));
   }
   // What DeepTiledOutputFile would add itself, set first so that the checksum covers it.
   const TileGrid grid{g.width, g.height, h.tile_size};

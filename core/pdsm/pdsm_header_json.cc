@@ -41,9 +41,9 @@ const char* SamplingName(SamplingPattern pattern) {
 }
 
 const char* LightKindName(const PdsmHeader& header) {
-  return header.light_shape == LightShape::kDisk && header.cone_half_angle_deg > 0
-             ? "spot"
-             : LightShapeName(header.light_shape);
+  if (header.light_shape != LightShape::kDisk) return LightShapeName(header.light_shape);
+  if (header.face_tangent > 0) return "sphere-face";
+  return header.cone_half_angle_deg > 0 ? "spot" : "disk";
 }
 
 double SunDiameterDegrees(const PdsmHeader& header) {
@@ -61,6 +61,10 @@ std::string LightSizeJson(const PdsmHeader& h) {
       if (h.cone_half_angle_deg > 0) {
         return absl::StrFormat(", \"lightRadius\": %.17g, \"coneHalfAngleDeg\": %.17g",
                                h.light_radius, h.cone_half_angle_deg);
+      }
+      if (h.face_tangent > 0) {
+        return absl::StrFormat(", \"lightRadius\": %.17g, \"faceTangent\": %.17g", h.light_radius,
+                               h.face_tangent);
       }
       return absl::StrFormat(", \"lightRadius\": %.17g", h.light_radius);
     case LightShape::kSun:

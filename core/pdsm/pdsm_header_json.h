@@ -18,7 +18,8 @@ std::string JsonString(std::string_view s);
 // The sampling pattern as `--sampling` takes it ("blue-noise").
 const char* SamplingName(SamplingPattern pattern);
 
-// "rect", "disk", "spot" (a disk with a cone), "sun".
+// "rect", "disk", "spot" (a disk with a cone), "sphere-face" (a disk, one face of a sphere
+// light), "sun".
 const char* LightKindName(const PdsmHeader& header);
 
 // A sun's angular diameter, degrees (0 for other lights).

@@ -33,6 +33,10 @@ struct PdsmHeader {
   // A spot light (a disk into a cone; LightSpec::cone_half_angle_deg): the cone's half-angle,
   // degrees; 0 for every other light. Informational: the window already stops at the cone.
   double cone_half_angle_deg = 0;
+  // A face of a sphere light (LightSpec::face_tangent; core/scene/sphere_faces.h): the bound
+  // on |s|, |t| of the face's directions; 0 for every other light. The part is the face's disk,
+  // named "SPHERE@FACE"; readers take the sphere's faces together (core/pdsm/pdsm_lights.h).
+  double face_tangent = 0;
   PdsmGeometry geometry;
   int samples = 0;
   int shadow_map_resolution = 0;

@@ -102,22 +102,25 @@ int64_t PdsmTileCache::TileKey(int part, const glm::dvec3& p_world) const {
   return int64_t{y / header.tile_size} * tiles_x + x / header.tile_size;
 }
 
-absl::StatusOr<std::vector<double>> AttenuationAt(PdsmTileCache& cache, std::span<const int> parts,
+absl::StatusOr<std::vector<double>> AttenuationAt(PdsmTileCache& cache,
+                                                  std::span<const PdsmLightParts> lights,
                                                   std::span<const glm::dvec3> points_world) {
+  const std::vector<PdsmHeader>& headers = cache.reader().headers();
   std::vector<int64_t> keys(points_world.size());
   std::vector<size_t> order(points_world.size());
   for (size_t k = 0; k < points_world.size(); ++k) {
-    keys[k] = cache.TileKey(parts[0], points_world[k]);
+    keys[k] = cache.TileKey(lights[0].parts[0], points_world[k]);
     order[k] = k;
   }
   std::stable_sort(order.begin(), order.end(),
                    [&keys](size_t a, size_t b) { return keys[a] < keys[b]; });
-  std::vector<double> values(points_world.size() * parts.size());
+  std::vector<double> values(points_world.size() * lights.size());
   for (const size_t k : order) {
-    for (size_t l = 0; l < parts.size(); ++l) {
-      absl::StatusOr<double> a = cache.Attenuation(parts[l], points_world[k]);
+    for (size_t l = 0; l < lights.size(); ++l) {
+      const int part = PartAt(headers, lights[l], points_world[k]);
+      absl::StatusOr<double> a = cache.Attenuation(part, points_world[k]);
       if (!a.ok()) return a.status();
-      values[k * parts.size() + l] = *a;
+      values[k * lights.size() + l] = *a;
     }
   }
   return values;

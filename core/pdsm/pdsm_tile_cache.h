@@ -23,6 +23,7 @@
 #include "absl/synchronization/mutex.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_image.h"
+#include "core/pdsm/pdsm_lights.h"
 
 namespace pdsm {
 
@@ -70,11 +71,13 @@ class PdsmTileCache {
   int64_t tiles_read_ ABSL_GUARDED_BY(mu_) = 0;
 };
 
-// The attenuation at each of `points_world` for each of `parts`, point-major (point k's value
-// for parts[l] at k * parts.size() + l). The points are answered in the order of their tiles
-// (of parts[0]'s map), so that neighbours in the map share a read whatever their order here.
-// REQUIRES: parts non-empty, each a part of the cache's file. Errors: reading a tile.
-absl::StatusOr<std::vector<double>> AttenuationAt(PdsmTileCache& cache, std::span<const int> parts,
+// The attenuation at each of `points_world` for each of `lights` (core/pdsm/pdsm_lights.h: a
+// sphere's value from the face that holds the point), point-major (point k's value for
+// lights[l] at k * lights.size() + l). The points are answered in the order of their tiles (of
+// lights[0]'s first part), so that neighbours in the map share a read whatever their order here.
+// REQUIRES: lights non-empty, each of parts of the cache's file. Errors: reading a tile.
+absl::StatusOr<std::vector<double>> AttenuationAt(PdsmTileCache& cache,
+                                                  std::span<const PdsmLightParts> lights,
                                                   std::span<const glm::dvec3> points_world);
 
 }  // namespace pdsm

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <numbers>
 #include <thread>
 
 #include <embree3/rtcore.h>
@@ -123,9 +124,57 @@ absl::StatusOr<RTCScene> BuildScene(RTCDevice device, const Casters& casters) {
   return rtc_scene;
 }
 
-double HiddenFraction(RTCScene rtc_scene, const Scene& scene, const Casters& casters,
-                      const glm::dvec3& p, const std::vector<glm::dvec2>& samples) {
-  const bool sun = scene.light.shape == LightShape::kSun;
+// The rays from p (rebased light space) to its light samples: each direction reaches its
+// sample at t = 1 (rect, disk, sphere) or points to the sun (t unbounded).
+struct SampleRays {
+  std::vector<glm::dvec3> directions;
+  bool unbounded = false;
+};
+
+// Rect/disk: to the sample on the light plane. Sun: towards the sun.
+SampleRays PlanarOrSunRays(const Scene& scene, const Casters& casters, const glm::dvec3& p,
+                           const std::vector<glm::dvec2>& samples) {
+  SampleRays rays;
+  rays.unbounded = scene.light.shape == LightShape::kSun;
+  for (const glm::dvec2& s : samples) {
+    rays.directions.push_back(rays.unbounded
+                                  ? -glm::dvec3(s.x, s.y, 1.0)
+                                  : glm::dvec3(s.x, s.y, 0.0) - casters.origin_light - p);
+  }
+  return rays;
+}
+
+// A sphere light (every face of one, core/scene/sphere_faces.h): the true sphere, not the face's
+// disk. Directions uniform in the solid angle the sphere subtends from p (the cone of half-angle
+// asin(r / d) towards its centre), each reaching the sphere's near side: a sphere hides as much
+// of itself as the solid angle hidden, the definition the faces approximate. Empty for a point
+// inside the sphere.
+SampleRays SphereRays(const Scene& scene, const Casters& casters, const glm::dvec3& p,
+                      const std::vector<glm::dvec2>& unit_square) {
+  SampleRays rays;
+  const glm::dvec3 to_center = -casters.origin_light - p;
+  const double d = glm::length(to_center);
+  const double r = scene.light.radius;
+  if (!(d > r)) return rays;
+  const glm::dvec3 w = to_center / d;
+  const LightFrame basis = MakeLightFrame(glm::dvec3(0.0), w, nullptr);
+  const double cos_max = std::sqrt(std::max(0.0, 1.0 - (r / d) * (r / d)));
+  for (const glm::dvec2& u : unit_square) {
+    const double cos_theta = 1.0 - u.x * (1.0 - cos_max);
+    const double sin_theta = std::sqrt(std::max(0.0, 1.0 - cos_theta * cos_theta));
+    const double phi = 2.0 * std::numbers::pi * u.y;
+    const glm::dvec3 dir = sin_theta * std::cos(phi) * basis.u +
+                           sin_theta * std::sin(phi) * basis.v + cos_theta * basis.n;
+    // The near intersection with the sphere: d cos - sqrt(r^2 - d^2 sin^2).
+    const double t =
+        d * cos_theta - std::sqrt(std::max(0.0, r * r - d * d * sin_theta * sin_theta));
+    rays.directions.push_back(t * dir);
+  }
+  return rays;
+}
+
+double HiddenFraction(RTCScene rtc_scene, const Casters& casters, const glm::dvec3& p,
+                      const SampleRays& rays) {
   const double scale = std::max(casters.scale, glm::length(p));
   const double offset = kRoundingsOffset * std::ldexp(scale, -24);
   PointContext context;
@@ -133,10 +182,7 @@ double HiddenFraction(RTCScene rtc_scene, const Scene& scene, const Casters& cas
   context.point = p;
   context.margin = kCoplanarMargin * scale;
   int hidden = 0;
-  for (const glm::dvec2& s : samples) {
-    // Rect/disk: to the sample on the light plane (t = 1). Sun: towards the sun, unbounded.
-    const glm::dvec3 direction =
-        sun ? -glm::dvec3(s.x, s.y, 1.0) : glm::dvec3(s.x, s.y, 0.0) - casters.origin_light - p;
+  for (const glm::dvec3& direction : rays.directions) {
     RTCRay ray;
     ray.org_x = static_cast<float>(p.x);
     ray.org_y = static_cast<float>(p.y);
@@ -145,7 +191,7 @@ double HiddenFraction(RTCScene rtc_scene, const Scene& scene, const Casters& cas
     ray.dir_y = static_cast<float>(direction.y);
     ray.dir_z = static_cast<float>(direction.z);
     ray.tnear = static_cast<float>(offset / glm::length(direction));
-    ray.tfar = sun ? std::numeric_limits<float>::infinity() : 1.0f;
+    ray.tfar = rays.unbounded ? std::numeric_limits<float>::infinity() : 1.0f;
     ray.time = 0.0f;
     ray.mask = ~0u;
     ray.id = 0;
@@ -153,7 +199,7 @@ double HiddenFraction(RTCScene rtc_scene, const Scene& scene, const Casters& cas
     rtcOccluded1(rtc_scene, &context.embree, &ray);
     if (ray.tfar < 0.0f) ++hidden;  // Embree marks an occluded ray with tfar = -inf
   }
-  return static_cast<double>(hidden) / samples.size();
+  return static_cast<double>(hidden) / rays.directions.size();
 }
 
 }  // namespace
@@ -174,21 +220,27 @@ absl::StatusOr<std::vector<double>> EmbreeAttenuation(const Scene& scene,
   EmbreeScene rtc_scene(*built);
 
   const bool sun = scene.light.shape == LightShape::kSun;
+  const bool sphere = scene.light.is_sphere_face();
   std::vector<double> result(points_world.size(), std::numeric_limits<double>::quiet_NaN());
   std::atomic<size_t> next{0};  // points are independent: each writes only its own slot
   RunOnAllCores(points_world.size(), [&] {
     for (size_t i = next++; i < points_world.size(); i = next++) {
       const glm::dvec3 p_light = scene.light.frame.LightFromWorld(points_world[i]);
       if (!std::isfinite(p_light.x) || !std::isfinite(p_light.y) || !std::isfinite(p_light.z) ||
-          (!sun && !(p_light.z > 0.0))) {
+          (!sun && !sphere && !(p_light.z > 0.0))) {
         continue;  // stays NaN: behind the light, like `pdsm query` outside the
                    // frustum
       }
-      const std::vector<glm::dvec2> light_samples = GenerateLightSamples(
-          // Per point its own stratification: independent errors between points.
-          scene.light, samples, SamplingPattern::kStratified, HashInts(seed, i));
-      result[i] = HiddenFraction(rtc_scene.get(), scene, *casters, p_light - casters->origin_light,
-                                 light_samples);
+      const glm::dvec3 p = p_light - casters->origin_light;
+      // Per point its own stratification: independent errors between points.
+      const SampleRays rays =
+          sphere ? SphereRays(scene, *casters, p, StratifiedUnitSquare(samples, HashInts(seed, i)))
+                 : PlanarOrSunRays(
+                       scene, *casters, p,
+                       GenerateLightSamples(scene.light, samples, SamplingPattern::kStratified,
+                                            HashInts(seed, i)));
+      if (rays.directions.empty()) continue;  // inside a sphere light: NaN
+      result[i] = HiddenFraction(rtc_scene.get(), *casters, p, rays);
     }
   });
   return result;

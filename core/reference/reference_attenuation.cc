@@ -35,6 +35,11 @@ absl::StatusOr<std::vector<double>> ReferenceAttenuation(const Scene& scene,
                                                          std::span<const glm::dvec3> points,
                                                          const ReferenceOptions& options) {
   if (ResolveReferenceMethod(options.method, scene.light) == ReferenceMethod::kExact) {
+    if (scene.light.is_sphere_face()) {
+      // The exact method projects a planar light; a sphere's outline moves with the point.
+      return absl::UnimplementedError(
+          "the exact reference has no sphere light: use --method embree (or auto)");
+    }
     return ExactAttenuation(scene, points);
   }
   return EmbreeAttenuation(scene, points, options.samples, options.seed);

@@ -5,6 +5,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
+#include "core/scene/sphere_faces.h"
 
 namespace pdsm {
 
@@ -36,7 +37,20 @@ int FindLight(const Scene& scene, std::string_view name) {
 absl::StatusOr<Scene> OneLight(Scene scene, std::string_view light, std::string_view what,
                                std::string_view flag) {
   if (light.empty() && scene.LightCount() == 1) return scene;
-  const int index = light.empty() ? -1 : FindLight(scene, light);
+  int index = light.empty() ? -1 : FindLight(scene, light);
+  // A sphere light (its faces, core/scene/sphere_faces.h), named or the scene's only light: its
+  // first face, which bakes that face and whose reference is the whole sphere's.
+  const std::string_view sphere = SphereOfFace(scene.light_name);
+  if (index < 0 && !sphere.empty() && (light.empty() || light == sphere)) {
+    bool only_faces = true;
+    for (size_t i = 1; i < scene.LightCount(); ++i) {
+      only_faces = only_faces && SphereOfFace(scene.more_lights[i - 1].name) == sphere;
+    }
+    if (!light.empty() || only_faces) index = 0;
+  }
+  for (size_t i = 1; index < 0 && !light.empty() && i < scene.LightCount(); ++i) {
+    if (SphereOfFace(scene.more_lights[i - 1].name) == light) index = static_cast<int>(i);
+  }
   if (index >= 0) return index == 0 && scene.LightCount() == 1 ? scene : ForLight(scene, index);
   std::vector<std::string> names;
   for (size_t i = 0; i < scene.LightCount(); ++i) names.push_back(LightOf(scene, i).name);

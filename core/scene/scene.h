@@ -58,6 +58,11 @@ struct LightSpec {
   // tan(cone half-angle). 0: no cone (every other light).
   double cone_half_angle_deg = 0;
   bool is_spot() const { return cone_half_angle_deg > 0; }
+  // A face of a sphere light (core/scene/sphere_faces.h): a disk (shape kDisk, the sphere's
+  // `radius`, centred on the sphere) whose PDSM covers only the face's directions, |s|, |t| <=
+  // face_tangent. 0: not a face (every other light).
+  double face_tangent = 0;
+  bool is_sphere_face() const { return face_tangent > 0; }
 };
 
 enum class SamplingPattern { kStratified, kUniform, kSobol, kHalton, kBlueNoise };
@@ -128,9 +133,11 @@ Scene ForLight(const Scene& scene, size_t i);
 int FindLight(const Scene& scene, std::string_view name);
 
 // For the commands that work on one light (`what`: "pdsm reference"): `scene` baking the light
-// named `light`, or its only light when `light` is empty. INVALID_ARGUMENT naming the scene
-// file and its lights when `light` names none of them, or is empty and there are several;
-// `flag`, when the command has one ("--light"), is named as the way to choose.
+// named `light`, or its only light when `light` is empty. A sphere light, named or the only
+// light, is its first face (core/scene/sphere_faces.h), as are its faces named one by one.
+// INVALID_ARGUMENT naming the scene file and its lights when `light` names none of them, or is
+// empty and there are several; `flag`, when the command has one ("--light"), is named as the way to
+// choose.
 absl::StatusOr<Scene> OneLight(Scene scene, std::string_view light, std::string_view what,
                                std::string_view flag = {});
 

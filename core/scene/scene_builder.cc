@@ -9,6 +9,7 @@
 #include "absl/strings/str_cat.h"
 #include "core/scene/scene_bake.h"
 #include "core/scene/scene_light.h"
+#include "core/scene/sphere_faces.h"
 
 namespace pdsm::internal {
 namespace {
@@ -97,16 +98,42 @@ absl::StatusOr<std::vector<SceneLight>> SceneBuilder::BuildLights(
       return checks.Error(label + ".name",
                           absl::StrCat("\"", entry.name(), "\" names another light already"));
     }
-    absl::StatusOr<LightSpec> spec = BuildLight(checks, entry);
-    if (!spec.ok()) return spec.status();
+    // A sphere is several lights, its faces (core/scene/sphere_faces.h); any other shape one.
+    std::vector<LightSpec> specs;
+    if (entry.has_sphere()) {
+      absl::StatusOr<std::vector<LightSpec>> faces = BuildSphereFaces(checks, entry.sphere());
+      if (!faces.ok()) return faces.status();
+      specs = *std::move(faces);
+    } else {
+      absl::StatusOr<LightSpec> spec = BuildLight(checks, entry);
+      if (!spec.ok()) return spec.status();
+      specs.push_back(*spec);
+    }
     std::set<std::string> own;  // the bake fields this light sets itself
     const pdsm::v1::BakeParams bake = MergedBakeParams(message.bake(), entry.bake(), &own);
     for (const std::string& field : own) {
       checks = checks.Renamed(absl::StrCat("bake.", field), absl::StrCat(label, ".bake.", field));
     }
-    absl::StatusOr<BakeSettings> settings = BuildBake(checks, bake, spec->shape);
+    absl::StatusOr<BakeSettings> settings = BuildBake(checks, bake, specs[0].shape);
     if (!settings.ok()) return settings.status();
-    lights.push_back(SceneLight{entry.name(), *spec, *settings});
+    if (entry.has_sphere() && settings->frustum.has_value()) {
+      return checks.Error("bake.frustum",
+                          "not for a sphere light: each of its faces covers its own directions");
+    }
+    if (!entry.has_sphere()) {
+      lights.push_back(SceneLight{entry.name(), specs[0], *settings});
+      continue;
+    }
+    for (size_t f = 0; f < specs.size(); ++f) {
+      lights.push_back(
+          SceneLight{SphereFaceName(entry.name(), SphereFaces()[f]), specs[f], *settings});
+    }
+  }
+  // Each face of a sphere is a part of the file: the bound is on parts.
+  if (lights.size() > static_cast<size_t>(kMaxLights)) {
+    return checks_.Error("lights",
+                         absl::StrCat("at most ", kMaxLights, " lights, a sphere counting as ",
+                                      kSphereFaceCount, " (got ", lights.size(), ")"));
   }
   return lights;
 }

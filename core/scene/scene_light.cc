@@ -8,6 +8,7 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "core/geometry/light_frame.h"
+#include "core/scene/sphere_faces.h"
 
 namespace pdsm::internal {
 namespace {
@@ -97,6 +98,20 @@ absl::StatusOr<LightSpec> BuildSun(const FieldChecker& checks, const pdsm::v1::S
 
 }  // namespace
 
+absl::StatusOr<std::vector<LightSpec>> BuildSphereFaces(const FieldChecker& checks,
+                                                        const pdsm::v1::SphereLight& sphere) {
+  absl::StatusOr<glm::dvec3> center = checks.Vec3("light.sphere.center", sphere.center());
+  if (!center.ok()) return center.status();
+  if (absl::Status s = checks.CheckPositive("light.sphere.radius", sphere.radius()); !s.ok()) {
+    return s;
+  }
+  std::vector<LightSpec> faces;
+  for (const SphereFace& face : SphereFaces()) {
+    faces.push_back(SphereFaceLight(*center, sphere.radius(), face));
+  }
+  return faces;
+}
+
 absl::StatusOr<LightSpec> BuildLight(const FieldChecker& checks, const pdsm::v1::Light& light) {
   switch (light.shape_case()) {
     case pdsm::v1::Light::kRect:
@@ -107,10 +122,12 @@ absl::StatusOr<LightSpec> BuildLight(const FieldChecker& checks, const pdsm::v1:
       return BuildSun(checks, light.sun());
     case pdsm::v1::Light::kSpot:
       return BuildSpot(checks, light.spot());
+    case pdsm::v1::Light::kSphere:
+      break;  // several lights: BuildSphereFaces
     case pdsm::v1::Light::SHAPE_NOT_SET:
       break;
   }
-  return checks.Error("light", "one of rect, disk, spot, sun is required");
+  return checks.Error("light", "one of rect, disk, spot, sphere, sun is required");
 }
 
 }  // namespace pdsm::internal

@@ -151,7 +151,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"SunAngleNinety", kSquare, Sun("90"), "{}", "light.sun.angularDiameterDeg",
                 "must be in (0, 90) degrees (got 90)"},
         BadCase{"NoLight", kSquare, "{}", "{}", "light",
-                "one of rect, disk, spot, sun is required"},
+                "one of rect, disk, spot, sphere, sun is required"},
         BadCase{"SamplesZero", kSquare, kRect, R"({"samples": 0})", "bake.samples",
                 "must be in [1, 65536] (got 0)"},
         BadCase{"SamplesTooMany", kSquare, kRect, R"({"samples": 65537})", "bake.samples",
@@ -1120,7 +1120,8 @@ TEST_F(SceneLoaderTest, BadLightsNameTheEntryAndField) {
       Load(LightsJson(absl::StrCat(R"({"name": "a", )", sun, R"(, "bake": {"samples": 2}})"),
                       R"({"epsilon": 7})")),
       "bake.epsilon", "(got 7)");
-  ExpectInvalid(Load(LightsJson(R"({"name": "a"})")), "lights[0]", "one of rect, disk, spot, sun");
+  ExpectInvalid(Load(LightsJson(R"({"name": "a"})")), "lights[0]",
+                "one of rect, disk, spot, sphere, sun");
   ExpectInvalid(
       Load(absl::StrCat(R"({"meshes": [], "light": {)", sun, R"(}, "lights": [{)", sun, "}]}")),
       "lights", "either light (one light) or lights");

@@ -164,9 +164,12 @@ absl::StatusOr<pdsm::v1::Scene> ReadWorldFile(const std::string& path,
         rect->add_size(l.mSize.y);
         break;
       }
-      case aiLightSource_POINT:
-        left_out["point lights (pdsm has no sphere light yet)"].push_back(source_name);
-        continue;
+      case aiLightSource_POINT: {
+        pdsm::v1::SphereLight* sphere = light.mutable_sphere();
+        SetVec3(center, sphere->mutable_center());
+        sphere->set_radius(NumberExtra(node, "radius").value_or(kDefaultPunctualRadius));
+        break;
+      }
       default:
         left_out["ambient and other lights (they cast no shadow pdsm can bake)"].push_back(
             source_name);
@@ -185,7 +188,7 @@ absl::StatusOr<pdsm::v1::Scene> ReadWorldFile(const std::string& path,
   if (scene.lights_size() == 0) {
     return absl::InvalidArgumentError(
         absl::StrCat(path,
-                     ": no light pdsm can bake (a directional, spot or area light; glTF: "
+                     ": no light pdsm can bake (a directional, spot, point or area light; glTF: "
                      "KHR_lights_punctual)",
                      left_out.empty() ? "" : absl::StrCat("; ", absl::StrJoin(*warnings, "; ")),
                      ". Add one to the file, or write a scene JSON that names this file as a mesh "

@@ -9,9 +9,10 @@
 //   directional -> sun, angularDiameterDeg from the node's extras, else 0.53 (the sun's);
 //   spot        -> spot, the outer cone angle as coneHalfAngleDeg, radius from the node's
 //                  extras, else kDefaultPunctualRadius (glTF's punctual lights have no size);
+//   point       -> sphere (core/scene/sphere_faces.h), radius from the node's extras, else
+//                  kDefaultPunctualRadius;
 //   area        -> rect of the light's size, its up as the rect's;
-//   point, ambient -> not baked (pdsm has no sphere light yet; ambient light casts no
-//                  shadow): named in one warning per kind.
+//   ambient and others -> not baked (no shadow to bake): named in one warning per kind.
 // A light node's numeric extras named as BakeParams' JSON fields (samples,
 // shadowMapResolution, epsilon, depthBias, tileSize, adaptiveTolerance, adaptiveMinSamples)
 // are that light's own `bake`, as a scene JSON's lights[i].bake. Names are made to fit
@@ -27,7 +28,7 @@
 
 namespace pdsm {
 
-// World units: a glTF spot light's radius when its node's extras give none (5 cm in glTF's
+// World units: a glTF spot or point light's radius when its node's extras give none (5 cm in glTF's
 // metres: a lamp's bulb).
 inline constexpr double kDefaultPunctualRadius = 0.05;
 // Degrees: a directional light's angular diameter when its node's extras give none.

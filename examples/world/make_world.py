@@ -76,7 +76,8 @@ def main():
          "extensions": {"KHR_lights_punctual": {"light": 1}},
          "extras": {"radius": 0.3, "samples": 32}},
         {"name": "bulb", "translation": [0, 3, 3],
-         "extensions": {"KHR_lights_punctual": {"light": 2}}},
+         "extensions": {"KHR_lights_punctual": {"light": 2}},
+         "extras": {"radius": 0.2, "samples": 32}},
     ]
     gltf = {
         "asset": {"version": "2.0", "generator": "pdsm examples/world/make_world.py"},

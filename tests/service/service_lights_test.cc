@@ -1,9 +1,12 @@
 // The service bakes every light of a scene in one job: a sun, a rect and a spot with its own
 // samples, their tasks in one queue, one multipart file byte-identical to `pdsm bake`'s, the
-// progress, tiles and queries of each light by its name, and a restart mid-job.
+// progress, tiles and queries of each light by its name, a sphere light's faces, and a
+// restart mid-job.
 #include <algorithm>
 #include <set>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -57,6 +60,21 @@ grpc::Status FetchTile(ServiceCluster& cluster, const std::string& job_id, const
   while (reader->Read(&chunk)) {
   }
   return reader->Finish();
+}
+
+// `pdsm query --job` prints what `pdsm query` of the local bake (LocalBakeBytes' local.exr)
+// prints, with each of `flags` (" --light NAME", or none).
+void ExpectJobAnswersAsTheLocalFile(ServiceCluster& cluster, const std::string& job_id,
+                                    const std::string& points,
+                                    const std::vector<std::string>& flags) {
+  const std::string local = cluster.dir().File("local.exr");
+  for (const std::string& flag : flags) {
+    CommandResult from_file = cluster.Pdsm("query " + local + " --points " + points + flag);
+    CommandResult from_job = cluster.Pdsm("query --job " + job_id + " --points " + points + flag);
+    ASSERT_EQ(from_file.exit_code, 0) << from_file.err;
+    ASSERT_EQ(from_job.exit_code, 0) << from_job.err;
+    EXPECT_EQ(from_job.out, from_file.out) << flag;
+  }
 }
 
 TEST(ServiceLights, EveryLightOfAJobMatchesTheLocalBakeAndAnswersByName) {
@@ -134,15 +152,7 @@ TEST(ServiceLights, EveryLightOfAJobMatchesTheLocalBakeAndAnswersByName) {
   std::ostringstream csv;
   for (int i = 0; i < 40; ++i) csv << (-9 + 0.45 * i) << ",0.01," << (4 - 0.2 * i) << "\n";
   WriteText(points, csv.str());
-  const std::string local = cluster.dir().File("local.exr");
-  for (const std::string light : {"", "spot"}) {
-    const std::string flag = light.empty() ? "" : " --light " + light;
-    CommandResult from_file = cluster.Pdsm("query " + local + " --points " + points + flag);
-    CommandResult from_job = cluster.Pdsm("query --job " + job_id + " --points " + points + flag);
-    ASSERT_EQ(from_file.exit_code, 0) << from_file.err;
-    ASSERT_EQ(from_job.exit_code, 0) << from_job.err;
-    EXPECT_EQ(from_job.out, from_file.out) << flag;
-  }
+  ExpectJobAnswersAsTheLocalFile(cluster, job_id, points, {"", " --light spot"});
   CommandResult first = cluster.Pdsm("query --job " + job_id + " --points " + points);
   EXPECT_EQ(std::count(first.out.begin(), first.out.begin() + first.out.find('\n'), ','), 5)
       << "x,y,z and one column per light";
@@ -150,6 +160,43 @@ TEST(ServiceLights, EveryLightOfAJobMatchesTheLocalBakeAndAnswersByName) {
       cluster.Pdsm("query --job " + job_id + " --points " + points + " --light moon");
   EXPECT_NE(moon.exit_code, 0);
   EXPECT_NE(moon.err.find("no light \"moon\""), std::string::npos) << moon.err;
+}
+
+// A sphere light is six lights to the service, its faces: every worker turns a group's
+// samples the same way (core/bake/face_samples.h), so the file is `pdsm bake`'s, and the
+// coordinator answers the sphere by its name with one value per point.
+TEST(ServiceLights, ASphereLightsFacesMatchTheLocalBakeAndAnswerAsOneLight) {
+  ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "4"}));
+  ASSERT_TRUE(cluster.StartCoordinator());
+  const std::string scene = cluster.dir().File("sphere.json");
+  WriteText(scene,
+            R"({"name": "bulb", "meshes": [)"
+            R"({"inline": {"positions": [-8,0,-8, 8,0,-8, 8,0,8, -8,0,8],)"
+            R"( "indices": [0,1,2, 0,2,3]}, "role": "RECEIVER_ONLY"},)"
+            R"( {"inline": {"positions": [-1,2,-1, 1,2,-1, 1,2,1, -1,2,1],)"
+            R"( "indices": [0,1,2, 0,2,3]}, "role": "CASTER_ONLY"},)"
+            R"( {"inline": {"positions": [4,0,-1, 4,0,1, 4,2,1, 4,2,-1],)"
+            R"( "indices": [0,1,2, 0,2,3]}, "role": "CASTER_ONLY"}],)"
+            R"( "lights": [{"name": "lamp", "sphere": {"center": [0.5,4,0], "radius": 0.3}}],)"
+            R"( "bake": {"resolution": [64, 64], "samples": 8, "tileSize": 16}})");
+  const std::string expected = LocalBakeBytes(cluster.dir(), scene);
+  ASSERT_FALSE(expected.empty());
+  const std::string job_id = cluster.Submit(scene);
+  ASSERT_FALSE(job_id.empty());
+  cluster.AddWorker();
+  cluster.AddWorker();
+  const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
+  ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error() << cluster.Log("coordinator.log");
+  ASSERT_EQ(job.lights_size(), 6);
+  EXPECT_EQ(job.lights(0).name(), "lamp@+x");
+  EXPECT_TRUE(FetchBytes(cluster, job_id) == expected) << "fetched PDSM differs from local bake";
+  const std::string points = cluster.dir().File("points.csv");
+  WriteText(points, "0,0,0\n7,0,0\n-6,0,-5\n0.5,3,0\n");
+  ExpectJobAnswersAsTheLocalFile(cluster, job_id, points,
+                                 {"", " --light lamp", " --light lamp@+x"});
+  CommandResult sphere = cluster.Pdsm("query --job " + job_id + " --points " + points);
+  EXPECT_EQ(sphere.out.substr(0, sphere.out.find('\n')), "0,0,0,1.000000")
+      << "one column, the sphere's: under the plate";
 }
 
 // A coordinator killed while the lights are under way resumes each with only its missing
