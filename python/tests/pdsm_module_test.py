@@ -95,6 +95,26 @@ class PdsmModuleTest(unittest.TestCase):
         self.assertEqual(f.header["resolution"], [32, 32])
         self.assertEqual(f.attenuation([[0, 0, 0], [0, 0.1, 0]]).shape, (2,))
 
+    def test_a_sphere_light_is_one_light_of_six_parts(self):
+        scene = os.path.join(self.tmp.name, "sphere.json")
+        with open(scene, "w") as f:
+            json.dump({"name": "bulb", "meshes": [
+                {"inline": {"positions": [-8, 0, -8, 8, 0, -8, 8, 0, 8, -8, 0, 8],
+                            "indices": [0, 1, 2, 0, 2, 3]}, "role": "RECEIVER_ONLY"},
+                {"inline": {"positions": [-1, 2, -1, 1, 2, -1, 1, 2, 1, -1, 2, 1],
+                            "indices": [0, 1, 2, 0, 2, 3]}, "role": "CASTER_ONLY"}],
+                "lights": [{"name": "lamp", "sphere": {"center": [0, 4, 0], "radius": 0.3}}]}, f)
+        path = os.path.join(self.tmp.name, "sphere.exr")
+        f = pdsm.bake(scene, path, resolution=32, samples=4, sm_resolution=64)
+        self.assertEqual(f.lights, ["lamp"])
+        self.assertEqual(len(f.headers), 6)
+        points = np.array([[0, 0, 0], [6, 0, 0], [0, 3, 0]])
+        values = f.attenuation(points)
+        self.assertEqual(values.shape, (3,))
+        np.testing.assert_array_equal(values, [1.0, 0.0, 0.0])
+        np.testing.assert_array_equal(f.attenuation(points, light="lamp"), values)
+        self.assertEqual(f.attenuation(points[1:2], light="lamp@+x")[0], 0.0)
+
     def test_threads_sharing_a_file_get_the_same_answers(self):
         points = ground_points(20000, seed=2)
         expected = self.file.attenuation(points)
