@@ -225,8 +225,12 @@ TEST(SphereLight, CommandsTakeTheSphereByItsNameAndEachFaceByItsOwn) {
   EXPECT_EQ(my.out, "7,0,0,nan\n");
   CommandResult info = RunCommand(absl::StrCat(cli, " info ", out), dir);
   ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_THAT(info.out, HasSubstr("1 light in 6 parts"));
   EXPECT_THAT(info.out, HasSubstr("light \"lamp@-z\""));
   EXPECT_THAT(info.out, HasSubstr("sphere-face"));
+  CommandResult info_sphere = RunCommand(absl::StrCat(cli, " info ", out, " --light lamp"), dir);
+  ASSERT_EQ(info_sphere.exit_code, 0) << info_sphere.err;
+  EXPECT_EQ(info_sphere.out, info.out) << "the sphere by its name is its six faces";
   // The reference of a one-sphere scene is the sphere's, at every point.
   testing::WriteText(points, "0,0,0\n7,0,0\n0.5,3,0\n");
   CommandResult reference =

@@ -10,6 +10,7 @@
 #include "client/commands.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_header_json.h"
+#include "core/pdsm/pdsm_lights.h"
 
 namespace pdsm {
 namespace {
@@ -122,7 +123,16 @@ int RunInfo(const InfoFlags& flags) {
     std::printf("]}\n");
     return kExitOk;
   }
-  std::printf("%s: %zu lights\n", flags.pdsm_path.c_str(), lights.size());
+  // A sphere's faces are parts of one light (core/pdsm/pdsm_lights.h).
+  std::vector<PdsmHeader> headers;
+  for (const PdsmImage& light : lights) headers.push_back(light.header);
+  const size_t count = LightsOfParts(headers).size();
+  if (count == lights.size()) {
+    std::printf("%s: %zu lights\n", flags.pdsm_path.c_str(), lights.size());
+  } else {
+    std::printf("%s: %zu %s in %zu parts\n", flags.pdsm_path.c_str(), count,
+                count == 1 ? "light" : "lights", lights.size());
+  }
   for (const PdsmImage& light : lights) {
     Describe(flags, absl::StrCat("light \"", light.header.light_name, "\""), &light);
   }

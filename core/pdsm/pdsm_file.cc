@@ -34,6 +34,7 @@
 #include "core/pdsm/exr_output_stream.h"
 #include "core/pdsm/pdsm_exr_header.h"
 #include "core/pdsm/pdsm_exr_tiles.h"
+#include "core/pdsm/pdsm_lights.h"
 #include "core/util/atomic_file.h"
 #include "core/util/file_system.h"
 
@@ -608,15 +609,17 @@ absl::StatusOr<std::vector<PdsmImage>> ReadPdsmLights(const std::string& path,
                                                       std::string_view light) {
   absl::StatusOr<PdsmReader> reader = PdsmReader::Open(path);
   if (!reader.ok()) return reader.status();
-  int first = 0, end = reader->light_count();
-  if (!light.empty()) {
-    absl::StatusOr<int> part = reader->FindLight(light);
-    if (!part.ok()) return part.status();
-    first = *part;
-    end = *part + 1;
+  std::vector<int> parts;
+  if (light.empty()) {
+    for (int p = 0; p < reader->light_count(); ++p) parts.push_back(p);
+  } else {
+    // A light's parts: its one, or a sphere's six faces (core/pdsm/pdsm_lights.h).
+    absl::StatusOr<PdsmLightParts> found = FindLightParts(reader->headers(), path, light);
+    if (!found.ok()) return found.status();
+    parts = std::move(found->parts);
   }
   std::vector<PdsmImage> lights;
-  for (int p = first; p < end; ++p) {
+  for (const int p : parts) {
     absl::StatusOr<PdsmImage> image = reader->ReadLight(p);
     if (!image.ok()) return image.status();
     lights.push_back(*std::move(image));

@@ -115,8 +115,9 @@ class PdsmReader {
 // corrupt), FAILED_PRECONDITION (a format version this build does not read).
 absl::StatusOr<PdsmImage> ReadPdsm(const std::string& path, std::string_view light = {});
 
-// Every light of the file, in file order (one for a one-light file); only the light named
-// `light` when it is not empty. Errors as ReadPdsm's.
+// Every part of the file, in file order (one for a one-light file); only the parts of the light
+// named `light` when it is not empty (a sphere's six faces, or one face by its own name:
+// core/pdsm/pdsm_lights.h). Errors as ReadPdsm's; NOT_FOUND names the file's lights.
 absl::StatusOr<std::vector<PdsmImage>> ReadPdsmLights(const std::string& path,
                                                       std::string_view light = {});
 
