@@ -23,17 +23,12 @@ absl::StatusOr<QueryAnswer> QueryCache::Query(const std::string& job_id,
     cache_ = cache;
   }
   const PdsmReader& reader = cache->reader();
-  std::vector<PdsmLightParts> lights;
-  if (light.empty()) {
-    lights = LightsOfParts(reader.headers());
-  } else {
-    absl::StatusOr<PdsmLightParts> found = FindLightParts(reader.headers(), reader.path(), light);
-    if (!found.ok()) return found.status();
-    lights.push_back(*std::move(found));
-  }
+  absl::StatusOr<std::vector<PdsmLightParts>> lights =
+      SelectLights(reader.headers(), reader.path(), light);
+  if (!lights.ok()) return lights.status();
   QueryAnswer answer;
-  for (const PdsmLightParts& l : lights) answer.lights.push_back(l.name);
-  absl::StatusOr<std::vector<double>> values = AttenuationAt(*cache, lights, points_world);
+  for (const PdsmLightParts& l : *lights) answer.lights.push_back(l.name);
+  absl::StatusOr<std::vector<double>> values = AttenuationAt(*cache, *lights, points_world);
   if (!values.ok()) return values.status();
   answer.attenuation = *std::move(values);
   return answer;

@@ -41,15 +41,10 @@ constexpr size_t kValuesPerChunk = size_t{1} << 22;
 absl::Status QueryLocal(const QueryFlags& flags, const std::vector<QueryPoint>& points) {
   absl::StatusOr<PdsmReader> reader = PdsmReader::Open(flags.pdsm_path);
   if (!reader.ok()) return reader.status();
-  std::vector<PdsmLightParts> lights;
-  if (flags.light.empty()) {
-    lights = LightsOfParts(reader->headers());
-  } else {
-    absl::StatusOr<PdsmLightParts> light =
-        FindLightParts(reader->headers(), reader->path(), flags.light);
-    if (!light.ok()) return light.status();
-    lights.push_back(*std::move(light));
-  }
+  absl::StatusOr<std::vector<PdsmLightParts>> selected =
+      SelectLights(reader->headers(), reader->path(), flags.light);
+  if (!selected.ok()) return selected.status();
+  const std::vector<PdsmLightParts> lights = *std::move(selected);
   PdsmTileCache cache(*std::move(reader), flags.cache_mib << 20);
   const size_t chunk = std::max<size_t>(4096, kValuesPerChunk / lights.size());
   std::vector<glm::dvec3> world;

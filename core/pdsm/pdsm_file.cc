@@ -609,20 +609,17 @@ absl::StatusOr<std::vector<PdsmImage>> ReadPdsmLights(const std::string& path,
                                                       std::string_view light) {
   absl::StatusOr<PdsmReader> reader = PdsmReader::Open(path);
   if (!reader.ok()) return reader.status();
-  std::vector<int> parts;
-  if (light.empty()) {
-    for (int p = 0; p < reader->light_count(); ++p) parts.push_back(p);
-  } else {
-    // A light's parts: its one, or a sphere's six faces (core/pdsm/pdsm_lights.h).
-    absl::StatusOr<PdsmLightParts> found = FindLightParts(reader->headers(), path, light);
-    if (!found.ok()) return found.status();
-    parts = std::move(found->parts);
-  }
+  // The selected lights' parts, in file order (a sphere's are its six faces).
+  absl::StatusOr<std::vector<PdsmLightParts>> selected =
+      SelectLights(reader->headers(), path, light);
+  if (!selected.ok()) return selected.status();
   std::vector<PdsmImage> lights;
-  for (const int p : parts) {
-    absl::StatusOr<PdsmImage> image = reader->ReadLight(p);
-    if (!image.ok()) return image.status();
-    lights.push_back(*std::move(image));
+  for (const PdsmLightParts& selected_light : *selected) {
+    for (const int p : selected_light.parts) {
+      absl::StatusOr<PdsmImage> image = reader->ReadLight(p);
+      if (!image.ok()) return image.status();
+      lights.push_back(*std::move(image));
+    }
   }
   return lights;
 }

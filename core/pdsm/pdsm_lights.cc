@@ -64,6 +64,15 @@ absl::StatusOr<PdsmLightParts> FindLightParts(std::span<const PdsmHeader> header
       absl::StrFormat("%s has no light \"%s\"; its lights: %s", path, name, Listed(lights)));
 }
 
+absl::StatusOr<std::vector<PdsmLightParts>> SelectLights(std::span<const PdsmHeader> headers,
+                                                         std::string_view path,
+                                                         std::string_view name) {
+  if (name.empty()) return LightsOfParts(headers);
+  absl::StatusOr<PdsmLightParts> found = FindLightParts(headers, path, name);
+  if (!found.ok()) return found.status();
+  return std::vector<PdsmLightParts>{*std::move(found)};
+}
+
 int PartAt(std::span<const PdsmHeader> headers, const PdsmLightParts& light,
            const glm::dvec3& p_world) {
   int best = light.parts[0];

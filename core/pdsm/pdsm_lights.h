@@ -33,6 +33,12 @@ std::vector<PdsmLightParts> LightsOfParts(std::span<const PdsmHeader> headers);
 absl::StatusOr<PdsmLightParts> FindLightParts(std::span<const PdsmHeader> headers,
                                               std::string_view path, std::string_view name);
 
+// What a consumer's `--light NAME` selects: every light of the file when `name` is empty, else
+// the one FindLightParts finds (with its errors, except that an empty name is never an error).
+absl::StatusOr<std::vector<PdsmLightParts>> SelectLights(std::span<const PdsmHeader> headers,
+                                                         std::string_view path,
+                                                         std::string_view name);
+
 // The part of `light` that answers at p_world: its only part, or the face whose axis (the
 // part's frame.n) is nearest the point's direction from the centre (ties: the first in file
 // order). REQUIRES: light.parts is not empty and indexes `headers`.
