@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include "absl/strings/str_format.h"
+
 namespace pdsm {
 
 int ExitCodeFor(const absl::Status& status) {
@@ -23,6 +25,11 @@ int ExitCodeFor(const absl::Status& status) {
 int ReportError(const absl::Status& status) {
   std::fprintf(stderr, "pdsm: %s\n", std::string(status.message()).c_str());
   return ExitCodeFor(status);
+}
+
+std::string LightsText(size_t lights, size_t parts) {
+  if (lights == parts) return absl::StrFormat("%d lights", lights);
+  return absl::StrFormat("%d %s in %d parts", lights, lights == 1 ? "light" : "lights", parts);
 }
 
 }  // namespace pdsm

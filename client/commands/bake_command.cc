@@ -59,8 +59,8 @@ PreviewPaths PreviewPathsOf(const BakeFlags& flags) {
   return {camera.string(), fs::path(camera).replace_extension(".light.png").string()};
 }
 
-// "3 lights", or "3 lights in 8 parts" when a sphere's faces are parts of their own.
-std::string LightsText(const std::vector<BakeSummary>& lights) {
+// LightsText of the baked lights: a sphere's faces, named "NAME@FACE", count as one light.
+std::string BakedLightsText(const std::vector<BakeSummary>& lights) {
   size_t count = 0;
   std::string_view sphere;  // the sphere whose faces are being counted
   for (const BakeSummary& light : lights) {
@@ -68,9 +68,7 @@ std::string LightsText(const std::vector<BakeSummary>& lights) {
     if (of.empty() || of != sphere) ++count;
     sphere = of;
   }
-  if (count == lights.size()) return absl::StrFormat("%d lights", count);
-  return absl::StrFormat("%d %s in %d parts", count, count == 1 ? "light" : "lights",
-                         lights.size());
+  return LightsText(count, lights.size());
 }
 
 void PrintSummary(const Scene& scene, const BakeFlags& flags,
@@ -79,7 +77,7 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags,
   const std::string what = s.lights.empty()
                                ? absl::StrFormat("%dx%d PDSM, %d samples", scene.bake.width,
                                                  scene.bake.height, scene.bake.samples)
-                               : LightsText(s.lights);
+                               : BakedLightsText(s.lights);
   std::fprintf(
       stderr,
       "baked \"%s\": %s, %d tiles (%d all lit), %lld tasks\n"
@@ -138,7 +136,7 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags,
                  static_cast<long long>(light.assembly.vertices));
   }
   std::printf("pdsm: %s (%s%s)\n", flags.output_path.c_str(), HumanBytes(s.file_bytes).c_str(),
-              s.lights.empty() ? "" : absl::StrCat(", ", LightsText(s.lights)).c_str());
+              s.lights.empty() ? "" : absl::StrCat(", ", BakedLightsText(s.lights)).c_str());
   for (const PreviewPaths& light : previews) {
     if (!light.camera.empty()) {
       std::printf("preview: %s (camera view, the baked soft shadows)\n", light.camera.c_str());

@@ -126,13 +126,8 @@ int RunInfo(const InfoFlags& flags) {
   // A sphere's faces are parts of one light (core/pdsm/pdsm_lights.h).
   std::vector<PdsmHeader> headers;
   for (const PdsmImage& light : lights) headers.push_back(light.header);
-  const size_t count = LightsOfParts(headers).size();
-  if (count == lights.size()) {
-    std::printf("%s: %zu lights\n", flags.pdsm_path.c_str(), lights.size());
-  } else {
-    std::printf("%s: %zu %s in %zu parts\n", flags.pdsm_path.c_str(), count,
-                count == 1 ? "light" : "lights", lights.size());
-  }
+  std::printf("%s: %s\n", flags.pdsm_path.c_str(),
+              LightsText(LightsOfParts(headers).size(), lights.size()).c_str());
   for (const PdsmImage& light : lights) {
     Describe(flags, absl::StrCat("light \"", light.header.light_name, "\""), &light);
   }
