@@ -37,7 +37,10 @@ absl::Status CheckGlError(const GlFunctions& gl, absl::string_view what) {
   if (first == GL_NO_ERROR) return absl::OkStatus();
   for (int i = 0; i < 16 && gl.GetError() != GL_NO_ERROR; ++i) {
   }
-  return absl::InternalError(absl::StrFormat("GL error 0x%04x after %s", first, what));
+  const std::string message = absl::StrFormat("GL error 0x%04x after %s", first, what);
+  // Out of memory is the size of the data, not a fault: callers may go on without it.
+  if (first == GL_OUT_OF_MEMORY) return absl::ResourceExhaustedError(message + " (out of memory)");
+  return absl::InternalError(message);
 }
 
 absl::StatusOr<Program> BuildProgram(const GlFunctions& gl, const char* vertex_source,

@@ -97,10 +97,23 @@ int64_t SceneHeldBytes(const pdsm::v1::Scene& scene) {
   return static_cast<int64_t>(scene.SpaceUsedLong() + scene.ByteSizeLong());
 }
 
+// The plan's groups with a tile a caster may reach: the engine lists only those
+// (core/pipeline/bake_engine.cc, SchedulerSpec).
+int64_t GroupsWithWork(const BakePlan& plan) {
+  if (plan.tile_has_casters.empty()) return plan.group_count();
+  int64_t groups = 0;
+  for (int g = 0; g < plan.group_count(); ++g) {
+    const std::vector<int> tiles = plan.group(g).tiles;
+    groups += std::any_of(tiles.begin(), tiles.end(),
+                          [&plan](int t) { return plan.tile_has_casters[t]; });
+  }
+  return groups;
+}
+
 // What a light of this plan holds (JobHeldBytes without the scene).
 int64_t LightHeldBytes(const BakePlan& plan) {
   return PlanHeldBytes(plan) + BakeEngine::JobHeldBytes(static_cast<int64_t>(plan.tile_count()),
-                                                        static_cast<int64_t>(plan.group_count()));
+                                                        plan.group_count(), GroupsWithWork(plan));
 }
 
 absl::Status PlannedBytesError(const std::string& label, const char* what, int64_t bytes,
@@ -130,7 +143,7 @@ absl::Status CheckMinPlannedBytes(const pdsm::v1::Scene& scene, const Scene& loa
     const BakeSettings bake = LightOf(loaded, i).bake;
     surfaces_only = surfaces_only || bake.surfaces_only;
     bytes += MinReleasedPlanBytes(bake, receiver_vertices, receiver_triangles) +
-             BakeEngine::JobHeldBytes(TileCountOf(bake), /*groups=*/1);
+             BakeEngine::JobHeldBytes(TileCountOf(bake), /*groups=*/1, /*groups_with_work=*/0);
   }
   if (bytes <= max_bytes) return absl::OkStatus();
   return PlannedBytesError(label, "would hold at least", bytes, max_bytes, surfaces_only);

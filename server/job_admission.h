@@ -11,6 +11,7 @@
 
 #include "absl/status/statusor.h"
 #include "core/bake/bake_plan.h"
+#include "core/scene/scene.h"
 #include "pdsm/v1/jobs.pb.h"
 #include "server/coordinator_assets.h"
 #include "server/job_lights.h"
@@ -24,10 +25,13 @@ namespace pdsm {
 inline constexpr int64_t kDefaultMaxPlannedBytes = int64_t{4096} << 20;
 
 struct AdmissionLimits {
-  int64_t max_job_pixels = int64_t{8192} * 8192;
+  // A map's memory no longer grows with its pixels (tiles are written as they finish, and an
+  // all-lit tile costs a few bytes: docs/performance.md, "Maps of any size"), so the default
+  // is the scene format's own limit; its tiles are what max_job_tiles bounds.
+  int64_t max_job_pixels = kMaxPdsmPixels;
   // Tiles are the unit of the plan, the job store and the tile files: checked before the plan
   // is made, so that a 1 KB request cannot make the coordinator plan 67 million tiles (8192^2
-  // at tile size 1 took 87 s and 5 GB). 2^18 is 8192^2 at tile size 16.
+  // at tile size 1 took 87 s and 5 GB). 2^18 is 8192^2 at tile size 16, 32768^2 at 64.
   int64_t max_job_tiles = int64_t{1} << 18;
   int max_samples = 65536;
   int64_t max_triangles = 20'000'000;

@@ -1,5 +1,7 @@
 #include "server/job_store.h"
 
+#include <algorithm>
+
 #include <sqlite3.h>
 
 #include <filesystem>
@@ -45,6 +47,13 @@ CREATE TABLE done_tiles (
   PRIMARY KEY (job_id, tile_index)
 ) WITHOUT ROWID;
 PRAGMA user_version = 1;
+)sql";
+
+// Version 2 (2026-12-03, issue #12 item 5): a done tile may be all lit (no shadow reaches its
+// rays), stored as this flag alone and made again from the plan, not as a file.
+constexpr char kSchemaV2[] = R"sql(
+ALTER TABLE done_tiles ADD COLUMN all_lit INTEGER NOT NULL DEFAULT 0;
+PRAGMA user_version = 2;
 )sql";
 
 // The columns ReadJob reads, in its order; the scene, when read, comes after them.
@@ -257,7 +266,12 @@ absl::Status Migrate(sqlite3* db, const std::string& db_path) {
   }
   if (version == 0) {
     if (absl::Status s = Exec(db, db_path, kSchemaV1); !s.ok()) return s;
-    spdlog::info("created job database {} (schema version {})", db_path, JobStore::kSchemaVersion);
+    spdlog::info("created job database {}", db_path);
+  }
+  if (version <= 1) {
+    if (absl::Status s = Exec(db, db_path, kSchemaV2); !s.ok()) return s;
+    spdlog::info("job database {}: schema version {} -> {}", db_path, std::max<int64_t>(version, 1),
+                 JobStore::kSchemaVersion);
   }
   return txn.Commit();
 }
@@ -459,12 +473,13 @@ absl::Status JobStore::SetSucceeded(const std::string& job_id, uint64_t pdsm_byt
   return absl::OkStatus();
 }
 
-absl::Status JobStore::MarkTileDone(const std::string& job_id, int tile_index, int64_t now_ms) {
-  return MarkTilesDone(job_id, {tile_index}, now_ms);
+absl::Status JobStore::MarkTileDone(const std::string& job_id, int tile_index, int64_t now_ms,
+                                    bool all_lit) {
+  return MarkTilesDone(job_id, {tile_index}, now_ms, all_lit);
 }
 
 absl::Status JobStore::MarkTilesDone(const std::string& job_id, const std::vector<int>& tiles,
-                                     int64_t now_ms) {
+                                     int64_t now_ms, bool all_lit) {
   absl::MutexLock lock(&mu_);
   Transaction txn(db_, db_path_);
   if (absl::Status s = txn.Begin(); !s.ok()) return s;
@@ -485,14 +500,17 @@ absl::Status JobStore::MarkTilesDone(const std::string& job_id, const std::vecto
     }
   }
 
+  // A tile done again replaces its row: it may have been stored as a file and is all lit now,
+  // or the other way round.
   absl::StatusOr<Statement> insert = Statement::Prepare(db_, db_path_, R"sql(
-      INSERT OR IGNORE INTO done_tiles (job_id, tile_index, done_unix_ms)
-      VALUES (?1, ?2, ?3))sql");
+      INSERT OR REPLACE INTO done_tiles (job_id, tile_index, done_unix_ms, all_lit)
+      VALUES (?1, ?2, ?3, ?4))sql");
   if (!insert.ok()) return insert.status();
   for (int tile_index : tiles) {
     insert->BindText(1, job_id);
     insert->BindInt64(2, tile_index);
     insert->BindInt64(3, now_ms);
+    insert->BindInt64(4, all_lit ? 1 : 0);
     if (absl::Status s = insert->Run(); !s.ok()) return s;
     insert->Reset();
   }
@@ -532,11 +550,22 @@ absl::Status JobStore::MarkTileUndone(const std::string& job_id, int tile_index)
 }
 
 absl::StatusOr<std::vector<int>> JobStore::DoneTiles(const std::string& job_id) {
+  return SelectTiles(job_id, "");
+}
+
+absl::StatusOr<std::vector<int>> JobStore::AllLitTiles(const std::string& job_id) {
+  return SelectTiles(job_id, " AND all_lit = 1");
+}
+
+absl::StatusOr<std::vector<int>> JobStore::SelectTiles(const std::string& job_id,
+                                                       absl::string_view condition) {
   absl::MutexLock lock(&mu_);
   if (absl::Status s = CheckJobExists(job_id); !s.ok()) return s;
 
-  absl::StatusOr<Statement> stmt = Statement::Prepare(
-      db_, db_path_, "SELECT tile_index FROM done_tiles WHERE job_id = ?1 ORDER BY tile_index ASC");
+  absl::StatusOr<Statement> stmt =
+      Statement::Prepare(db_, db_path_,
+                         absl::StrCat("SELECT tile_index FROM done_tiles WHERE job_id = ?1",
+                                      condition, " ORDER BY tile_index ASC"));
   if (!stmt.ok()) return stmt.status();
   stmt->BindText(1, job_id);
   std::vector<int> tiles;

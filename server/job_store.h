@@ -16,6 +16,7 @@
 #include "absl/base/thread_annotations.h"
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
 #include "absl/synchronization/mutex.h"
 #include "pdsm/v1/jobs.pb.h"
 
@@ -48,7 +49,9 @@ struct JobRecord {
 class JobStore {
  public:
   // The database's schema version (PRAGMA user_version).
-  static constexpr int kSchemaVersion = 1;
+  // 2 since 2026-12-03 (done tiles flagged all lit); a version-1 database is upgraded in
+  // place when opened (and is then no longer readable by older builds).
+  static constexpr int kSchemaVersion = 2;
 
   // Opens or creates DATA_DIR/jobs.db, creating DATA_DIR (and its parents) if needed.
   // FAILED_PRECONDITION when the database's schema is newer than kSchemaVersion (written by a
@@ -97,12 +100,14 @@ class JobStore {
   // tile to the job's done tiles (no-op if there) and increments tile_assemblies, even when
   // the tile was done already (that counts a recomputation, which tests detect). Stamps
   // updated_unix_ms. NOT_FOUND when there is no such job; INVALID_ARGUMENT when tile_index is
-  // outside [0, tiles_total).
-  absl::Status MarkTileDone(const std::string& job_id, int tile_index, int64_t now_ms);
+  // outside [0, tiles_total). `all_lit`: the tile is stored as this flag alone, not as a file
+  // (server/stored_job.h); a tile marked again takes the new flag.
+  absl::Status MarkTileDone(const std::string& job_id, int tile_index, int64_t now_ms,
+                            bool all_lit = false);
   // MarkTileDone of every tile in one transaction (one sync for thousands of tiles no caster
   // reaches); nothing is marked when one is outside the job.
   absl::Status MarkTilesDone(const std::string& job_id, const std::vector<int>& tiles,
-                             int64_t now_ms);
+                             int64_t now_ms, bool all_lit = false);
 
   // Takes tile `tile_index` out of the job's done tiles (no-op if not there): verification found
   // it computed from a quarantined worker's results, so a resumed job must redo it.
@@ -112,6 +117,8 @@ class JobStore {
 
   // The job's done tiles, ascending. NOT_FOUND when there is no such job.
   absl::StatusOr<std::vector<int>> DoneTiles(const std::string& job_id);
+  // Those of the job's done tiles marked all lit, ascending. NOT_FOUND when there is no such job.
+  absl::StatusOr<std::vector<int>> AllLitTiles(const std::string& job_id);
 
   const std::string& db_path() const { return db_path_; }
 
@@ -119,6 +126,10 @@ class JobStore {
   JobStore(sqlite3* db, std::string db_path) : db_(db), db_path_(std::move(db_path)) {}
   // NOT_FOUND (NoSuchJob) unless the job has a row.
   absl::Status CheckJobExists(const std::string& job_id) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  // The job's done tiles whose row meets `condition` (SQL after "WHERE job_id = ?1", "" for
+  // all), ascending.
+  absl::StatusOr<std::vector<int>> SelectTiles(const std::string& job_id,
+                                               absl::string_view condition);
 
   absl::Mutex mu_;
   sqlite3* const db_ ABSL_PT_GUARDED_BY(mu_);  // closed by the destructor

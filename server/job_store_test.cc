@@ -257,6 +257,46 @@ TEST(JobStoreTest, MarkTileDoneCountsAssembliesIncludingRepeats) {
   EXPECT_EQ((*listed)[0].tile_assemblies, 4);
 }
 
+TEST(JobStoreTest, AllLitTilesAreDoneAndTheLastMarkDecides) {
+  TempDir dir;
+  std::unique_ptr<JobStore> store = OpenOrDie(dir.path().string());
+  ASSERT_NE(store, nullptr);
+  const std::string id = CreateOrDie(*store, SampleJob(1)).job_id;
+  ASSERT_TRUE(store->MarkTilesDone(id, {3, 4, 5}, 10, /*all_lit=*/true).ok());
+  ASSERT_TRUE(store->MarkTileDone(id, 6, 11).ok());
+  ASSERT_TRUE(store->MarkTileDone(id, 4, 12).ok());  // computed again, with a shadow now
+  EXPECT_THAT(*store->DoneTiles(id), ElementsAre(3, 4, 5, 6));
+  EXPECT_THAT(*store->AllLitTiles(id), ElementsAre(3, 5));
+  EXPECT_EQ(store->GetJob(id)->tiles_done, 4);
+  EXPECT_EQ(store->AllLitTiles("ffffffffffffffff").status().code(), absl::StatusCode::kNotFound);
+}
+
+// A database of schema 1 (before all-lit tiles) is upgraded in place when opened: its done
+// tiles stay done, none of them all lit.
+TEST(JobStoreTest, ASchemaOneDatabaseIsUpgraded) {
+  TempDir dir;
+  std::string id;
+  {
+    std::unique_ptr<JobStore> store = OpenOrDie(dir.path().string());
+    ASSERT_NE(store, nullptr);
+    id = CreateOrDie(*store, SampleJob(1)).job_id;
+    ASSERT_TRUE(store->MarkTileDone(id, 2, 10).ok());
+  }
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open((dir.path() / "jobs.db").string().c_str(), &db), SQLITE_OK);
+  EXPECT_EQ(sqlite3_exec(db, "ALTER TABLE done_tiles DROP COLUMN all_lit; PRAGMA user_version = 1;",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+
+  std::unique_ptr<JobStore> store = OpenOrDie(dir.path().string());
+  ASSERT_NE(store, nullptr);
+  EXPECT_THAT(*store->DoneTiles(id), ElementsAre(2));
+  EXPECT_THAT(*store->AllLitTiles(id), IsEmpty());
+  ASSERT_TRUE(store->MarkTileDone(id, 3, 11, /*all_lit=*/true).ok());
+  EXPECT_THAT(*store->AllLitTiles(id), ElementsAre(3));
+}
+
 TEST(JobStoreTest, AWithdrawnTileIsNoLongerDoneUntilMarkedAgain) {
   TempDir dir;
   std::unique_ptr<JobStore> store = OpenOrDie(dir.path().string());

@@ -107,9 +107,19 @@ std::vector<int> StoredJob::FinishedTiles(int light) const {
     index -= l.tile_offset;
     if (index >= 0 && index < static_cast<int>(stored.size())) stored[index] = true;
   }
+  // Tiles stored as all lit count too; if the store cannot say which, they are left out (not
+  // finished yet, to the caller), never made up.
+  absl::StatusOr<std::vector<bool>> all_lit = AllLitTiles();
+  if (!all_lit.ok()) {
+    spdlog::warn("job {}: cannot read its all-lit tiles: {}", record_.job_id,
+                 std::string(all_lit.status().message()));
+  }
   std::vector<int> done;
   for (const TileRect& rect : AllTiles(*l.plan)) {
-    if (stored[rect.index] || IsUnreachedTile(*l.plan, rect.index)) done.push_back(rect.index);
+    if (stored[rect.index] || IsUnreachedTile(*l.plan, rect.index) ||
+        (all_lit.ok() && (*all_lit)[l.tile_offset + rect.index])) {
+      done.push_back(rect.index);
+    }
   }
   return done;
 }
@@ -119,7 +129,14 @@ absl::StatusOr<std::string> StoredJob::FinishedTileFile(int light, int tile) con
   const std::string path = paths_.Tile(l.tile_offset + tile);
   std::error_code ec;
   if (std::filesystem::exists(path, ec)) return path;
-  if (tile < 0 || tile >= l.plan->tile_count() || !IsUnreachedTile(*l.plan, tile)) {
+  bool made = tile >= 0 && tile < l.plan->tile_count() && IsUnreachedTile(*l.plan, tile);
+  if (!made && tile >= 0 && tile < l.plan->tile_count()) {
+    absl::MutexLock lock(&all_lit_mu_);
+    absl::StatusOr<const std::vector<bool>*> all_lit = AllLitLocked();
+    if (!all_lit.ok()) return all_lit.status();
+    made = (**all_lit)[l.tile_offset + tile];
+  }
+  if (!made) {
     return absl::NotFoundError(
         absl::StrCat("job ", record_.job_id, ": tile ", tile, " is not assembled (yet)"));
   }
@@ -140,7 +157,23 @@ void StoredJob::Started() {
 }
 
 absl::Status StoredJob::StoreTile(const JobLight& light, const PdsmTile& tile) {
-  const int index = light.tile_offset + light.plan->TileIndexAt(tile.x0, tile.y0);
+  const int tile_in_light = light.plan->TileIndexAt(tile.x0, tile.y0);
+  const int index = light.tile_offset + tile_in_light;
+  if (IsMadeFromThePlan(*light.plan, tile_in_light, tile)) {
+    // All lit: the row alone (one sync, where a file costs three), made again when needed.
+    if (ended_) return absl::OkStatus();
+    if (absl::Status s = store_->MarkTileDone(record_.job_id, index, UnixNowMs(),
+                                              /*all_lit=*/true);
+        !s.ok()) {
+      return s;
+    }
+    if (absl::Status s = SetAllLit(index, true); !s.ok()) return s;
+    // A file of an earlier run (its row lost in a crash) would only be ignored: remove it.
+    FileSystem* fs = fs_ != nullptr ? fs_ : FileSystem::Default();
+    const absl::Status removed = fs->RemoveFile(paths_.Tile(index));
+    if (!removed.ok() && !absl::IsNotFound(removed)) return removed;
+    return absl::OkStatus();
+  }
   std::error_code ec;
   std::filesystem::create_directories(paths_.tiles, ec);
   if (absl::Status s = WriteTileFile(paths_.Tile(index), tile, fs_); !s.ok()) return s;
@@ -148,7 +181,43 @@ absl::Status StoredJob::StoreTile(const JobLight& light, const PdsmTile& tile) {
   if (absl::Status s = store_->MarkTileDone(record_.job_id, index, UnixNowMs()); !s.ok()) {
     return s;
   }
+  if (absl::Status s = SetAllLit(index, false); !s.ok()) return s;
   spdlog::debug("job {} tile {}: stored, {} vertices", record_.job_id, index, tile.vertices.size());
+  return absl::OkStatus();
+}
+
+bool StoredJob::IsMadeFromThePlan(const BakePlan& plan, int tile_index, const PdsmTile& tile) {
+  if (!tile.vertices.empty()) return false;
+  const PdsmTile made = MakeUnreachedTile(plan, tile_index).tile;
+  return tile.samples == made.samples && tile.offsets == made.offsets;
+}
+
+absl::StatusOr<const std::vector<bool>*> StoredJob::AllLitLocked() const {
+  if (!all_lit_) {
+    absl::StatusOr<std::vector<int>> tiles = store_->AllLitTiles(record_.job_id);
+    if (!tiles.ok()) return tiles.status();
+    const JobLight& last = lights_.back();
+    std::vector<bool> all_lit(last.tile_offset + last.plan->tile_count(), false);
+    for (int t : *tiles) {
+      if (t >= 0 && t < static_cast<int>(all_lit.size())) all_lit[t] = true;
+    }
+    all_lit_ = std::move(all_lit);
+  }
+  return &*all_lit_;
+}
+
+absl::StatusOr<std::vector<bool>> StoredJob::AllLitTiles() const {
+  absl::MutexLock lock(&all_lit_mu_);
+  absl::StatusOr<const std::vector<bool>*> all_lit = AllLitLocked();
+  if (!all_lit.ok()) return all_lit.status();
+  return **all_lit;
+}
+
+absl::Status StoredJob::SetAllLit(int index, bool all_lit) {
+  absl::MutexLock lock(&all_lit_mu_);
+  absl::StatusOr<const std::vector<bool>*> loaded = AllLitLocked();
+  if (!loaded.ok()) return loaded.status();
+  (*all_lit_)[index] = all_lit;
   return absl::OkStatus();
 }
 
@@ -168,6 +237,7 @@ absl::Status StoredJob::WithdrawTiles(const JobLight& light, const std::vector<i
     FileSystem* fs = fs_ != nullptr ? fs_ : FileSystem::Default();
     const absl::Status removed = fs->RemoveFile(paths_.Tile(index));
     if (!removed.ok() && !absl::IsNotFound(removed)) return removed;
+    if (absl::Status s = SetAllLit(index, false); !s.ok()) return s;
     spdlog::info("job {} tile {}: withdrawn, to be computed again", record_.job_id, index);
   }
   return absl::OkStatus();
@@ -184,11 +254,14 @@ absl::Status StoredJob::LightFinished() {
 absl::Status StoredJob::WriteFile() {
   std::error_code ec;
   std::filesystem::create_directories(paths_.dir, ec);
+  absl::StatusOr<std::vector<bool>> all_lit = AllLitTiles();
+  if (!all_lit.ok()) return all_lit.status();
   const auto write_light = [&](const JobLight& light, PdsmWriter* writer) -> absl::Status {
     for (const TileRect& rect : AllTiles(*light.plan)) {
-      // A tile no caster reaches was never stored: it is made again, as the engine made it.
+      // A tile no caster reaches, or found all lit, was never stored: it is made again, as the
+      // engine made it.
       absl::StatusOr<PdsmTile> tile =
-          IsUnreachedTile(*light.plan, rect.index)
+          IsUnreachedTile(*light.plan, rect.index) || (*all_lit)[light.tile_offset + rect.index]
               ? MakeUnreachedTile(*light.plan, rect.index).tile
               : ReadTileFile(paths_.Tile(light.tile_offset + rect.index));
       if (!tile.ok()) return tile.status();

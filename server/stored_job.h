@@ -3,7 +3,9 @@
 // engine job's. Under DATA_DIR/jobs/<id>/:
 //   tiles/<index>.tile  each finished tile (core/pipeline/tile_file.h) by its index among the
 //                       job's tiles, durable once its row is in the job store (MarkTileDone),
-//                       so a restart resumes the job with only its missing tiles;
+//                       so a restart resumes the job with only its missing tiles; a tile
+//                       found all lit (what the plan alone makes again) has no file, its
+//                       row in the store says so (JobStore::MarkTileDone's all_lit);
 //   pdsm.exr            the PDSM, written from the tile files when every light's tiles are
 //                       stored: for one light the single-part file, for several the multipart
 //                       file the local bake writes (PdsmLightsWriter), byte for byte.
@@ -73,13 +75,13 @@ class StoredJob : public std::enable_shared_from_this<StoredJob> {
   std::optional<JobProgress> LightEndProgress(int light) const;
 
   // Light `light`'s tiles (its own indices) that are finished, ascending: those whose files are
-  // complete (written under a temporary name, then renamed) and those no caster reaches, which
-  // are never stored as files (core/pipeline/unreached_tile.h).
+  // complete (written under a temporary name, then renamed), those no caster reaches, which
+  // are never stored as files (core/pipeline/unreached_tile.h), and those stored all lit.
   std::vector<int> FinishedTiles(int light) const;
 
-  // The file of finished tile `tile` of light `light`, for FetchTile: a tile no caster reaches
-  // is written on the first request (the bytes the file will hold). NOT_FOUND when the tile is
-  // not finished (yet).
+  // The file of finished tile `tile` of light `light`, for FetchTile: a tile no caster reaches,
+  // or stored all lit, is written on the first request (the bytes the file will hold).
+  // NOT_FOUND when the tile is not finished (yet).
   absl::StatusOr<std::string> FinishedTileFile(int light, int tile) const;
 
   // Writes the job's end state to the store now, without waiting for the end of every light: a
@@ -90,7 +92,17 @@ class StoredJob : public std::enable_shared_from_this<StoredJob> {
  private:
   class Light;  // the JobOutput of one light
   void Started();
+  // A tile that the plan alone makes again (MakeUnreachedTile: all lit, the same samples) is
+  // stored as a flag of its row in the job store, not as a file: in a sparse world most tiles
+  // a caster's box may reach are all lit, and a file each (three syncs) made the coordinator
+  // the bottleneck (a 32768^2 sparse world: 413 s through the service, 36 s locally).
   absl::Status StoreTile(const JobLight& light, const PdsmTile& tile);
+  static bool IsMadeFromThePlan(const BakePlan& plan, int tile_index, const PdsmTile& tile);
+  // The job's tiles (job indices) stored all lit, read from the store at the first use.
+  absl::StatusOr<std::vector<bool>> AllLitTiles() const;
+  absl::StatusOr<const std::vector<bool>*> AllLitLocked() const
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(all_lit_mu_);
+  absl::Status SetAllLit(int index, bool all_lit);
   // Marks the light's tiles no caster reaches done, in one transaction, without files.
   absl::Status StoreUnreachedTiles(const JobLight& light, const std::vector<int>& tiles);
   // Verification found the tiles (the light's own indices) fed by a quarantined worker: their
@@ -114,6 +126,9 @@ class StoredJob : public std::enable_shared_from_this<StoredJob> {
   FileSystem* const fs_;
   std::atomic<bool> started_{false};
   std::atomic<bool> ended_{false};  // set by RecordEnd: tiles finishing later are not recorded
+
+  mutable absl::Mutex all_lit_mu_;
+  mutable std::optional<std::vector<bool>> all_lit_ ABSL_GUARDED_BY(all_lit_mu_);
 
   mutable absl::Mutex mu_;
   std::vector<std::optional<JobProgress>> light_ends_ ABSL_GUARDED_BY(mu_);  // by light

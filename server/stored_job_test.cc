@@ -5,6 +5,9 @@
 #include <gtest/gtest.h>
 
 #include "core/bake/bake_plan.h"
+#include "core/pdsm/pdsm_file.h"
+#include "core/pipeline/tile_file.h"
+#include "core/pipeline/unreached_tile.h"
 #include "core/scene/scene_loader.h"
 #include "tests/test_support.h"
 #include "tests/write_faults.h"
@@ -104,6 +107,58 @@ TEST_F(StoredJobTest, EndStatesReachTheStoreAndTheTilesGo) {
   // A tile finishing after the end is not recorded as done.
   ASSERT_TRUE(job->LightOutput(0)->StoreTile(Tile(*plan_, 1, 1.0f)).ok());
   EXPECT_EQ(*store_->DoneTiles(record_.job_id), std::vector<int>{0});
+}
+
+// A tile a task found all lit (what the plan alone makes again) is its row alone: no file, yet
+// finished, served and written into the PDSM as the plan makes it, also after a restart (a new
+// StoredJob on the same store); the file is the one its tiles written directly give.
+TEST_F(StoredJobTest, AnAllLitTileIsARowNotAFile) {
+  const JobPaths paths(dir_.path().string(), record_.job_id);
+  ASSERT_EQ(plan_->tile_count(), 2);
+  ASSERT_FALSE(IsUnreachedTile(*plan_, 1));  // else the plan alone would say so
+  const PdsmTile lit = MakeUnreachedTile(*plan_, 1).tile;
+  const PdsmTile shadowed = Tile(*plan_, 0, 0.5f);
+  ASSERT_TRUE(Job(nullptr)->LightOutput(0)->StoreTile(lit).ok());
+  EXPECT_FALSE(std::filesystem::exists(paths.Tile(1)));
+  EXPECT_EQ(*store_->AllLitTiles(record_.job_id), std::vector<int>{1});
+  EXPECT_EQ(*store_->DoneTiles(record_.job_id), std::vector<int>{1});
+
+  std::shared_ptr<StoredJob> restarted = Job(nullptr);
+  EXPECT_EQ(restarted->FinishedTiles(0), std::vector<int>{1});
+  absl::StatusOr<std::string> served = restarted->FinishedTileFile(0, 1);
+  ASSERT_TRUE(served.ok()) << served.status();
+  absl::StatusOr<PdsmTile> read = ReadTileFile(*served);
+  ASSERT_TRUE(read.ok()) << read.status();
+  EXPECT_EQ(read->offsets, lit.offsets);
+  EXPECT_TRUE(read->vertices.empty());
+  EXPECT_EQ(restarted->FinishedTileFile(0, 0).status().code(), absl::StatusCode::kNotFound);
+
+  ASSERT_TRUE(restarted->LightOutput(0)->StoreTile(shadowed).ok());
+  ASSERT_TRUE(restarted->LightOutput(0)->Finish().ok());
+  const std::string direct = dir_.File("direct.exr");
+  absl::StatusOr<std::unique_ptr<PdsmWriter>> writer = PdsmWriter::Create(direct, plan_->header);
+  ASSERT_TRUE(writer.ok()) << writer.status();
+  ASSERT_TRUE((*writer)->WriteTile(shadowed).ok());
+  ASSERT_TRUE((*writer)->WriteTile(lit).ok());
+  ASSERT_TRUE((*writer)->Finish().ok());
+  EXPECT_TRUE(testing::ReadBytes(paths.pdsm) == testing::ReadBytes(direct));
+}
+
+// A tile stored all lit and then with a shadow (a withdrawn tile computed again) is a file
+// again, and the other way round: the row's flag follows the last store.
+TEST_F(StoredJobTest, TheLastStoreOfATileDecidesWhetherItIsAFile) {
+  const JobPaths paths(dir_.path().string(), record_.job_id);
+  std::shared_ptr<StoredJob> job = Job(nullptr);
+  ASSERT_TRUE(job->LightOutput(0)->StoreTile(MakeUnreachedTile(*plan_, 1).tile).ok());
+  ASSERT_TRUE(job->LightOutput(0)->WithdrawTiles({1}).ok());
+  EXPECT_TRUE(job->FinishedTiles(0).empty());
+  ASSERT_TRUE(job->LightOutput(0)->StoreTile(Tile(*plan_, 1, 0.25f)).ok());
+  EXPECT_TRUE(std::filesystem::exists(paths.Tile(1)));
+  EXPECT_TRUE(store_->AllLitTiles(record_.job_id)->empty());
+  ASSERT_TRUE(job->LightOutput(0)->StoreTile(MakeUnreachedTile(*plan_, 1).tile).ok());
+  EXPECT_FALSE(std::filesystem::exists(paths.Tile(1)));
+  EXPECT_EQ(*store_->AllLitTiles(record_.job_id), std::vector<int>{1});
+  EXPECT_EQ(Job(nullptr)->FinishedTiles(0), std::vector<int>{1});
 }
 
 }  // namespace

@@ -47,7 +47,7 @@ class LocalWorker {
     for (int t = first; t < plan_.tile_count(); t += stride) {
       absl::StatusOr<std::vector<float>> depth = runner_->ReceiverDepth(plan_.tile(t));
       if (!depth.ok()) return depth.status();
-      output_->SetReceiverDepth(t, *std::move(depth));
+      output_->SetReceiverDepth(t, *depth);
     }
     return absl::OkStatus();
   }

@@ -1,6 +1,8 @@
 #include "worker/local_output.h"
 
+#include <span>
 #include <utility>
+#include <vector>
 
 namespace pdsm {
 
@@ -14,13 +16,17 @@ LocalOutput::LocalOutput(const BakePlan& plan, PdsmWriter* writer, std::string p
                has_preview() ? plan.geometry().height : 0),
       writer_(writer) {}
 
-void LocalOutput::SetReceiverDepth(int tile_index, std::vector<float> depth) {
-  receiver_depth_.at(tile_index) = std::move(depth);
+void LocalOutput::SetReceiverDepth(int tile_index, std::span<const float> depth) {
+  const TileRect rect = plan_.tile(tile_index);
+  receiver_depth_.at(tile_index) =
+      preview_.SampledDepths(rect.x0, rect.y0, rect.width, rect.height, depth);
 }
 
 absl::Status LocalOutput::StoreTile(const PdsmTile& tile) {
   if (has_preview()) {
-    preview_.ShadeTile(tile, receiver_depth_.at(plan_.TileIndexAt(tile.x0, tile.y0)));
+    std::vector<float>& depth = receiver_depth_.at(plan_.TileIndexAt(tile.x0, tile.y0));
+    preview_.ShadeTile(tile, depth);
+    std::vector<float>().swap(depth);  // each tile is stored once
   }
   absl::MutexLock lock(&writer_mu_);
   return writer_->WriteTile(tile);

@@ -5,6 +5,7 @@
 #define PDSM_WORKER_LOCAL_OUTPUT_H_
 
 #include <atomic>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -27,9 +28,11 @@ class LocalOutput final : public JobOutput {
 
   bool has_preview() const { return !preview_path_.empty(); }
   // The preview's surface for tile `tile_index`: the light-space depth of the nearest receiver
-  // along each of its rays (TaskRunner::ReceiverDepth). REQUIRES: has_preview(); every tile's
-  // set before the bake starts; distinct tiles may be set from different threads.
-  void SetReceiverDepth(int tile_index, std::vector<float> depth);
+  // along each of its rays (TaskRunner::ReceiverDepth), row-major over the tile. Only the
+  // pixels the preview samples are kept (PreviewImage::SampledDepths), and only until the tile
+  // is shaded. REQUIRES: has_preview(); every tile's set before the bake starts; distinct
+  // tiles may be set from different threads.
+  void SetReceiverDepth(int tile_index, std::span<const float> depth);
 
   absl::Status StoreTile(const PdsmTile& tile) override;
   absl::Status Finish() override;  // writes the preview, then renames the PDSM into place
@@ -44,7 +47,7 @@ class LocalOutput final : public JobOutput {
   const BakePlan& plan_;
   const std::string preview_path_;
   FileSystem* const fs_;
-  std::vector<std::vector<float>> receiver_depth_;  // by tile; written before the bake only
+  std::vector<std::vector<float>> receiver_depth_;  // by tile, sampled; dropped once shaded
   PreviewImage preview_;                            // tiles are disjoint: shading needs no lock
 
   absl::Mutex writer_mu_;

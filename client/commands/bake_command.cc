@@ -170,6 +170,9 @@ void WarnAboutUncoveredReceivers(const Scene& scene, const PdsmHeader& header) {
                100 * outside, light.c_str());
 }
 
+// The largest map the bake's camera view shows (4096^2: 128 MiB of index on the GPU).
+constexpr int kMaxCameraViewPixels = 4096 * 4096;
+
 // The camera view of light `part` of the PDSM just written, read back (`reader`: the file, or
 // why it could not be opened) so that the picture shows what the file holds; `*written` says
 // whether it was. A PDSM larger than this GL's buffers (a 2048^2 plates
@@ -180,6 +183,20 @@ absl::Status WriteBakeCameraView(const Scene& scene, const BakeFlags& flags,
                                  int part, bool* written) {
   *written = false;
   if (previews.camera.empty()) return absl::OkStatus();
+  // The camera view uploads the whole map (8 bytes a pixel of index, then the vertices): past
+  // kMaxCameraViewPixels it would hold gigabytes for a picture (a 16384^2 map: 4.5 GB, then
+  // GL_OUT_OF_MEMORY), so the bake says so instead, before reading anything.
+  if (reader.ok()) {
+    const PdsmGeometry& g = reader->headers().at(part).geometry;
+    if (static_cast<int64_t>(g.width) * g.height > kMaxCameraViewPixels) {
+      std::fprintf(stderr,
+                   "pdsm: warning: no camera view %s: a %dx%d map is over the %d pixels the "
+                   "camera view uploads whole (the light view is written); the PDSM is "
+                   "complete\n",
+                   previews.camera.c_str(), g.width, g.height, kMaxCameraViewPixels);
+      return absl::OkStatus();
+    }
+  }
   absl::StatusOr<PdsmImage> pdsm =
       reader.ok() ? reader->ReadLight(part) : absl::StatusOr<PdsmImage>(reader.status());
   absl::Status s = pdsm.status();

@@ -294,14 +294,16 @@ std::vector<bool> TilesCastersMayReach(const BakePlan& plan) {
   const PdsmGeometry& g = plan.geometry();
   const bool sun = g.projection == Projection::kOrthographic;
   const SampleExtent e = ExtentOf(plan);
-  for (const CasterCluster& c : plan.caster_clusters) {
+  // The tiles whose rays the points of the light-space box [lo, hi] can shadow; false when none.
+  const auto tiles_of = [&](const glm::dvec3& lo, const glm::dvec3& hi, int64_t* tx0, int64_t* tx1,
+                            int64_t* ty0, int64_t* ty1) {
     double z_lo, z_hi;
-    if (!DrawnDepths(plan, c.lo.z, c.hi.z, &z_lo, &z_hi)) continue;
+    if (!DrawnDepths(plan, lo.z, hi.z, &z_lo, &z_hi)) return false;
     // The rays' (s, t) the box's points can shadow: perspective s = (x - a (1 - l)) / z over
     // a (1 - l) in [min(0, a), max(0, a)]; sun s = x + a (z_q - z), z_q - z in [0, z_far - z].
     double s_lo = kInf, s_hi = -kInf, t_lo = kInf, t_hi = -kInf;
     for (int k = 0; k < 8; ++k) {
-      const double x = (k & 1) ? c.hi.x : c.lo.x, y = (k & 2) ? c.hi.y : c.lo.y;
+      const double x = (k & 1) ? hi.x : lo.x, y = (k & 2) ? hi.y : lo.y;
       const double z = (k & 4) ? z_hi : z_lo;
       if (sun) {
         const double run = std::max(0.0, g.z_far - z);
@@ -320,10 +322,39 @@ std::vector<bool> TilesCastersMayReach(const BakePlan& plan) {
     const int64_t x1 = std::min<int64_t>(g.width - 1, pixel(s_hi, g.s_min, g.PixelPitchS()) + 2);
     const int64_t y0 = std::max<int64_t>(0, pixel(t_lo, g.t_min, g.PixelPitchT()) - 1);
     const int64_t y1 = std::min<int64_t>(g.height - 1, pixel(t_hi, g.t_min, g.PixelPitchT()) + 2);
-    if (x0 > x1 || y0 > y1) continue;
+    if (x0 > x1 || y0 > y1) return false;
     const int size = plan.header.tile_size;
-    for (int64_t ty = y0 / size; ty <= y1 / size; ++ty) {
-      for (int64_t tx = x0 / size; tx <= x1 / size; ++tx) reached[ty * plan.tiles_x + tx] = true;
+    *tx0 = x0 / size, *tx1 = x1 / size, *ty0 = y0 / size, *ty1 = y1 / size;
+    return true;
+  };
+  const auto mark = [&](int64_t tx0, int64_t tx1, int64_t ty0, int64_t ty1) {
+    for (int64_t ty = ty0; ty <= ty1; ++ty) {
+      for (int64_t tx = tx0; tx <= tx1; ++tx) reached[ty * plan.tiles_x + tx] = true;
+    }
+  };
+  const LightSpaceMesh& mesh = plan.casters;
+  for (const CasterCluster& c : plan.caster_clusters) {
+    int64_t tx0, tx1, ty0, ty1;
+    if (!tiles_of(c.lo, c.hi, &tx0, &tx1, &ty0, &ty1)) continue;
+    // A cluster's box is a coarse bound: 128 roofs scattered over a sparse world have one box
+    // over most of it, and every tile under it cost a task that found no caster (32768^2:
+    // 258,141 of 262,144 tiles). Where the box spans more tiles than the cluster has
+    // triangles, each triangle's own box says which tiles it reaches: within the cluster's,
+    // so as conservative. (Without the triangles, released, the box stands.)
+    const bool have_triangles =
+        mesh.indices.size() >= 3 * (size_t{c.first_triangle} + c.triangle_count);
+    if (!have_triangles || (tx1 - tx0 + 1) * (ty1 - ty0 + 1) <= int64_t{c.triangle_count}) {
+      mark(tx0, tx1, ty0, ty1);
+      continue;
+    }
+    for (uint32_t t = c.first_triangle; t < c.first_triangle + c.triangle_count; ++t) {
+      glm::dvec3 lo(kInf), hi(-kInf);
+      for (int k = 0; k < 3; ++k) {
+        const glm::dvec3 p(mesh.positions[mesh.indices[3 * size_t{t} + k]]);
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+      }
+      if (tiles_of(lo, hi, &tx0, &tx1, &ty0, &ty1)) mark(tx0, tx1, ty0, ty1);
     }
   }
   return reached;

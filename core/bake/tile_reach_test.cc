@@ -566,6 +566,37 @@ TEST_P(TileReachTest, TilesCastersMayReachIsASupersetOfTileHasCasters) {
   EXPECT_LT(flagged, 2 * 192);  // of 2 x 192 tiles
 }
 
+// Casters scattered far apart share a cluster whose box spans the map; each triangle's own box
+// flags only the tiles near it (a sparse world's roofs: bench/sparse_world.py), and never
+// misses a tile the exact test keeps.
+TEST_P(TileReachTest, ScatteredCastersFlagOnlyTheTilesNearThem) {
+  Scene scene = MakeScene(GetParam(), 5, 0);
+  TriangleMesh casters;
+  casters.role = MeshRole::kCasterOnly;
+  for (const glm::dvec3 c : {glm::dvec3(-7, 5, -5), glm::dvec3(7, 5, 5), glm::dvec3(-7, 5, 5)}) {
+    for (const glm::dvec3 d : {glm::dvec3(0, 0, 0), glm::dvec3(0.5, 0, 0), glm::dvec3(0, 0, 0.5)}) {
+      casters.positions_world.push_back(c + d);
+      casters.indices.push_back(static_cast<uint32_t>(casters.indices.size()));
+    }
+  }
+  scene.meshes[1] = casters;
+  scene.bake.width = 256;
+  scene.bake.height = 192;
+  const BakePlan plan = Plan(scene);
+  ASSERT_EQ(plan.caster_clusters.size(), 1u);
+  ASSERT_EQ(plan.tile_has_casters.size(), plan.tile_count());
+  int exact = 0, flagged = 0;
+  for (const TileRect& tile : AllTiles(plan)) {
+    const bool has = TileHasCasters(plan, tile);
+    if (has) EXPECT_TRUE(plan.tile_has_casters[tile.index]) << "tile " << tile.index;
+    exact += has;
+    flagged += plan.tile_has_casters[tile.index];
+  }
+  EXPECT_GE(exact, 3);
+  // The cluster's box alone flagged far more: rect 192, sun 104 of the 192 tiles.
+  EXPECT_LE(flagged, std::max(2 * exact, 12)) << "exact " << exact;
+}
+
 TEST(CasterClusters, EveryTriangleOnceInSpatialRunsWithTheirBounds) {
   LightSpaceMesh mesh;
   std::mt19937_64 rng(5);

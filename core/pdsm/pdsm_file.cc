@@ -18,7 +18,6 @@
 #include <cstdint>
 #include <filesystem>
 #include <limits>
-#include <map>
 #include <optional>
 #include <set>
 #include <string_view>
@@ -35,6 +34,7 @@
 #include "core/pdsm/pdsm_exr_header.h"
 #include "core/pdsm/pdsm_exr_tiles.h"
 #include "core/pdsm/pdsm_lights.h"
+#include "core/pdsm/tile_reorder_buffer.h"
 #include "core/util/atomic_file.h"
 #include "core/util/file_system.h"
 
@@ -52,7 +52,7 @@ class ExrPdsmWriter final : public PdsmWriter {
   ExrPdsmWriter(std::string path, FileSystem* fs, const PdsmHeader& header,
                 std::unique_ptr<AtomicFile> file, std::unique_ptr<ExrOutputStream> stream,
                 std::unique_ptr<Imf::DeepTiledOutputFile> exr, bool staged,
-                std::optional<Imath::Box2i> display_window)
+                std::optional<Imath::Box2i> display_window, int64_t reorder_memory_bytes)
       : path_(std::move(path)),
         fs_(fs),
         staged_(staged),
@@ -61,7 +61,8 @@ class ExrPdsmWriter final : public PdsmWriter {
         grid_{header.geometry.width, header.geometry.height, header.tile_size},
         file_(std::move(file)),
         stream_(std::move(stream)),
-        exr_(std::move(exr)) {
+        exr_(std::move(exr)),
+        pending_(ParentDir(path_), reorder_memory_bytes, fs) {
     if (header_.adaptive()) header_.tile_samples.assign(grid_.Count(), 0);
   }
 
@@ -82,14 +83,14 @@ class ExrPdsmWriter final : public PdsmWriter {
     if (*index != next_tile_) {
       // Out of order: keep it until the tiles before it are written, so that the file's
       // bytes do not depend on the order of arrival.
-      pending_.emplace(*index, tile);
+      if (absl::Status s = pending_.Put(*index, tile); !s.ok()) return Fail(s);
       return absl::OkStatus();
     }
     if (absl::Status s = Emit(tile); !s.ok()) return s;
-    for (auto it = pending_.find(next_tile_); it != pending_.end();
-         it = pending_.find(next_tile_)) {
-      if (absl::Status s = Emit(it->second); !s.ok()) return s;
-      pending_.erase(it);
+    while (pending_.Contains(next_tile_)) {
+      absl::StatusOr<std::optional<PdsmTile>> next = pending_.Take(next_tile_);
+      if (!next.ok()) return Fail(next.status());
+      if (absl::Status s = Emit(**next); !s.ok()) return s;
     }
     return absl::OkStatus();
   }
@@ -133,7 +134,7 @@ class ExrPdsmWriter final : public PdsmWriter {
           path_, tile.x0, tile.y0, tile.width, tile.height, grid_.width, grid_.height, ts));
     }
     const int64_t index = (tile.y0 / ts) * grid_.TilesX() + tile.x0 / ts;
-    if (index < next_tile_ || pending_.contains(index)) {
+    if (index < next_tile_ || pending_.Contains(index)) {
       return absl::InvalidArgumentError(
           absl::StrFormat("%s: tile (%d, %d) written twice", path_, tile.x0, tile.y0));
     }
@@ -218,7 +219,7 @@ class ExrPdsmWriter final : public PdsmWriter {
   std::unique_ptr<AtomicFile> file_;         // the rewritten one once RewriteWithTileSamples() ran
   std::unique_ptr<ExrOutputStream> stream_;  // writes to *file_; null after a rewrite
   std::unique_ptr<Imf::DeepTiledOutputFile> exr_;  // writes to *stream_; null once finished
-  std::map<int64_t, PdsmTile> pending_;            // out-of-order tiles by index
+  TileReorderBuffer pending_;                      // out-of-order tiles by index
   int64_t next_tile_ = 0;                          // all tiles before it are written
   DeepTileBuffers buffers_;
   absl::Status error_;  // sticky: after a failure nothing more is written
@@ -304,7 +305,8 @@ absl::Status CheckDepthOrder(const PdsmImage& image, absl::string_view path) {
 // A writer of `header` into a new AtomicFile for `path`.
 absl::StatusOr<std::unique_ptr<ExrPdsmWriter>> CreateExrWriter(
     const std::string& path, const PdsmHeader& header, FileSystem* fs, bool staged,
-    const std::optional<Imath::Box2i>& display_window) {
+    const std::optional<Imath::Box2i>& display_window,
+    int64_t reorder_memory_bytes = kTileReorderMemoryBytes) {
   if (absl::Status s = ValidateHeaderForWrite(header, path); !s.ok()) return s;
   if (fs == nullptr) fs = FileSystem::Default();
   absl::StatusOr<std::unique_ptr<AtomicFile>> file = AtomicFile::Create(path, fs);
@@ -320,7 +322,8 @@ absl::StatusOr<std::unique_ptr<ExrPdsmWriter>> CreateExrWriter(
         StatusFromCurrentException((*file)->temp_path(), "cannot start").message());
   }
   return std::make_unique<ExrPdsmWriter>(path, fs, header, *std::move(file), std::move(stream),
-                                         std::move(exr), staged, display_window);
+                                         std::move(exr), staged, display_window,
+                                         reorder_memory_bytes);
 }
 
 // Each light into a staged single-part file (ExrPdsmWriter, staged), then every part's
@@ -431,9 +434,10 @@ absl::Status ReserveFileDescriptors(const std::string& path, int lights) {
 
 absl::StatusOr<std::unique_ptr<PdsmWriter>> PdsmWriter::Create(const std::string& path,
                                                                const PdsmHeader& header,
-                                                               FileSystem* fs) {
+                                                               FileSystem* fs,
+                                                               int64_t reorder_memory_bytes) {
   absl::StatusOr<std::unique_ptr<ExrPdsmWriter>> writer =
-      CreateExrWriter(path, header, fs, /*staged=*/false, std::nullopt);
+      CreateExrWriter(path, header, fs, /*staged=*/false, std::nullopt, reorder_memory_bytes);
   if (!writer.ok()) return writer.status();
   return std::unique_ptr<PdsmWriter>(*std::move(writer));
 }

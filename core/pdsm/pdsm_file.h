@@ -15,6 +15,7 @@
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
 #include "core/pdsm/pdsm_image.h"
+#include "core/pdsm/tile_reorder_buffer.h"
 #include "core/util/file_system.h"
 
 namespace pdsm {
@@ -26,13 +27,16 @@ namespace pdsm {
 // every call returns it again. I/O errors are the FileSystem's (RESOURCE_EXHAUSTED for a full
 // disk, NOT_FOUND for a missing folder, …) and name the file.
 // Tiles are those of the grid of header.tile_size; they may be added in any order, and the
-// bytes of the file do not depend on that order. Not thread-safe.
+// bytes of the file do not depend on that order: a tile that comes before its turn waits in a
+// TileReorderBuffer (tile_reorder_buffer.h), in memory up to `reorder_memory_bytes` and in a
+// scratch file beside `path` past that, so the writer's memory does not grow with the map.
+// Not thread-safe.
 class PdsmWriter {
  public:
   // `fs` null means FileSystem::Default(); it must outlive the writer.
-  static absl::StatusOr<std::unique_ptr<PdsmWriter>> Create(const std::string& path,
-                                                            const PdsmHeader& header,
-                                                            FileSystem* fs = nullptr);
+  static absl::StatusOr<std::unique_ptr<PdsmWriter>> Create(
+      const std::string& path, const PdsmHeader& header, FileSystem* fs = nullptr,
+      int64_t reorder_memory_bytes = kTileReorderMemoryBytes);
   virtual ~PdsmWriter() = default;
 
   // REQUIRES: tile is one cell of the tile grid, given once.

@@ -249,6 +249,38 @@ TEST_F(PdsmFileTest, BytesDoNotDependOnTileOrder) {
   EXPECT_TRUE(in_order == ReadBytes(Path("shuffled.exr")));
 }
 
+// Early tiles past the writer's memory budget wait in a scratch file (TileReorderBuffer):
+// the bytes are those of a bake whose tiles came in order, and nothing is left beside the file.
+TEST_F(PdsmFileTest, EarlyTilesSpilledToDiskGiveTheSameBytes) {
+  const PdsmImage image = RandomImage(FullHeader(130, 70, 16), 5, 1000);
+  const std::vector<PdsmTile> tiles = CutTiles(image);
+  ASSERT_TRUE(WriteTiles(Path("in_order.exr"), image.header, tiles).ok());
+  const std::vector<PdsmTile> reversed(tiles.rbegin(), tiles.rend());
+  // Budget 0: every early tile with a vertex goes to disk; 20 KiB: some do.
+  ASSERT_TRUE(WriteTiles(Path("spilled.exr"), image.header, reversed, nullptr, 0).ok());
+  ASSERT_TRUE(WriteTiles(Path("some.exr"), image.header, reversed, nullptr, 20 << 10).ok());
+  const std::string in_order = ReadBytes(Path("in_order.exr"));
+  ASSERT_FALSE(in_order.empty());
+  EXPECT_TRUE(in_order == ReadBytes(Path("spilled.exr")));
+  EXPECT_TRUE(in_order == ReadBytes(Path("some.exr")));
+  EXPECT_THAT(Files(), ::testing::UnorderedElementsAre("in_order.exr", "spilled.exr", "some.exr"));
+}
+
+// A spill that cannot be written fails the writer with the disk's error, and leaves nothing.
+TEST_F(PdsmFileTest, AFullDiskWhileSpillingFailsTheWriterAndLeavesNothing) {
+  const PdsmImage image = RandomImage(FullHeader(64, 64, 16), 3);
+  const std::vector<PdsmTile> tiles = CutTiles(image);
+  FaultInjectingFileSystem faults;
+  absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
+      PdsmWriter::Create(Path("out.exr"), image.header, &faults, /*reorder_memory_bytes=*/0);
+  ASSERT_TRUE(writer.ok()) << writer.status();
+  faults.FailNth(FileOp::kCreate, 1, ENOSPC);  // the scratch file
+  const absl::Status early = (*writer)->WriteTile(tiles.back());
+  EXPECT_EQ(early.code(), absl::StatusCode::kResourceExhausted) << early;
+  EXPECT_EQ((*writer)->WriteTile(tiles.front()).code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_THAT(Files(), ::testing::IsEmpty());
+}
+
 TEST_F(PdsmFileTest, SameContentGivesSameBytesTwice) {
   // Nothing time- or address-dependent in the file.
   const PdsmImage image = RandomImage(FullHeader(33, 17, 8), 9);

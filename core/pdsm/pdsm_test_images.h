@@ -1,15 +1,19 @@
 // Test images for the PDSM file tests: a header whose every field is off its default, random
-// functions, the image cut into the writer's tiles, and a write of them.
+// functions, the image cut into the writer's tiles, a write of them, and a tile comparison.
 #ifndef PDSM_CORE_PDSM_PDSM_TEST_IMAGES_H_
 #define PDSM_CORE_PDSM_PDSM_TEST_IMAGES_H_
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <numbers>
 #include <random>
 #include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "absl/status/status.h"
 #include "core/pdsm/pdsm_file.h"
@@ -107,14 +111,31 @@ inline std::vector<PdsmTile> CutTiles(const PdsmImage& image) {
 
 inline absl::Status WriteTiles(const std::string& path, const PdsmHeader& header,
                                const std::vector<PdsmTile>& tiles,
-                               FileSystem* file_system = nullptr) {
+                               FileSystem* file_system = nullptr,
+                               int64_t reorder_memory_bytes = kTileReorderMemoryBytes) {
   absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
-      PdsmWriter::Create(path, header, file_system);
+      PdsmWriter::Create(path, header, file_system, reorder_memory_bytes);
   if (!writer.ok()) return writer.status();
   for (const PdsmTile& tile : tiles) {
     if (absl::Status s = (*writer)->WriteTile(tile); !s.ok()) return s;
   }
   return (*writer)->Finish();
+}
+
+// Expects `got` to be `want` exactly: rectangle, samples, offsets and every vertex's bit
+// pattern (-0.0 must stay -0.0, a NaN its payload).
+inline void ExpectSameTile(const PdsmTile& got, const PdsmTile& want) {
+  EXPECT_EQ(got.x0, want.x0);
+  EXPECT_EQ(got.y0, want.y0);
+  EXPECT_EQ(got.width, want.width);
+  EXPECT_EQ(got.height, want.height);
+  EXPECT_EQ(got.samples, want.samples);
+  EXPECT_EQ(got.offsets, want.offsets);
+  ASSERT_EQ(got.vertices.size(), want.vertices.size());
+  for (size_t i = 0; i < got.vertices.size(); ++i) {
+    EXPECT_EQ(std::bit_cast<uint64_t>(got.vertices[i]), std::bit_cast<uint64_t>(want.vertices[i]))
+        << "vertex " << i;
+  }
 }
 
 }  // namespace pdsm::testing

@@ -74,6 +74,7 @@ JobSpec SchedulerSpec(const EngineJob& job, std::vector<int>* direct, int* work_
     if (!partly_done) work.tiles = {};  // tiles_of lists the same tiles
     spec.groups.push_back(std::move(work));
   }
+  spec.groups.shrink_to_fit();  // held for the job's life: JobHeldBytes counts no spare room
   return spec;
 }
 
@@ -150,12 +151,12 @@ struct BakeEngine::Job {
   std::vector<bool> stored;
 };
 
-int64_t BakeEngine::JobHeldBytes(int64_t tiles, int64_t groups) {
-  // Per tile: its stored bit (a byte's worth, rounded up). Per group: its GroupWork (a list
-  // of its tiles only while it is open, or partly done before a restart: not counted) and
-  // its Job::StoredSums.
-  constexpr int64_t kPerGroup = sizeof(GroupWork) + sizeof(Job::StoredSums);
-  return int64_t{sizeof(Job)} + 4096 + (tiles + 7) / 8 + groups * kPerGroup;
+int64_t BakeEngine::JobHeldBytes(int64_t tiles, int64_t groups, int64_t groups_with_work) {
+  // Per tile: its stored bit (a byte's worth, rounded up). Per group: its Job::StoredSums;
+  // per group with work, its GroupWork (a list of its tiles only while it is open, or partly
+  // done before a restart: not counted).
+  return int64_t{sizeof(Job)} + 4096 + (tiles + 7) / 8 + groups * int64_t{sizeof(Job::StoredSums)} +
+         groups_with_work * int64_t{sizeof(GroupWork)};
 }
 
 BakeEngine::BakeEngine(EngineOptions options)

@@ -158,14 +158,14 @@ class BakeEngine {
   BakeEngine(const BakeEngine&) = delete;
   BakeEngine& operator=(const BakeEngine&) = delete;
 
-  // The heap bytes the engine holds for a job of `tiles` tiles in `groups` tile groups from
-  // AddJob to its end, besides its plan, its open groups (bounded by
-  // SchedulerOptions::max_open_tiles and the event memory budget) and the tiles no caster
-  // reaches until they are stored: a bit per tile and a few words per group (the scheduler's
-  // entry of each group, verification's sums of each group's stored tiles). What a
-  // coordinator counts against --max-planned-mib (server/plan_budget.h); the coordinator's
-  // memory test checks it against the heap.
-  static int64_t JobHeldBytes(int64_t tiles, int64_t groups);
+  // The heap bytes the engine holds for a job of `tiles` tiles in `groups` tile groups, of
+  // which `groups_with_work` have a tile a caster may reach, from AddJob to its end, besides
+  // its plan, its open groups (bounded by SchedulerOptions::max_open_tiles and the event
+  // memory budget) and the tiles no caster reaches until they are stored: a bit per tile and a
+  // few words per group (verification's sums of each group's stored tiles; the scheduler's
+  // entry of each group with work). What a coordinator counts against --max-planned-mib
+  // (server/plan_budget.h); the coordinator's memory test checks it against the heap.
+  static int64_t JobHeldBytes(int64_t tiles, int64_t groups, int64_t groups_with_work);
 
   // Starts scheduling the job. A job with every tile done goes straight to Finish (through the
   // executor). ALREADY_EXISTS when a job of that id is in progress; INVALID_ARGUMENT without a

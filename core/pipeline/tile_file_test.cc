@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/pdsm/pdsm_test_images.h"
 #include "tests/test_support.h"
 #include "tests/write_faults.h"
 
@@ -19,6 +20,7 @@ namespace pdsm {
 namespace {
 
 namespace fs = std::filesystem;
+using ::pdsm::testing::ExpectSameTile;
 using ::pdsm::testing::ReadBytes;
 using ::pdsm::testing::TempDir;
 using ::pdsm::testing::WriteText;
@@ -44,20 +46,6 @@ PdsmTile SmallTile() {
                    {1e6f + 0.5f, 0.75f}, {-0.0f, std::nextafter(1.0f, 0.0f)},
                    {3.0f, 0.5f},         {std::numeric_limits<float>::denorm_min(), 1.0f}};
   return tile;
-}
-
-void ExpectTilesEqual(const PdsmTile& a, const PdsmTile& b) {
-  EXPECT_EQ(a.x0, b.x0);
-  EXPECT_EQ(a.y0, b.y0);
-  EXPECT_EQ(a.width, b.width);
-  EXPECT_EQ(a.height, b.height);
-  EXPECT_EQ(a.offsets, b.offsets);
-  ASSERT_EQ(a.vertices.size(), b.vertices.size());
-  for (size_t i = 0; i < a.vertices.size(); ++i) {
-    // Bit patterns: -0.0 must stay -0.0.
-    EXPECT_EQ(std::bit_cast<uint64_t>(a.vertices[i]), std::bit_cast<uint64_t>(b.vertices[i]))
-        << "vertex " << i;
-  }
 }
 
 // FNV-1a 64, as the file format defines its checksum.
@@ -94,7 +82,7 @@ TEST(TileFileTest, RoundTripIsExact) {
   ASSERT_TRUE(WriteTileFile(path, tile).ok());
   absl::StatusOr<PdsmTile> read = ReadTileFile(path);
   ASSERT_TRUE(read.ok()) << read.status();
-  ExpectTilesEqual(*read, tile);
+  ExpectSameTile(*read, tile);
   EXPECT_EQ(ReadBytes(path).size(), 44 + 7 * 8 + 8 * 8 + 8u);
 }
 
@@ -107,7 +95,7 @@ TEST(TileFileTest, AdaptiveTileKeepsItsSampleCount) {
   ASSERT_TRUE(WriteTileFile(dir.File("a"), tile).ok());
   absl::StatusOr<PdsmTile> read = ReadTileFile(dir.File("a"));
   ASSERT_TRUE(read.ok()) << read.status();
-  ExpectTilesEqual(*read, tile);
+  ExpectSameTile(*read, tile);
   EXPECT_EQ(read->samples, 48);
   const std::string bytes = ReadBytes(dir.File("a"));
   EXPECT_EQ(bytes.size(), 44 + 7 * 8 + 8 * 8 + 4 + 8u);
@@ -133,7 +121,7 @@ TEST(TileFileTest, RoundTripOfTileWithoutVertices) {
   ASSERT_TRUE(WriteTileFile(dir.File("empty"), tile).ok());
   absl::StatusOr<PdsmTile> read = ReadTileFile(dir.File("empty"));
   ASSERT_TRUE(read.ok()) << read.status();
-  ExpectTilesEqual(*read, tile);
+  ExpectSameTile(*read, tile);
   EXPECT_TRUE(read->vertices.empty());
 }
 
@@ -144,7 +132,7 @@ TEST(TileFileTest, RoundTripOfZeroPixelTile) {
   ASSERT_TRUE(WriteTileFile(dir.File("zero"), tile).ok());
   absl::StatusOr<PdsmTile> read = ReadTileFile(dir.File("zero"));
   ASSERT_TRUE(read.ok()) << read.status();
-  ExpectTilesEqual(*read, tile);
+  ExpectSameTile(*read, tile);
 }
 
 TEST(TileFileTest, RoundTripOfLargerTile) {
@@ -164,7 +152,7 @@ TEST(TileFileTest, RoundTripOfLargerTile) {
   ASSERT_TRUE(WriteTileFile(dir.File("big"), tile).ok());
   absl::StatusOr<PdsmTile> read = ReadTileFile(dir.File("big"));
   ASSERT_TRUE(read.ok()) << read.status();
-  ExpectTilesEqual(*read, tile);
+  ExpectSameTile(*read, tile);
 }
 
 TEST(TileFileTest, OverwritesAndLeavesNoTemporaryFile) {
@@ -178,7 +166,7 @@ TEST(TileFileTest, OverwritesAndLeavesNoTemporaryFile) {
   EXPECT_THAT(FilesIn(dir.path()), ::testing::ElementsAre("tile"));
   absl::StatusOr<PdsmTile> read = ReadTileFile(path);
   ASSERT_TRUE(read.ok()) << read.status();
-  ExpectTilesEqual(*read, second);
+  ExpectSameTile(*read, second);
 }
 
 // A temporary file a crash left behind is another name: never read as the tile, never
@@ -194,7 +182,7 @@ TEST(TileFileTest, TemporaryFileLeftByACrashIsNotTheTile) {
   EXPECT_FALSE(std::filesystem::exists(crashed));
   absl::StatusOr<PdsmTile> read = ReadTileFile(path);
   ASSERT_TRUE(read.ok()) << read.status();
-  ExpectTilesEqual(*read, SmallTile());
+  ExpectSameTile(*read, SmallTile());
 }
 
 TEST(TileFileTest, EveryFileSystemFailureLeavesThePreviousTile) {
@@ -208,7 +196,7 @@ TEST(TileFileTest, EveryFileSystemFailureLeavesThePreviousTile) {
       path, dir.path(), [&](FileSystem* fs) { return WriteTileFile(path, next, fs); });
   absl::StatusOr<PdsmTile> read = ReadTileFile(path);
   ASSERT_TRUE(read.ok()) << read.status();
-  ExpectTilesEqual(*read, SmallTile());
+  ExpectSameTile(*read, SmallTile());
 }
 
 TEST(TileFileTest, MissingFileIsNotFound) {

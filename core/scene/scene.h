@@ -142,7 +142,12 @@ absl::StatusOr<Scene> OneLight(Scene scene, std::string_view light, std::string_
                                std::string_view flag = {});
 
 // Limits on user input (docs/scene_format.md). Larger requests are refused, not clamped.
-inline constexpr int kMaxPdsmResolution = 16384;
+// A map's side, its pixels (2^30: a 32768^2 map; pixel indices stay within 32-bit ints) and
+// its tiles (2^20: a 65536-pixel-wide map of 64-pixel tiles has 1024 a row; each tile costs a
+// few dozen bytes in plans, job stores and the file's offset table).
+inline constexpr int kMaxPdsmResolution = 65536;
+inline constexpr int64_t kMaxPdsmPixels = int64_t{1} << 30;
+inline constexpr int64_t kMaxPdsmTiles = int64_t{1} << 20;
 inline constexpr int kMaxSamples = 65536;
 inline constexpr int kMaxShadowMapResolution = 16384;
 inline constexpr int kMaxTileSize = 4096;

@@ -205,12 +205,32 @@ absl::Status BuildAdaptive(const FieldChecker& checks, const pdsm::v1::BakeParam
   return absl::OkStatus();
 }
 
+// The map as a whole: its pixels and its tiles, within the limits of scene.h.
+absl::Status CheckMapSize(const FieldChecker& checks, const BakeSettings& b) {
+  const int64_t pixels = int64_t{b.width} * b.height;
+  if (pixels > kMaxPdsmPixels) {
+    return checks.Error("bake.resolution",
+                        absl::StrCat("a map holds at most ", kMaxPdsmPixels,
+                                     " pixels (32768x32768) (got ", b.width, "x", b.height, ")"));
+  }
+  const int64_t tiles = int64_t{(b.width + b.tile_size - 1) / b.tile_size} *
+                        ((b.height + b.tile_size - 1) / b.tile_size);
+  if (tiles > kMaxPdsmTiles) {
+    return checks.Error(
+        "bake.tileSize",
+        absl::StrCat("a ", b.width, "x", b.height, " map in tiles of ", b.tile_size, " pixels has ",
+                     tiles, " tiles, more than ", kMaxPdsmTiles, ": use larger tiles"));
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::StatusOr<BakeSettings> BuildBake(const FieldChecker& checks, const pdsm::v1::BakeParams& bake,
                                        LightShape shape) {
   BakeSettings out;
   if (absl::Status s = BuildSizes(checks, bake, &out); !s.ok()) return s;
+  if (absl::Status s = CheckMapSize(checks, out); !s.ok()) return s;
   if (absl::Status s = BuildScalars(checks, bake, &out); !s.ok()) return s;
   if (absl::Status s = BuildEnums(checks, bake, &out); !s.ok()) return s;
   if (bake.has_frustum()) {

@@ -157,9 +157,14 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"SamplesTooMany", kSquare, kRect, R"({"samples": 65537})", "bake.samples",
                 "(got 65537)"},
         BadCase{"ResolutionZero", kSquare, kRect, R"({"resolution": [0, 10]})",
-                "bake.resolution[0]", "must be in [1, 16384] (got 0)"},
-        BadCase{"ResolutionTooLarge", kSquare, kRect, R"({"resolution": [20000, 10]})",
-                "bake.resolution[0]", "(got 20000)"},
+                "bake.resolution[0]", "must be in [1, 65536] (got 0)"},
+        BadCase{"ResolutionTooLarge", kSquare, kRect, R"({"resolution": [65537, 10]})",
+                "bake.resolution[0]", "(got 65537)"},
+        BadCase{"ResolutionTooManyPixels", kSquare, kRect, R"({"resolution": [32768, 32769]})",
+                "bake.resolution", "at most 1073741824 pixels (32768x32768) (got 32768x32769)"},
+        BadCase{"ResolutionTooManyTiles", kSquare, kRect,
+                R"({"resolution": [8192, 8192], "tileSize": 7})", "bake.tileSize",
+                "a 8192x8192 map in tiles of 7 pixels has 1371241 tiles, more than 1048576"},
         BadCase{"ResolutionCount", kSquare, kRect, R"({"resolution": [1]})", "bake.resolution",
                 "must have 2 numbers [width, height] (got 1)"},
         BadCase{"ShadowMapResolutionZero", kSquare, kRect, R"({"shadowMapResolution": 0})",
@@ -431,10 +436,15 @@ TEST_F(SceneLoaderTest, AllBakeFieldsAreRead) {
 
 TEST_F(SceneLoaderTest, LimitsAreInclusive) {
   absl::StatusOr<Scene> scene = Load(SceneJson(kSquare, kRect, R"({
-      "resolution": [16384, 1], "samples": 65536, "shadowMapResolution": 16384,
+      "resolution": [65536, 1], "samples": 65536, "shadowMapResolution": 16384,
       "epsilon": 1, "tileSize": 4096})"));
   ASSERT_TRUE(scene.ok()) << scene.status();
   EXPECT_EQ(scene->bake.samples, kMaxSamples);
+  EXPECT_EQ(scene->bake.width, kMaxPdsmResolution);
+  // 2^30 pixels in 2^20 tiles: both limits at once.
+  scene = Load(SceneJson(kSquare, kRect, R"({"resolution": [32768, 32768], "tileSize": 32})"));
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  EXPECT_EQ(int64_t{scene->bake.width} * scene->bake.height, kMaxPdsmPixels);
 }
 
 TEST_F(SceneLoaderTest, SamplingPatternsAndAdaptiveAreRead) {

@@ -233,10 +233,18 @@ TEST(HostileRequests, ForgedResultsAreRefusedAndTheBakeStaysExact) {
 TEST(HostileRequests, TilesPerJobAreBoundedBeforePlanning) {
   ServiceCluster cluster;
   ASSERT_TRUE(cluster.StartCoordinator());
+  // 67 million tiles: past the scene format's own limit (2^20 a light), refused as it is read.
   const std::string worst = WriteServiceScene(cluster.dir(), 8192, 1, 1);
-  const CommandResult refused = cluster.Pdsm("submit " + worst);
+  const CommandResult invalid = cluster.Pdsm("submit " + worst);
+  EXPECT_NE(invalid.exit_code, 0);
+  EXPECT_NE(invalid.err.find("has 67108864 tiles, more than 1048576"), std::string::npos)
+      << invalid.err;
+  // 2^20 tiles: a valid scene, past this coordinator's limit, refused before planning.
+  TempDir many_dir;
+  const std::string many = WriteServiceScene(many_dir, 8192, 1, 8);
+  const CommandResult refused = cluster.Pdsm("submit " + many);
   EXPECT_NE(refused.exit_code, 0);
-  EXPECT_NE(refused.err.find("bake.tileSize: 1 makes 67108864 tiles"), std::string::npos)
+  EXPECT_NE(refused.err.find("bake.tileSize: 8 makes 1048576 tiles"), std::string::npos)
       << refused.err;
   EXPECT_NE(refused.err.find("limit of 262144"), std::string::npos) << refused.err;
 
