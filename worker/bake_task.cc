@@ -129,23 +129,40 @@ void TaskStats::Add(const TaskStats& o) {
   tiles_skipped += o.tiles_skipped;
 }
 
-absl::StatusOr<std::unique_ptr<TaskRunner>> TaskRunner::Create(const BakePlan& plan,
-                                                               GroupCache* groups) {
+absl::StatusOr<std::unique_ptr<TaskRunner>> TaskRunner::Create() {
   absl::StatusOr<std::unique_ptr<ShadowMapRenderer>> renderer = ShadowMapRenderer::Create();
   if (!renderer.ok()) return renderer.status();
-  return std::unique_ptr<TaskRunner>(new TaskRunner(plan, std::move(*renderer), groups));
+  return std::unique_ptr<TaskRunner>(new TaskRunner(std::move(*renderer)));
 }
 
+absl::StatusOr<std::unique_ptr<TaskRunner>> TaskRunner::Create(const BakePlan& plan,
+                                                               GroupCache* groups) {
+  absl::StatusOr<std::unique_ptr<TaskRunner>> runner = Create();
+  if (runner.ok()) (*runner)->SetPlan(plan, groups);
+  return runner;
+}
+
+void TaskRunner::SetPlan(const BakePlan& plan, GroupCache* groups) {
+  plan_ = &plan;
+  own_groups_ = groups == nullptr ? std::make_unique<GroupCache>(plan, 1) : nullptr;
+  groups_ = groups != nullptr ? groups : own_groups_.get();
+  group_.reset();
+  receivers_uploaded_ = false;
+}
+
+void TaskRunner::LeaveThread() { renderer_->LeaveThread(); }
+
 absl::Status TaskRunner::Prepare(const BakeTask& task) {
+  if (plan_ == nullptr) return absl::FailedPreconditionError("the task runner has no plan");
   if (!receivers_uploaded_ && group_ && group_->group_index == task.group_index &&
       group_->tiles == task.tiles) {
     return absl::OkStatus();
   }
-  if (task.group_index < 0 || task.group_index >= plan_.group_count()) {
+  if (task.group_index < 0 || task.group_index >= plan_->group_count()) {
     return absl::InvalidArgumentError(absl::StrFormat("tile group %d: the plan has %d groups",
-                                                      task.group_index, plan_.group_count()));
+                                                      task.group_index, plan_->group_count()));
   }
-  const std::vector<int> of_group = plan_.group(task.group_index).tiles;
+  const std::vector<int> of_group = plan_->group(task.group_index).tiles;
   for (int t : task.tiles) {
     if (!std::binary_search(of_group.begin(), of_group.end(), t)) {
       return absl::InvalidArgumentError(
@@ -157,16 +174,16 @@ absl::Status TaskRunner::Prepare(const BakeTask& task) {
   // their vertices still shared: llvmpipe shades a vertex once for the triangles around it
   // (its vertex cache), which is most of a shadow map's cost on a fine mesh.
   constexpr uint32_t kUnused = std::numeric_limits<uint32_t>::max();
-  std::vector<uint32_t> remap(plan_.casters.positions.size(), kUnused);
+  std::vector<uint32_t> remap(plan_->casters.positions.size(), kUnused);
   std::vector<glm::vec3> positions;
   std::vector<uint32_t> indices;
   indices.reserve(group_->triangles.size() * 3);
   for (uint32_t tri : group_->triangles) {
     for (int k = 0; k < 3; ++k) {
-      const uint32_t v = plan_.casters.indices[3 * tri + k];
+      const uint32_t v = plan_->casters.indices[3 * tri + k];
       if (remap[v] == kUnused) {
         remap[v] = static_cast<uint32_t>(positions.size());
-        positions.push_back(plan_.casters.positions[v]);
+        positions.push_back(plan_->casters.positions[v]);
       }
       indices.push_back(remap[v]);
     }
@@ -191,11 +208,11 @@ absl::StatusOr<std::vector<TileEvents>> TaskRunner::Run(const BakeTask& task, Ta
 
   // The batch's samples in chunks whose maps fit kScanMapTexels together (one map at least):
   // each chunk's maps are rendered, then every ray is scanned through all of them at once.
-  ShadowMapCamera camera = BakeCamera(plan_);
+  ShadowMapCamera camera = BakeCamera(*plan_);
   // A sphere face's group sees the sphere's outline from its own direction.
   std::vector<glm::dvec2> face_samples;
-  if (IsSphereFacePlan(plan_)) face_samples = FaceGroupSamples(plan_, task.group_index);
-  const std::vector<glm::dvec2>& samples = face_samples.empty() ? plan_.samples : face_samples;
+  if (IsSphereFacePlan(*plan_)) face_samples = FaceGroupSamples(*plan_, task.group_index);
+  const std::vector<glm::dvec2>& samples = face_samples.empty() ? plan_->samples : face_samples;
   std::vector<ChunkMap> maps;
   bool first_chunk = true;
   for (int k = task.sample_begin; k < task.sample_end;) {
@@ -203,7 +220,7 @@ absl::StatusOr<std::vector<TileEvents>> TaskRunner::Run(const BakeTask& task, Ta
     int64_t chunk_texels = 0;
     for (; k < task.sample_end; ++k) {
       const glm::dvec2& sample = samples.at(k);
-      const ShadowMapWindow window = GroupWindow(plan_, group, sample);
+      const ShadowMapWindow window = GroupWindow(*plan_, group, sample);
       const int64_t texels = int64_t{window.width} * window.height;
       if (texels > kMaxShadowMapTexels) {
         return absl::ResourceExhaustedError(absl::StrFormat(
@@ -222,7 +239,7 @@ absl::StatusOr<std::vector<TileEvents>> TaskRunner::Run(const BakeTask& task, Ta
       map.window = window;
       camera.sample = sample;
       camera.window = window;
-      const std::vector<DrawRange> visible = VisibleClusters(plan_, group, sample, window);
+      const std::vector<DrawRange> visible = VisibleClusters(*plan_, group, sample, window);
       auto render_start = std::chrono::steady_clock::now();
       if (absl::Status s = renderer_->Render(camera, visible, &map.depth); !s.ok()) return s;
       stats->shadow_map_seconds += SecondsSince(render_start);
@@ -237,7 +254,7 @@ absl::StatusOr<std::vector<TileEvents>> TaskRunner::Run(const BakeTask& task, Ta
     for (size_t i = 0; i < group.prepared.size(); ++i) {
       const PreparedTile& tile = group.prepared[i];
       if (tile.blocks.empty()) continue;  // all lit: its offsets stay zero
-      TileEvents chunk = ScanTile(plan_, tile, maps, map_count, stats);
+      TileEvents chunk = ScanTile(*plan_, tile, maps, map_count, stats);
       if (first_chunk) {
         results[i] = std::move(chunk);
       } else {
@@ -252,16 +269,18 @@ absl::StatusOr<std::vector<TileEvents>> TaskRunner::Run(const BakeTask& task, Ta
 }
 
 absl::StatusOr<std::vector<float>> TaskRunner::ReceiverDepth(const TileRect& tile) {
+  if (plan_ == nullptr) return absl::FailedPreconditionError("the task runner has no plan");
   // The light-centre view of the receivers on the PDSM's own pixel grid.
   if (!receivers_uploaded_) {
     group_.reset();  // its casters are no longer uploaded
-    if (absl::Status s = renderer_->SetGeometry(plan_.receivers.positions, plan_.receivers.indices);
+    if (absl::Status s =
+            renderer_->SetGeometry(plan_->receivers.positions, plan_->receivers.indices);
         !s.ok()) {
       return s;
     }
     receivers_uploaded_ = true;
   }
-  const PdsmGeometry& g = plan_.geometry();
+  const PdsmGeometry& g = plan_->geometry();
   ShadowMapCamera camera;
   camera.projection = g.projection;
   camera.lattice = ShadowMapLattice{g.s_min, g.t_min, g.PixelPitchS(), g.PixelPitchT()};
@@ -270,7 +289,7 @@ absl::StatusOr<std::vector<float>> TaskRunner::ReceiverDepth(const TileRect& til
   // (its frame puts the whole scene at z > 0). The casters' clip plane here cut off the ground
   // nearest a low sun from the preview, though the PDSM holds it.
   camera.z_clip_near = g.projection == Projection::kPerspective ? 1e-6 * g.z_far : 0.0;
-  camera.z_clip_far = plan_.z_clip_far;
+  camera.z_clip_far = plan_->z_clip_far;
   std::vector<float> depth;
   if (absl::Status s = renderer_->Render(camera, &depth); !s.ok()) return s;
   return depth;

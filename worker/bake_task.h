@@ -46,13 +46,25 @@ struct TaskStats {
 // its sample and window.
 ShadowMapCamera BakeCamera(const BakePlan& plan);
 
-// Runs tasks of one plan. Owns a renderer (an OSMesa context): one runner per thread.
+// Runs tasks of a plan. Owns a renderer (an OSMesa context, ~20 ms of shader compilation to
+// make): one runner per thread, kept from one plan (light, job) to the next with SetPlan.
+// Not thread-safe; it may pass to another thread as its renderer does (LeaveThread).
 class TaskRunner {
  public:
-  // `plan` must outlive the runner, and `groups` (the prepared groups shared with the plan's
-  // other runners; null: the runner keeps its own) too.
+  // A runner with no plan yet (Run and ReceiverDepth: FAILED_PRECONDITION until SetPlan).
+  static absl::StatusOr<std::unique_ptr<TaskRunner>> Create();
+  // Create(), then SetPlan(plan, groups).
   static absl::StatusOr<std::unique_ptr<TaskRunner>> Create(const BakePlan& plan,
                                                             GroupCache* groups = nullptr);
+
+  // Runs `plan`'s tasks from now on, keeping the renderer. `plan` must outlive its use here,
+  // and `groups` (the prepared groups shared with the plan's other runners; null: the runner
+  // keeps its own) too. A task gives the same events whatever plans the runner ran before.
+  void SetPlan(const BakePlan& plan, GroupCache* groups = nullptr);
+
+  // Unbinds the renderer's context from the calling thread (ShadowMapRenderer::LeaveThread),
+  // so that another thread may run this runner next.
+  void LeaveThread();
 
   // One TileEvents per task tile, in order. `cancelled` (optional) is polled before each
   // sample's shadow map: when it returns true the task stops with CANCELLED (a cancelled job or
@@ -67,18 +79,15 @@ class TaskRunner {
   absl::StatusOr<std::vector<float>> ReceiverDepth(const TileRect& tile);
 
  private:
-  TaskRunner(const BakePlan& plan, std::unique_ptr<ShadowMapRenderer> renderer, GroupCache* groups)
-      : plan_(plan),
-        renderer_(std::move(renderer)),
-        own_groups_(groups == nullptr ? std::make_unique<GroupCache>(plan, 1) : nullptr),
-        groups_(groups != nullptr ? groups : own_groups_.get()) {}
+  explicit TaskRunner(std::unique_ptr<ShadowMapRenderer> renderer)
+      : renderer_(std::move(renderer)) {}
   // Prepares the task's group (kept for the next batches of it) and uploads its casters.
   absl::Status Prepare(const BakeTask& task);
 
-  const BakePlan& plan_;
+  const BakePlan* plan_ = nullptr;  // null until SetPlan
   std::unique_ptr<ShadowMapRenderer> renderer_;
   std::unique_ptr<GroupCache> own_groups_;  // when no shared cache was given
-  GroupCache* const groups_;
+  GroupCache* groups_ = nullptr;
   std::shared_ptr<const PreparedGroup> group_;  // the last task's group, its casters uploaded
   bool receivers_uploaded_ = false;  // the renderer holds the receivers (ReceiverDepth) instead
 };

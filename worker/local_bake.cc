@@ -26,26 +26,33 @@ constexpr int64_t kLocalLeaseMs = std::numeric_limits<int64_t>::max() / 4;
 // How long an idle thread waits for work before looking again whether the bake is over.
 constexpr absl::Duration kIdleWait = absl::Seconds(1);
 
-// One thread of the bake: its task runner, its statistics.
+// One thread of one light's bake: its task runner (borrowed from the bake, which keeps it for
+// the next light), its statistics.
 class LocalWorker {
  public:
+  // `runner` is the bake's slot for this thread's runner: filled at Start if empty, and must
+  // outlive the worker.
   LocalWorker(int index, const BakePlan& plan, GroupCache* groups, BakeEngine* engine,
-              LocalOutput* output)
+              LocalOutput* output, std::unique_ptr<TaskRunner>* runner)
       : id_(absl::StrCat("local-", index)),
         plan_(plan),
         groups_(groups),
         engine_(engine),
-        output_(output) {}
+        output_(output),
+        runner_(runner) {}
 
-  // Creates the runner and renders the preview's receiver depths of every `stride`-th tile
-  // from `first`.
+  // Sets the runner on this light's plan (making it for the first light) and renders the
+  // preview's receiver depths of every `stride`-th tile from `first`.
   absl::Status Start(int first, int stride) {
-    absl::StatusOr<std::unique_ptr<TaskRunner>> runner = TaskRunner::Create(plan_, groups_);
-    if (!runner.ok()) return runner.status();
-    runner_ = *std::move(runner);
+    if (*runner_ == nullptr) {
+      absl::StatusOr<std::unique_ptr<TaskRunner>> runner = TaskRunner::Create();
+      if (!runner.ok()) return runner.status();
+      *runner_ = *std::move(runner);
+    }
+    (*runner_)->SetPlan(plan_, groups_);
     if (!output_->has_preview()) return absl::OkStatus();
     for (int t = first; t < plan_.tile_count(); t += stride) {
-      absl::StatusOr<std::vector<float>> depth = runner_->ReceiverDepth(plan_.tile(t));
+      absl::StatusOr<std::vector<float>> depth = (*runner_)->ReceiverDepth(plan_.tile(t));
       if (!depth.ok()) return depth.status();
       output_->SetReceiverDepth(t, *depth);
     }
@@ -57,7 +64,7 @@ class LocalWorker {
     while (!output_->ended()) {
       const std::optional<TaskLease> lease = engine_->Lease(id_, kIdleWait);
       if (!lease) continue;
-      absl::StatusOr<std::vector<TileEvents>> events = runner_->Run(
+      absl::StatusOr<std::vector<TileEvents>> events = (*runner_)->Run(
           BakeTask{lease->group_index, lease->tiles, lease->sample_begin, lease->sample_end},
           &stats_, [this] { return output_->ended(); });
       if (events.ok()) {
@@ -70,6 +77,12 @@ class LocalWorker {
     }
   }
 
+  // Lets the next light's bake use the runner on another thread. Call on this worker's
+  // thread, last.
+  void LeaveThread() {
+    if (*runner_ != nullptr) (*runner_)->LeaveThread();
+  }
+
   const TaskStats& stats() const { return stats_; }
 
  private:
@@ -78,7 +91,7 @@ class LocalWorker {
   GroupCache* const groups_;
   BakeEngine* const engine_;
   LocalOutput* const output_;
-  std::unique_ptr<TaskRunner> runner_;
+  std::unique_ptr<TaskRunner>* const runner_;
   TaskStats stats_;
 };
 
@@ -134,9 +147,14 @@ class StartLine {
 
 // Bakes one light's plan into `writer` (a file, or one part of a multipart file), with the
 // light-view preview at `preview_path` ("": none). `on_progress` gets this light's progress.
-absl::StatusOr<BakeSummary> BakePlanned(
-    std::shared_ptr<const BakePlan> plan, PdsmWriter* writer, const std::string& preview_path,
-    const LocalBakeOptions& options, const std::function<void(const BakeProgress&)>& on_progress) {
+// `runners` holds the bake's task runners, one per thread, made here as needed and kept for
+// the next light: a runner's GL context and shaders cost ~20 ms to make, as much as the whole
+// bake of a small light.
+absl::StatusOr<BakeSummary> BakePlanned(std::shared_ptr<const BakePlan> plan, PdsmWriter* writer,
+                                        const std::string& preview_path,
+                                        const LocalBakeOptions& options,
+                                        const std::function<void(const BakeProgress&)>& on_progress,
+                                        std::vector<std::unique_ptr<TaskRunner>>* runners) {
   const auto start = std::chrono::steady_clock::now();
   const auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -173,9 +191,11 @@ absl::StatusOr<BakeSummary> BakePlanned(
     on_progress(BakeProgress{p->tasks_done, p->tasks_total, elapsed()});
   };
   GroupCache groups(*plan);  // each group prepared once, whichever thread needs it first
+  if (runners->size() < static_cast<size_t>(threads)) runners->resize(threads);
   std::vector<std::unique_ptr<LocalWorker>> workers;
   for (int t = 0; t < threads; ++t) {
-    workers.push_back(std::make_unique<LocalWorker>(t, *plan, &groups, &engine, output.get()));
+    workers.push_back(
+        std::make_unique<LocalWorker>(t, *plan, &groups, &engine, output.get(), &(*runners)[t]));
   }
   absl::Mutex start_mu;
   absl::Status started;  // the first runner that could not start, else AddJob's
@@ -191,11 +211,13 @@ absl::StatusOr<BakeSummary> BakePlanned(
         if (started.ok()) started = s;
       }
       start_line.Arrive();
+      bool go;
       {
         absl::MutexLock lock(&start_mu);
-        if (!started.ok()) return;
+        go = started.ok();
       }
-      workers[t]->RunTasks(report_progress);
+      if (go) workers[t]->RunTasks(report_progress);
+      workers[t]->LeaveThread();
     });
   }
   queue.Wait();
@@ -251,6 +273,7 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
   BakeSummary total;
+  std::vector<std::unique_ptr<TaskRunner>> runners;  // one per thread, kept across lights
   if (scene.LightCount() == 1) {
     absl::StatusOr<BakePlan> planned = PlanBake(scene);
     if (!planned.ok()) return planned.status();
@@ -258,8 +281,8 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
     absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
         PdsmWriter::Create(options.output_path, plan->header, options.fs);
     if (!writer.ok()) return writer.status();
-    absl::StatusOr<BakeSummary> light =
-        BakePlanned(plan, writer->get(), options.preview_path, options, options.on_progress);
+    absl::StatusOr<BakeSummary> light = BakePlanned(plan, writer->get(), options.preview_path,
+                                                    options, options.on_progress, &runners);
     if (!light.ok()) return light.status();
     total = *std::move(light);
   } else {
@@ -290,7 +313,7 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
       }
       absl::StatusOr<BakeSummary> light =
           BakePlanned(plan, *part, LightPreviewPath(options.preview_path, plan->header.light_name),
-                      options, on_progress);
+                      options, on_progress, &runners);
       if (!light.ok()) return light.status();
       tasks_before += light->tasks;
       AddLight(*light, &total);

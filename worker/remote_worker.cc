@@ -207,6 +207,7 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
   std::pair<std::string, std::string> runner_job;  // (job id, light) of `runner`
   std::shared_ptr<const JobContext> context;
   std::unique_ptr<TaskRunner> runner;
+  std::shared_ptr<const JobContext> runner_context;  // keeps the runner's plan alive
   const auto stopping = [&] { return Stopping(stop); };
   Backoff backoff(kFirstBackoff, kMaxBackoff, std::random_device{}());
   while (!stopping()) {
@@ -253,7 +254,6 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
 
     const std::pair<std::string, std::string> task_job(task.job_id(), task.light());
     if (runner_job != task_job) {
-      runner.reset();
       runner_job = {};
       absl::StatusOr<std::shared_ptr<const JobContext>> loaded =
           Context(task.job_id(), task.light());
@@ -274,15 +274,20 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
            TaskFailure::kIncompatible);
       continue;
     }
+    // One runner per thread for every job and light: its context and compiled shaders are
+    // kept (making them costs more than a small light's whole task).
     if (runner == nullptr) {
-      absl::StatusOr<std::unique_ptr<TaskRunner>> created =
-          TaskRunner::Create(context->plan, context->groups.get());
+      absl::StatusOr<std::unique_ptr<TaskRunner>> created = TaskRunner::Create();
       if (!created.ok()) {
         forget_lease();
         fail(created.status(), TaskFailure::kFailed);
         continue;
       }
       runner = *std::move(created);
+    }
+    if (runner_job != task_job) {
+      runner->SetPlan(context->plan, context->groups.get());
+      runner_context = context;
       runner_job = task_job;
     }
 

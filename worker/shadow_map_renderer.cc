@@ -140,6 +140,7 @@ class OsMesaShadowMapRenderer final : public ShadowMapRenderer {
   absl::Status Render(const ShadowMapCamera& camera, std::vector<float>* depth) override;
   absl::Status Render(const ShadowMapCamera& camera, std::span<const DrawRange> ranges,
                       std::vector<float>* depth) override;
+  void LeaveThread() override { context_.Release(); }
 
  private:
   struct UniformLocations {

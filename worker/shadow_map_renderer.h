@@ -40,8 +40,10 @@ struct ShadowMapCamera {
   double footprint_scale = 1;
 };
 
-// Owns an OSMesa core-profile context and the GL objects made in it. Not thread-safe; make one
-// per thread. Move-only.
+// Owns an OSMesa core-profile context and the GL objects made in it. Not thread-safe: one
+// thread at a time. Each call makes the context current on its thread, so a renderer may pass
+// to another thread once the thread that used it last has called LeaveThread() (making one
+// costs ~20 ms of shader compilation, worth keeping across the lights of a bake). Move-only.
 class ShadowMapRenderer {
  public:
   struct Options {
@@ -67,9 +69,9 @@ class ShadowMapRenderer {
 
   // Renders `camera.window` into `depth` (resized to width * height, row-major, row 0 at the
   // window's lowest t). Windows larger than the GL limits are rendered in pieces. Output is
-  // bit-identical for the same camera and geometry. INVALID_ARGUMENT for a bad camera
-  // (perspective needs z_clip_near > 0; orthographic z_clip_far > z_clip_near; pitches > 0);
-  // INTERNAL when GL fails. REQUIRES: called on the thread that created the renderer.
+  // bit-identical for the same camera and geometry, whatever was rendered before. INVALID_ARGUMENT
+  // for a bad camera (perspective needs z_clip_near > 0; orthographic z_clip_far >
+  // z_clip_near; pitches > 0); INTERNAL when GL fails.
   virtual absl::Status Render(const ShadowMapCamera& camera, std::vector<float>* depth) = 0;
 
   // The same, drawing only the triangles of `ranges` (in order; ranges may be adjacent, not
@@ -77,6 +79,10 @@ class ShadowMapRenderer {
   // past the uploaded triangles.
   virtual absl::Status Render(const ShadowMapCamera& camera, std::span<const DrawRange> ranges,
                               std::vector<float>* depth) = 0;
+
+  // Unbinds the context from the calling thread, so that another thread may use the renderer
+  // next. Call on the thread that used it last; the next call binds it again.
+  virtual void LeaveThread() = 0;
 };
 
 }  // namespace pdsm

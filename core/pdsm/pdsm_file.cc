@@ -10,13 +10,13 @@
 #include <OpenEXR/ImfMultiPartInputFile.h>
 #include <OpenEXR/ImfMultiPartOutputFile.h>
 #include <OpenEXR/ImfPartType.h>
-#include <sys/resource.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <optional>
 #include <set>
@@ -31,6 +31,7 @@
 #include "absl/strings/string_view.h"
 #include "core/pdsm/exr_file_scan.h"
 #include "core/pdsm/exr_output_stream.h"
+#include "core/pdsm/exr_scratch_stream.h"
 #include "core/pdsm/pdsm_exr_header.h"
 #include "core/pdsm/pdsm_exr_tiles.h"
 #include "core/pdsm/pdsm_lights.h"
@@ -326,8 +327,10 @@ absl::StatusOr<std::unique_ptr<ExrPdsmWriter>> CreateExrWriter(
                                          reorder_memory_bytes);
 }
 
-// Each light into a staged single-part file (ExrPdsmWriter, staged), then every part's
-// compressed tiles copied, undecoded, into one multipart file (OpenEXR's copyPixels).
+// Each light into a staged single-part file (ExrPdsmWriter, staged), moved as soon as it is
+// finished into one scratch file of all the lights (end to end, so that the writer holds a few
+// descriptors however many lights there are), then every part's compressed tiles copied,
+// undecoded, into one multipart file (OpenEXR's copyPixels).
 class ExrPdsmLightsWriter final : public PdsmLightsWriter {
  public:
   ExrPdsmLightsWriter(std::string path, FileSystem* fs, int lights, Imath::Box2i display_window)
@@ -335,46 +338,50 @@ class ExrPdsmLightsWriter final : public PdsmLightsWriter {
 
   absl::StatusOr<PdsmWriter*> BeginLight(const PdsmHeader& header) override {
     if (!error_.ok()) return error_;
-    if (static_cast<int>(parts_.size()) == lights_) {
+    if (LightsBegun() == lights_) {
       return absl::FailedPreconditionError(
           absl::StrFormat("%s: all %d lights were begun already", path_, lights_));
     }
-    if (!parts_.empty() && !parts_.back()->finished()) {
+    if (current_ != nullptr && !current_->finished()) {
       return absl::FailedPreconditionError(
           absl::StrFormat("%s: light \"%s\" begun before light \"%s\" was finished", path_,
-                          header.light_name, parts_.back()->header().light_name));
+                          header.light_name, current_->header().light_name));
     }
     if (header.light_name.empty() || !names_.insert(header.light_name).second) {
       return absl::InvalidArgumentError(absl::StrFormat(
           "%s: every light of a multipart PDSM needs a name of its own (got \"%s\")", path_,
           header.light_name));
     }
+    if (absl::Status s = StageCurrent(); !s.ok()) return Fail(s);
     absl::StatusOr<std::unique_ptr<ExrPdsmWriter>> part =
         CreateExrWriter(path_, header, fs_, /*staged=*/true, display_window_);
     if (!part.ok()) return Fail(part.status());
-    parts_.push_back(*std::move(part));
-    return parts_.back().get();
+    current_ = *std::move(part);
+    return current_.get();
   }
 
   absl::Status Finish() override {
     if (!error_.ok()) return error_;
-    if (static_cast<int>(parts_.size()) != lights_ || !parts_.back()->finished()) {
+    if (LightsBegun() != lights_ || !current_->finished()) {
       return absl::FailedPreconditionError(absl::StrFormat(
           "%s: %d of %d lights finished", path_,
-          parts_.size() - (parts_.empty() || parts_.back()->finished() ? 0 : 1), lights_));
+          LightsBegun() - (current_ == nullptr || current_->finished() ? 0 : 1), lights_));
     }
+    if (absl::Status s = StageCurrent(); !s.ok()) return Fail(s);
     absl::StatusOr<std::unique_ptr<AtomicFile>> file = AtomicFile::Create(path_, fs_);
     if (!file.ok()) return Fail(file.status());
     {
       ExrOutputStream out(file->get());
       try {
         std::vector<Imf::Header> headers;
-        for (const auto& part : parts_) {
-          headers.push_back(ExrHeaderFromPdsm(part->header(), display_window_));
+        for (const StagedLight& light : staged_) {
+          headers.push_back(ExrHeaderFromPdsm(light.header, display_window_));
         }
         Imf::MultiPartOutputFile multipart(out, headers.data(), static_cast<int>(headers.size()));
-        for (size_t p = 0; p < parts_.size(); ++p) {
-          Imf::DeepTiledInputFile in(parts_[p]->staged_path().c_str(), Imf::globalThreadCount());
+        std::vector<Imf::Header>().swap(headers);  // the file keeps its own copies
+        for (size_t p = 0; p < staged_.size(); ++p) {
+          ExrScratchStream staged(scratch_.get(), staged_[p].begin, staged_[p].size);
+          Imf::DeepTiledInputFile in(staged, Imf::globalThreadCount());
           Imf::DeepTiledOutputPart(multipart, static_cast<int>(p)).copyPixels(in);
         }
       } catch (...) {
@@ -385,14 +392,64 @@ class ExrPdsmLightsWriter final : public PdsmLightsWriter {
     // The multipart file's destructor wrote its offset tables: a failure shows only here.
     if (!(*file)->status().ok()) return Fail((*file)->status());
     if (absl::Status s = (*file)->Commit(); !s.ok()) return Fail(s);
-    parts_.clear();  // removes the staged files
+    Drop();
     return absl::OkStatus();
   }
 
  private:
+  // A finished light: its header as written and its single-part file's bytes in `scratch_`.
+  struct StagedLight {
+    PdsmHeader header;
+    uint64_t begin = 0, size = 0;
+  };
+
+  int LightsBegun() const {
+    return static_cast<int>(staged_.size()) + (current_ != nullptr ? 1 : 0);
+  }
+
+  // Moves the finished current light's file to the end of the scratch file (made at the
+  // first light) and removes it. No-op without a current light.
+  absl::Status StageCurrent() {
+    if (current_ == nullptr) return absl::OkStatus();
+    if (!scratch_) {
+      absl::StatusOr<std::unique_ptr<ScratchFile>> scratch = fs_->NewScratchFile(ParentDir(path_));
+      if (!scratch.ok()) return scratch.status();
+      scratch_ = *std::move(scratch);
+    }
+    const std::string& staged_path = current_->staged_path();
+    std::ifstream in(staged_path, std::ios::binary);
+    StagedLight light{current_->header(), scratch_end_, 0};
+    std::vector<char> buffer(size_t{1} << 20);
+    while (in) {
+      in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+      const size_t got = static_cast<size_t>(in.gcount());
+      if (got == 0) break;
+      if (absl::Status s = scratch_->WriteAt(scratch_end_, absl::string_view(buffer.data(), got));
+          !s.ok()) {
+        return s;
+      }
+      scratch_end_ += got;
+      light.size += got;
+    }
+    if (in.bad() || !in.eof() || light.size == 0) {
+      return absl::DataLossError(absl::StrCat(staged_path, ": cannot read back the light \"",
+                                              light.header.light_name, "\" staged there"));
+    }
+    staged_.push_back(std::move(light));
+    current_.reset();  // removes the staged file
+    return absl::OkStatus();
+  }
+
+  // Removes whatever is staged.
+  void Drop() {
+    current_.reset();
+    staged_.clear();
+    scratch_.reset();
+  }
+
   absl::Status Fail(absl::Status status) {
     error_ = status;
-    parts_.clear();
+    Drop();
     return status;
   }
 
@@ -400,35 +457,13 @@ class ExrPdsmLightsWriter final : public PdsmLightsWriter {
   FileSystem* const fs_;
   const int lights_;
   const Imath::Box2i display_window_;
-  std::vector<std::unique_ptr<ExrPdsmWriter>> parts_;
+  std::unique_ptr<ExrPdsmWriter> current_;  // the light being written, in its own file
+  std::vector<StagedLight> staged_;         // the lights before it
+  std::unique_ptr<ScratchFile> scratch_;    // their files, end to end
+  uint64_t scratch_end_ = 0;
   std::set<std::string> names_;
   absl::Status error_;
 };
-
-// Every staged light holds a descriptor until the file is assembled: raise the soft limit on
-// open files towards the hard one when `lights` (and a margin for the rest of the process)
-// need it. RESOURCE_EXHAUSTED when even the hard limit is too low.
-absl::Status ReserveFileDescriptors(const std::string& path, int lights) {
-  constexpr rlim_t kMargin = 256;
-  const rlim_t wanted = static_cast<rlim_t>(lights) + kMargin;
-  struct rlimit limit;
-  if (::getrlimit(RLIMIT_NOFILE, &limit) != 0 || limit.rlim_cur >= wanted) {
-    return absl::OkStatus();
-  }
-  if (limit.rlim_max != RLIM_INFINITY && limit.rlim_max < wanted) {
-    return absl::ResourceExhaustedError(absl::StrFormat(
-        "%s: %d lights are staged in %d open files until the file is assembled, but this "
-        "process may open at most %d (ulimit -n; the hard limit)",
-        path, lights, lights, static_cast<long long>(limit.rlim_max)));
-  }
-  limit.rlim_cur = wanted;
-  if (::setrlimit(RLIMIT_NOFILE, &limit) != 0) {
-    return absl::ResourceExhaustedError(
-        absl::StrFormat("%s: %d lights need %d open files; raising ulimit -n failed", path, lights,
-                        static_cast<long long>(wanted)));
-  }
-  return absl::OkStatus();
-}
 
 }  // namespace
 
@@ -449,7 +484,6 @@ absl::StatusOr<std::unique_ptr<PdsmLightsWriter>> PdsmLightsWriter::Create(
         "%s: a multipart PDSM needs 2 or more lights and a size (got %d lights, %dx%d)", path,
         lights, max_width, max_height));
   }
-  if (absl::Status s = ReserveFileDescriptors(path, lights); !s.ok()) return s;
   if (fs == nullptr) fs = FileSystem::Default();
   return std::make_unique<ExrPdsmLightsWriter>(
       path, fs, lights, Imath::Box2i(Imath::V2i(0, 0), Imath::V2i(max_width - 1, max_height - 1)));

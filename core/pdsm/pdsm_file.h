@@ -49,12 +49,12 @@ class PdsmWriter {
 // Writes the PDSM of a scene with several lights: one multipart deep OpenEXR file, one part
 // per light in the order begun, each part what PdsmWriter writes for that light alone plus
 // the light's name (docs/pdsm_format.md, "Several lights"). Lights are written one after
-// another: each goes to a temporary file beside `path` (as PdsmWriter's, removed however the
-// writer ends), and Finish() copies every part's compressed tiles, undecoded, into the file,
-// committed as PdsmWriter commits. One temporary file (one descriptor) per light is open
-// until then: Create raises the process's soft limit on open files as far as its hard limit
-// when the lights need it (RESOURCE_EXHAUSTED when that is too low). The bytes depend only on the
-// headers and tiles, not on the order of tiles within a light. Errors as PdsmWriter's, sticky. Not
+// another: each goes to a temporary file beside `path` (as PdsmWriter's), moved once finished
+// to the end of one unnamed scratch file beside `path` (core/util/file_system.h: gone however
+// the process ends), so that the writer holds a few descriptors whatever the number of
+// lights; Finish() copies every part's compressed tiles, undecoded, into the file, committed
+// as PdsmWriter commits. The bytes depend only on the headers and tiles, not on the order of
+// tiles within a light. Errors as PdsmWriter's (and the scratch file's), sticky. Not
 // thread-safe.
 class PdsmLightsWriter {
  public:
@@ -66,8 +66,9 @@ class PdsmLightsWriter {
                                                                   FileSystem* fs = nullptr);
   virtual ~PdsmLightsWriter() = default;
 
-  // The writer of the next light's part, owned by this (valid until Finish or destruction):
-  // its WriteTile and Finish as PdsmWriter's, except that Finish completes the part only.
+  // The writer of the next light's part, owned by this (valid until the next BeginLight,
+  // Finish or destruction): its WriteTile and Finish as PdsmWriter's, except that Finish
+  // completes the part only.
   // REQUIRES: the light before it finished. INVALID_ARGUMENT when header.light_name is empty
   // or names a light begun already.
   virtual absl::StatusOr<PdsmWriter*> BeginLight(const PdsmHeader& header) = 0;

@@ -90,8 +90,7 @@ OsMesaContext::~OsMesaContext() { Destroy(); }
 
 void OsMesaContext::Destroy() {
   if (context_ == nullptr) return;
-  // Unbind first so this thread is not left with a dangling current context.
-  if (IsCurrent()) OSMesaMakeCurrent(nullptr, nullptr, 0, 0, 0);
+  Release();  // so that this thread is not left with a dangling current context
   OSMesaDestroyContext(context_);
   context_ = nullptr;
 }
@@ -105,6 +104,10 @@ absl::Status OsMesaContext::MakeCurrent() const {
                                             minor_version_, " core context)"));
   }
   return absl::OkStatus();
+}
+
+void OsMesaContext::Release() const {
+  if (IsCurrent()) OSMesaMakeCurrent(nullptr, nullptr, 0, 0, 0);
 }
 
 bool OsMesaContext::IsCurrent() const {

@@ -42,6 +42,9 @@ class OsMesaContext {
   // must not be current on two threads at once.
   absl::Status MakeCurrent() const;
   bool IsCurrent() const;
+  // Unbinds this context from the calling thread if it is current there (else a no-op), so
+  // that another thread may make it current next.
+  void Release() const;
 
   // The version requested and granted (4.5 or 3.3).
   int major_version() const { return major_version_; }

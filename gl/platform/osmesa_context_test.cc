@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <thread>
 
 #include "gl/gl_functions.h"
 #include "gl/gl_program.h"
@@ -25,6 +26,30 @@ TEST(OsMesaContextTest, IsCurrentAndMovable) {
   GLint major = 0;
   gl->GetIntegerv(GL_MAJOR_VERSION, &major);
   EXPECT_EQ(major, moved.major_version());
+}
+
+// A context released on one thread is made current on another and used there: how the local
+// bake's threads hand their renderers on from one light to the next.
+TEST(OsMesaContextTest, ReleasedOnOneThreadUsableOnAnother) {
+  absl::StatusOr<OsMesaContext> context = OsMesaContext::Create();
+  ASSERT_TRUE(context.ok()) << context.status();
+  context->Release();
+  EXPECT_FALSE(context->IsCurrent());
+  context->Release();  // a no-op when not current
+  GLint major = 0;
+  std::thread other([&] {
+    ASSERT_TRUE(context->MakeCurrent().ok());
+    EXPECT_TRUE(context->IsCurrent());
+    absl::StatusOr<GlFunctions> gl = GlFunctions::Load(&OsMesaContext::GetProcAddress);
+    ASSERT_TRUE(gl.ok()) << gl.status();
+    gl->GetIntegerv(GL_MAJOR_VERSION, &major);
+    context->Release();
+  });
+  other.join();
+  EXPECT_EQ(major, context->major_version());
+  EXPECT_FALSE(context->IsCurrent());
+  EXPECT_TRUE(context->MakeCurrent().ok());
+  EXPECT_TRUE(context->IsCurrent());
 }
 
 // The driver part on the platform part: a program builds, and a compile error reaches the

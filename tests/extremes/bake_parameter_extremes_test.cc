@@ -1,5 +1,6 @@
 // Extremes of the bake parameters: sample counts 1, 2, 7 and 65536; epsilon 0, 1e-6 and 1;
-// PDSM resolutions 1 x 1 and 1000 x 3 with tile sizes that do not divide them.
+// PDSM resolutions 1 x 1, 1000 x 3 with tile sizes that do not divide them, and 1 x 65536
+// (the longest side a map may have).
 #include <cmath>
 #include <vector>
 
@@ -150,6 +151,26 @@ TEST(ExtremesResolution, ThousandByThreeWithTilesOfSeven) {
   EXPECT_EQ(baked->image.header.geometry.height, 3);
   const PixelErrors e = PixelCentreErrors(baked->image, scene);
   std::printf("1000x3: mean error %.4f\n", e.mean);
+  EXPECT_LT(e.mean, 0.03);
+  EXPECT_LT(e.max_off_grid, 1e-3);
+}
+
+// 1 x 65536 (the scene format's longest side) in tiles of 64: a column of 1024 tiles, each one
+// pixel wide, whose pixels are 1 / 65536 of the window tall: every pixel's function at its
+// ground point against the exact value.
+TEST(ExtremesResolution, OneBy65536) {
+  Scene scene = PlateScene();
+  scene.bake.width = 1;
+  scene.bake.height = kMaxPdsmResolution;
+  scene.bake.tile_size = 64;
+  scene.bake.samples = 16;
+  const std::optional<Baked> baked = Bake(scene);
+  ASSERT_TRUE(baked);
+  EXPECT_EQ(baked->summary.tiles, 1024);
+  EXPECT_EQ(baked->image.header.geometry.width, 1);
+  EXPECT_EQ(baked->image.header.geometry.height, 65536);
+  const PixelErrors e = PixelCentreErrors(baked->image, scene);
+  std::printf("1x65536: mean error %.4f\n", e.mean);
   EXPECT_LT(e.mean, 0.03);
   EXPECT_LT(e.max_off_grid, 1e-3);
 }
