@@ -1,7 +1,8 @@
 #version 330 core
 // Stores the biased light-space depth of the nearest caster (R32F colour), and writes the
 // matching reversed depth so that the depth test (GL_GREATER, cleared to 0) keeps the nearest
-// *biased* surface.
+// *biased* surface. With PDSM_ALPHA_TEST defined (alpha-tested casters, core/scene/alpha_mask.h)
+// a fragment whose mask is below the cutoff is discarded: light passes there.
 
 in float z_light;
 
@@ -11,6 +12,12 @@ uniform float footprint_scale;  // scales that per-texel depth change (e.g. to a
 uniform int orthographic;       // 1 for the sun's sheared orthographic projection
 uniform float z_clip_near;
 uniform float z_clip_far;       // orthographic only
+
+#ifdef PDSM_ALPHA_TEST
+in vec2 mask_uv;
+uniform sampler2D alpha_mask;  // R8, GL_LINEAR, no mipmaps, the mask's wrap modes
+uniform float alpha_cutoff;
+#endif
 
 layout(location = 0) out float biased_depth;
 
@@ -23,7 +30,11 @@ float ReversedDepth(float z) {
 }
 
 void main() {
+  // Derivatives first: after a discard they are undefined in the discarded fragment's quad.
   float z_biased = BiasedDepth(z_light, depth_bias, slope_bias, footprint_scale);
+#ifdef PDSM_ALPHA_TEST
+  if (textureLod(alpha_mask, mask_uv, 0.0).r < alpha_cutoff) discard;
+#endif
   biased_depth = z_biased;
   gl_FragDepth = ReversedDepth(z_biased);
 }

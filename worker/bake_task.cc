@@ -148,6 +148,7 @@ void TaskRunner::SetPlan(const BakePlan& plan, GroupCache* groups) {
   groups_ = groups != nullptr ? groups : own_groups_.get();
   group_.reset();
   receivers_uploaded_ = false;
+  masks_set_ = false;
 }
 
 void TaskRunner::LeaveThread() { renderer_->LeaveThread(); }
@@ -169,6 +170,10 @@ absl::Status TaskRunner::Prepare(const BakeTask& task) {
           absl::StrFormat("tile %d is not in tile group %d", t, task.group_index));
     }
   }
+  if (!masks_set_) {  // the plan's alpha masks, once per plan (on the runner's thread: GL)
+    if (absl::Status s = renderer_->SetMasks(plan_->masks); !s.ok()) return s;
+    masks_set_ = true;
+  }
   group_ = groups_->Get(task.group_index, task.tiles);
   // The casters any tile of the group can meet, in cluster order, re-indexed compactly with
   // their vertices still shared: llvmpipe shades a vertex once for the triangles around it
@@ -176,7 +181,9 @@ absl::Status TaskRunner::Prepare(const BakeTask& task) {
   constexpr uint32_t kUnused = std::numeric_limits<uint32_t>::max();
   std::vector<uint32_t> remap(plan_->casters.positions.size(), kUnused);
   std::vector<glm::vec3> positions;
+  std::vector<glm::vec2> uvs;  // alpha-tested plans only
   std::vector<uint32_t> indices;
+  const bool with_uvs = !plan_->casters.uvs.empty();
   indices.reserve(group_->triangles.size() * 3);
   for (uint32_t tri : group_->triangles) {
     for (int k = 0; k < 3; ++k) {
@@ -184,12 +191,13 @@ absl::Status TaskRunner::Prepare(const BakeTask& task) {
       if (remap[v] == kUnused) {
         remap[v] = static_cast<uint32_t>(positions.size());
         positions.push_back(plan_->casters.positions[v]);
+        if (with_uvs) uvs.push_back(plan_->casters.uvs[v]);
       }
       indices.push_back(remap[v]);
     }
   }
   receivers_uploaded_ = false;
-  absl::Status uploaded = renderer_->SetGeometry(positions, indices);
+  absl::Status uploaded = renderer_->SetGeometry(positions, indices, uvs);
   if (!uploaded.ok()) group_.reset();  // the renderer's geometry is unknown
   return uploaded;
 }

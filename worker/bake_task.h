@@ -90,6 +90,7 @@ class TaskRunner {
   GroupCache* groups_ = nullptr;
   std::shared_ptr<const PreparedGroup> group_;  // the last task's group, its casters uploaded
   bool receivers_uploaded_ = false;  // the renderer holds the receivers (ReceiverDepth) instead
+  bool masks_set_ = false;           // the renderer holds plan_'s alpha masks
 };
 
 }  // namespace pdsm

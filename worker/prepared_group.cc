@@ -61,7 +61,7 @@ std::vector<UploadedCluster> ClusterRuns(const BakePlan& plan,
   size_t i = 0;
   for (const CasterCluster& c : plan.caster_clusters) {
     const uint32_t end = c.first_triangle + c.triangle_count;
-    UploadedCluster run{{static_cast<uint32_t>(i), 0}, glm::dvec3(kInf), glm::dvec3(-kInf)};
+    UploadedCluster run{{static_cast<uint32_t>(i), 0, c.mask}, glm::dvec3(kInf), glm::dvec3(-kInf)};
     for (; i < triangles.size() && triangles[i] < end; ++i) {
       for (int v = 0; v < 3; ++v) {
         const glm::dvec3 p(plan.casters.positions[plan.casters.indices[3 * triangles[i] + v]]);

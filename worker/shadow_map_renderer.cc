@@ -5,6 +5,7 @@
 #include <climits>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -41,9 +42,35 @@ spdlog::logger& Logger() {
   return *logger;
 }
 
-absl::StatusOr<gl::Program> LinkShadowMapProgram(const GlFunctions& gl) {
-  return gl::BuildProgram(gl, kShadowMapVertexShader, kShadowMapFragmentShader,
-                          "the shadow-map program (shadow_map.vert, shadow_map.frag)");
+// The shadow-map program; `alpha_test`: the alpha-tested variant (PDSM_ALPHA_TEST defined
+// right after the #version line, which must stay first).
+absl::StatusOr<gl::Program> LinkShadowMapProgram(const GlFunctions& gl, bool alpha_test) {
+  if (!alpha_test) {
+    return gl::BuildProgram(gl, kShadowMapVertexShader, kShadowMapFragmentShader,
+                            "the shadow-map program (shadow_map.vert, shadow_map.frag)");
+  }
+  const auto with_define = [](absl::string_view source) {
+    const size_t line_end = source.find('\n') + 1;
+    return absl::StrCat(source.substr(0, line_end), "#define PDSM_ALPHA_TEST 1\n",
+                        source.substr(line_end));
+  };
+  const std::string vertex = with_define(kShadowMapVertexShader);
+  const std::string fragment = with_define(kShadowMapFragmentShader);
+  return gl::BuildProgram(gl, vertex.c_str(), fragment.c_str(),
+                          "the alpha-tested shadow-map program (shadow_map.vert, "
+                          "shadow_map.frag with PDSM_ALPHA_TEST)");
+}
+
+GLint WrapMode(TextureWrap wrap) {
+  switch (wrap) {
+    case TextureWrap::kClampToEdge:
+      return GL_CLAMP_TO_EDGE;
+    case TextureWrap::kMirroredRepeat:
+      return GL_MIRRORED_REPEAT;
+    case TextureWrap::kRepeat:
+      break;
+  }
+  return GL_REPEAT;
 }
 
 absl::Status ValidateCamera(const ShadowMapCamera& camera) {
@@ -135,8 +162,11 @@ class OsMesaShadowMapRenderer final : public ShadowMapRenderer {
   OsMesaShadowMapRenderer& operator=(const OsMesaShadowMapRenderer&) = delete;
 
   absl::Status Init(const Options& options);
+  using ShadowMapRenderer::SetGeometry;
   absl::Status SetGeometry(std::span<const glm::vec3> positions_light,
-                           std::span<const uint32_t> indices) override;
+                           std::span<const uint32_t> indices,
+                           std::span<const glm::vec2> uvs) override;
+  absl::Status SetMasks(std::span<const std::shared_ptr<const AlphaMask>> masks) override;
   absl::Status Render(const ShadowMapCamera& camera, std::vector<float>* depth) override;
   absl::Status Render(const ShadowMapCamera& camera, std::span<const DrawRange> ranges,
                       std::vector<float>* depth) override;
@@ -146,7 +176,16 @@ class OsMesaShadowMapRenderer final : public ShadowMapRenderer {
   struct UniformLocations {
     GLint clip_from_light = -1, depth_bias = -1, slope_bias = -1, footprint_scale = -1,
           orthographic = -1, z_clip_near = -1, z_clip_far = -1;
+    GLint alpha_mask = -1, alpha_cutoff = -1;  // the alpha-tested program only
   };
+  // A linked program and where its uniforms are.
+  struct ShadowMapProgram {
+    gl::Program program;
+    UniformLocations uniforms;
+  };
+  absl::StatusOr<ShadowMapProgram> MakeProgram(bool alpha_test);
+  // Sets the camera's uniforms on `p` (made current).
+  void SetCameraUniforms(const ShadowMapProgram& p, const ShadowMapCamera& camera);
 
   absl::Status ChoosePieceSize(int requested);
   absl::Status EnsureTarget(int width, int height);
@@ -160,14 +199,19 @@ class OsMesaShadowMapRenderer final : public ShadowMapRenderer {
   GlFunctions gl_;
   bool has_clip_control_ = false;
   int max_piece_size_ = 0;
-  gl::Program program_;
-  UniformLocations uniforms_;
+  ShadowMapProgram opaque_;
+  std::optional<ShadowMapProgram> alpha_tested_;  // made by the first SetMasks with masks
+  std::vector<gl::Texture> mask_textures_;        // SetMasks' masks, in order
+  std::vector<float> mask_cutoffs_;
   gl::VertexArray vertex_array_;
   gl::Buffer vertex_buffer_;
+  gl::Buffer uv_buffer_;
   gl::Buffer index_buffer_;
   GLsizei index_count_ = 0;
+  bool has_uvs_ = false;
   std::vector<GLsizei> draw_counts_;  // the current Render's draw list
   std::vector<const void*> draw_offsets_;
+  std::vector<uint16_t> draw_masks_;  // each draw's DrawRange::mask
   // End (exclusive) in the draw list of each run of at most kTrianglesPerFlush triangles.
   std::vector<size_t> flush_ends_;
   // Render target, grown (never shrunk) to the largest piece rendered so far.
@@ -185,22 +229,13 @@ absl::Status OsMesaShadowMapRenderer::Init(const Options& options) {
   has_clip_control_ = major > 4 || (major == 4 && minor >= 5);
   if (absl::Status status = ChoosePieceSize(options.max_piece_size); !status.ok()) return status;
 
-  absl::StatusOr<gl::Program> program = LinkShadowMapProgram(gl_);
+  absl::StatusOr<ShadowMapProgram> program = MakeProgram(/*alpha_test=*/false);
   if (!program.ok()) return program.status();
-  program_ = *std::move(program);
-  const auto location = [&](const char* name) {
-    return gl_.GetUniformLocation(program_.name(), name);
-  };
-  uniforms_.clip_from_light = location("clip_from_light");
-  uniforms_.depth_bias = location("depth_bias");
-  uniforms_.slope_bias = location("slope_bias");
-  uniforms_.footprint_scale = location("footprint_scale");
-  uniforms_.orthographic = location("orthographic");
-  uniforms_.z_clip_near = location("z_clip_near");
-  uniforms_.z_clip_far = location("z_clip_far");
+  opaque_ = *std::move(program);
 
   vertex_array_ = gl::MakeVertexArray(gl_);
   vertex_buffer_ = gl::MakeBuffer(gl_);
+  uv_buffer_ = gl::MakeBuffer(gl_);
   index_buffer_ = gl::MakeBuffer(gl_);
   framebuffer_ = gl::MakeFramebuffer(gl_);
   gl_.BindVertexArray(vertex_array_.name());
@@ -214,6 +249,28 @@ absl::Status OsMesaShadowMapRenderer::Init(const Options& options) {
   Logger().debug("shadow-map renderer: GL {}.{} ({}), max piece {}", major, minor,
                  reinterpret_cast<const char*>(gl_.GetString(GL_RENDERER)), max_piece_size_);
   return absl::OkStatus();
+}
+
+absl::StatusOr<OsMesaShadowMapRenderer::ShadowMapProgram> OsMesaShadowMapRenderer::MakeProgram(
+    bool alpha_test) {
+  absl::StatusOr<gl::Program> program = LinkShadowMapProgram(gl_, alpha_test);
+  if (!program.ok()) return program.status();
+  ShadowMapProgram out;
+  out.program = *std::move(program);
+  const auto location = [&](const char* name) {
+    return gl_.GetUniformLocation(out.program.name(), name);
+  };
+  UniformLocations& u = out.uniforms;
+  u.clip_from_light = location("clip_from_light");
+  u.depth_bias = location("depth_bias");
+  u.slope_bias = location("slope_bias");
+  u.footprint_scale = location("footprint_scale");
+  u.orthographic = location("orthographic");
+  u.z_clip_near = location("z_clip_near");
+  u.z_clip_far = location("z_clip_far");
+  u.alpha_mask = location("alpha_mask");
+  u.alpha_cutoff = location("alpha_cutoff");
+  return out;
 }
 
 absl::Status OsMesaShadowMapRenderer::ChoosePieceSize(int requested) {
@@ -237,7 +294,17 @@ absl::Status OsMesaShadowMapRenderer::ChoosePieceSize(int requested) {
 }
 
 absl::Status OsMesaShadowMapRenderer::SetGeometry(std::span<const glm::vec3> positions_light,
-                                                  std::span<const uint32_t> indices) {
+                                                  std::span<const uint32_t> indices,
+                                                  std::span<const glm::vec2> uvs) {
+  if (!uvs.empty() && uvs.size() != positions_light.size()) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("uvs: ", uvs.size(), " for ", positions_light.size(), " positions"));
+  }
+  for (size_t i = 0; i < uvs.size(); ++i) {
+    if (!std::isfinite(uvs[i].x) || !std::isfinite(uvs[i].y)) {
+      return absl::InvalidArgumentError(absl::StrCat("uvs[", i, "] is not finite"));
+    }
+  }
   if (indices.size() % 3 != 0) {
     return absl::InvalidArgumentError(
         absl::StrCat("indices: size ", indices.size(), " is not a multiple of 3"));
@@ -263,9 +330,62 @@ absl::Status OsMesaShadowMapRenderer::SetGeometry(std::span<const glm::vec3> pos
   gl_.BufferData(GL_ARRAY_BUFFER, positions_light.size_bytes(), positions_light.data(),
                  GL_STATIC_DRAW);
   gl_.BufferData(GL_ELEMENT_ARRAY_BUFFER, indices.size_bytes(), indices.data(), GL_STATIC_DRAW);
+  has_uvs_ = !uvs.empty();
+  if (has_uvs_) {
+    gl_.BindBuffer(GL_ARRAY_BUFFER, uv_buffer_.name());
+    gl_.BufferData(GL_ARRAY_BUFFER, uvs.size_bytes(), uvs.data(), GL_STATIC_DRAW);
+    gl_.EnableVertexAttribArray(1);
+    gl_.VertexAttribPointer(1, 2, GL_FLOAT, GL_FALSE, sizeof(glm::vec2), nullptr);
+  } else {
+    gl_.DisableVertexAttribArray(1);
+  }
   index_count_ = static_cast<GLsizei>(indices.size());
   if (absl::Status status = CheckGlError(gl_, "uploading geometry"); !status.ok()) {
     index_count_ = 0;  // the buffers' contents are unknown; draw nothing rather than garbage
+    has_uvs_ = false;
+    return status;
+  }
+  return absl::OkStatus();
+}
+
+absl::Status OsMesaShadowMapRenderer::SetMasks(
+    std::span<const std::shared_ptr<const AlphaMask>> masks) {
+  for (size_t k = 0; k < masks.size(); ++k) {
+    if (masks[k] == nullptr || !masks[k]->Valid()) {
+      return absl::InvalidArgumentError(absl::StrCat("masks[", k, "] is not a valid mask"));
+    }
+  }
+  if (absl::Status status = context_.MakeCurrent(); !status.ok()) return status;
+  mask_textures_.clear();
+  mask_cutoffs_.clear();
+  if (masks.empty()) return absl::OkStatus();
+  if (!alpha_tested_) {
+    absl::StatusOr<ShadowMapProgram> program = MakeProgram(/*alpha_test=*/true);
+    if (!program.ok()) return program.status();
+    alpha_tested_ = *std::move(program);
+  }
+  gl_.PixelStorei(GL_UNPACK_ALIGNMENT, 1);  // rows of R8 texels are not 4-byte multiples
+  for (const auto& mask : masks) {
+    gl::Texture texture = gl::MakeTexture(gl_);
+    gl_.BindTexture(GL_TEXTURE_2D, texture.name());
+    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
+    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, WrapMode(mask->wrap_u));
+    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, WrapMode(mask->wrap_v));
+    // Row 0 (the image's top, v = 0) at texture t = 0: UVs index the image as glTF does.
+    gl_.TexImage2D(GL_TEXTURE_2D, 0, GL_R8, mask->width, mask->height, 0, GL_RED, GL_UNSIGNED_BYTE,
+                   mask->alpha.data());
+    mask_textures_.push_back(std::move(texture));
+    mask_cutoffs_.push_back(mask->cutoff);
+  }
+  gl_.BindTexture(GL_TEXTURE_2D, 0);
+  gl_.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  if (absl::Status status =
+          CheckGlError(gl_, absl::StrCat("uploading ", masks.size(), " alpha masks"));
+      !status.ok()) {
+    mask_textures_.clear();
+    mask_cutoffs_.clear();
     return status;
   }
   return absl::OkStatus();
@@ -316,7 +436,6 @@ absl::Status OsMesaShadowMapRenderer::EnsureTarget(int width, int height) {
 // (or another user of this context) left behind.
 void OsMesaShadowMapRenderer::SetPipelineState(const ShadowMapCamera& camera) {
   gl_.BindFramebuffer(GL_FRAMEBUFFER, framebuffer_.name());
-  gl_.UseProgram(program_.name());
   gl_.BindVertexArray(vertex_array_.name());
   // Reversed-Z: clip z / w in [0, 1], nearer is larger, cleared to 0 (beyond everything).
   if (has_clip_control_) gl_.ClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
@@ -327,12 +446,25 @@ void OsMesaShadowMapRenderer::SetPipelineState(const ShadowMapCamera& camera) {
   gl_.Disable(GL_CULL_FACE);    // both sides of a caster cast
   gl_.Disable(GL_BLEND);
   gl_.PixelStorei(GL_PACK_ALIGNMENT, 4);
-  gl_.Uniform1f(uniforms_.depth_bias, static_cast<float>(camera.depth_bias));
-  gl_.Uniform1f(uniforms_.slope_bias, static_cast<float>(camera.slope_bias));
-  gl_.Uniform1f(uniforms_.footprint_scale, static_cast<float>(camera.footprint_scale));
-  gl_.Uniform1i(uniforms_.orthographic, camera.projection == Projection::kOrthographic);
-  gl_.Uniform1f(uniforms_.z_clip_near, static_cast<float>(camera.z_clip_near));
-  gl_.Uniform1f(uniforms_.z_clip_far, static_cast<float>(camera.z_clip_far));
+  if (alpha_tested_ && !mask_textures_.empty()) {
+    gl_.UseProgram(alpha_tested_->program.name());
+    SetCameraUniforms(*alpha_tested_, camera);
+    gl_.Uniform1i(alpha_tested_->uniforms.alpha_mask, 0);  // texture unit 0
+    gl_.ActiveTexture(GL_TEXTURE0);
+  }
+  gl_.UseProgram(opaque_.program.name());
+  SetCameraUniforms(opaque_, camera);
+}
+
+void OsMesaShadowMapRenderer::SetCameraUniforms(const ShadowMapProgram& p,
+                                                const ShadowMapCamera& camera) {
+  const UniformLocations& u = p.uniforms;
+  gl_.Uniform1f(u.depth_bias, static_cast<float>(camera.depth_bias));
+  gl_.Uniform1f(u.slope_bias, static_cast<float>(camera.slope_bias));
+  gl_.Uniform1f(u.footprint_scale, static_cast<float>(camera.footprint_scale));
+  gl_.Uniform1i(u.orthographic, camera.projection == Projection::kOrthographic);
+  gl_.Uniform1f(u.z_clip_near, static_cast<float>(camera.z_clip_near));
+  gl_.Uniform1f(u.z_clip_far, static_cast<float>(camera.z_clip_far));
 }
 
 absl::Status OsMesaShadowMapRenderer::RenderPiece(const ShadowMapCamera& camera,
@@ -347,13 +479,44 @@ absl::Status OsMesaShadowMapRenderer::RenderPiece(const ShadowMapCamera& camera,
   gl_.ClearBufferfv(GL_DEPTH, 0, &beyond_everything);
   if (!draw_counts_.empty()) {
     const std::array<float, 16> clip_from_light = ClipFromLight(camera, piece, has_clip_control_);
-    gl_.UniformMatrix4fv(uniforms_.clip_from_light, 1, GL_FALSE, clip_from_light.data());
+    const bool any_masked =
+        std::any_of(draw_masks_.begin(), draw_masks_.end(), [](uint16_t k) { return k != 0; });
+    if (any_masked) {
+      gl_.UseProgram(alpha_tested_->program.name());
+      gl_.UniformMatrix4fv(alpha_tested_->uniforms.clip_from_light, 1, GL_FALSE,
+                           clip_from_light.data());
+    }
+    gl_.UseProgram(opaque_.program.name());
+    gl_.UniformMatrix4fv(opaque_.uniforms.clip_from_light, 1, GL_FALSE, clip_from_light.data());
+    uint16_t current_mask = 0;
     size_t begin = 0;
     for (const size_t end : flush_ends_) {
-      gl_.MultiDrawElements(GL_TRIANGLES, draw_counts_.data() + begin, GL_UNSIGNED_INT,
-                            draw_offsets_.data() + begin, static_cast<GLsizei>(end - begin));
+      // Runs of draws with one mask: one program and texture each (the draw list never puts
+      // opaque and masked triangles in one draw).
+      for (size_t run = begin; run < end;) {
+        size_t run_end = run + 1;
+        while (run_end < end && draw_masks_[run_end] == draw_masks_[run]) ++run_end;
+        const uint16_t mask = draw_masks_[run];
+        if (mask != current_mask) {
+          if (mask == 0) {
+            gl_.UseProgram(opaque_.program.name());
+          } else {
+            if (current_mask == 0) gl_.UseProgram(alpha_tested_->program.name());
+            gl_.BindTexture(GL_TEXTURE_2D, mask_textures_[mask - 1].name());
+            gl_.Uniform1f(alpha_tested_->uniforms.alpha_cutoff, mask_cutoffs_[mask - 1]);
+          }
+          current_mask = mask;
+        }
+        gl_.MultiDrawElements(GL_TRIANGLES, draw_counts_.data() + run, GL_UNSIGNED_INT,
+                              draw_offsets_.data() + run, static_cast<GLsizei>(run_end - run));
+        run = run_end;
+      }
       gl_.Flush();
       begin = end;
+    }
+    if (current_mask != 0) {
+      gl_.BindTexture(GL_TEXTURE_2D, 0);
+      gl_.UseProgram(opaque_.program.name());
     }
   }
   // Straight into the output: rows are `row_length` apart there; GL's bottom row (lowest t)
@@ -368,17 +531,19 @@ absl::Status OsMesaShadowMapRenderer::RenderPiece(const ShadowMapCamera& camera,
 void OsMesaShadowMapRenderer::SetDrawList(std::span<const DrawRange> ranges) {
   draw_counts_.clear();
   draw_offsets_.clear();
+  draw_masks_.clear();
   flush_ends_.clear();
   int64_t in_run = 0;  // triangles since the last flush
-  const auto add = [&](uint64_t first_triangle, int64_t triangles) {
+  const auto add = [&](uint64_t first_triangle, int64_t triangles, uint16_t mask) {
     const uintptr_t offset = first_triangle * 3 * sizeof(uint32_t);
-    // Adjacent ranges are one draw, unless a flush falls between them.
-    if (in_run > 0 &&
+    // Adjacent ranges of one mask are one draw, unless a flush falls between them.
+    if (in_run > 0 && draw_masks_.back() == mask &&
         reinterpret_cast<uintptr_t>(draw_offsets_.back()) + draw_counts_.back() * 4 == offset) {
       draw_counts_.back() += static_cast<GLsizei>(3 * triangles);
     } else {
       draw_counts_.push_back(static_cast<GLsizei>(3 * triangles));
       draw_offsets_.push_back(reinterpret_cast<const void*>(offset));
+      draw_masks_.push_back(mask);
     }
     in_run += triangles;
     if (in_run == kTrianglesPerFlush) {
@@ -391,7 +556,7 @@ void OsMesaShadowMapRenderer::SetDrawList(std::span<const DrawRange> ranges) {
     int64_t left = r.triangle_count;
     while (left > 0) {
       const int64_t take = std::min(left, kTrianglesPerFlush - in_run);
-      add(first, take);
+      add(first, take, r.mask);
       first += static_cast<uint64_t>(take);
       left -= take;
     }
@@ -413,6 +578,16 @@ absl::Status OsMesaShadowMapRenderer::Render(const ShadowMapCamera& camera,
       return absl::InvalidArgumentError(
           absl::StrFormat("draw range [%d, %d) past the %d uploaded triangles", r.first_triangle,
                           uint64_t{r.first_triangle} + r.triangle_count, index_count_ / 3));
+    }
+    if (r.mask > mask_textures_.size()) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("draw range at %d: mask %d past the %d masks set", r.first_triangle,
+                          r.mask, mask_textures_.size()));
+    }
+    if (r.mask != 0 && !has_uvs_) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("draw range at %d: alpha-tested (mask %d) but no UVs were uploaded",
+                          r.first_triangle, r.mask));
     }
   }
   SetDrawList(ranges);

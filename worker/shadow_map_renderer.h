@@ -17,6 +17,7 @@
 #include "absl/status/statusor.h"
 #include "core/bake/shadow_map_lattice.h"
 #include "core/pdsm/pdsm_geometry.h"
+#include "core/scene/alpha_mask.h"
 
 namespace pdsm {
 
@@ -24,6 +25,8 @@ namespace pdsm {
 struct DrawRange {
   uint32_t first_triangle = 0;
   uint32_t triangle_count = 0;
+  // 0: opaque; k: alpha-tested by the k-th mask given to SetMasks (core/scene/alpha_mask.h).
+  uint16_t mask = 0;
 };
 
 struct ShadowMapCamera {
@@ -64,8 +67,20 @@ class ShadowMapRenderer {
   // enough there), as triangles (3 indices each). Replaces the previous geometry; empty is
   // fine. INVALID_ARGUMENT (geometry unchanged) for an index out of range, a count not a
   // multiple of 3, or a non-finite position.
+  absl::Status SetGeometry(std::span<const glm::vec3> positions_light,
+                           std::span<const uint32_t> indices) {
+    return SetGeometry(positions_light, indices, {});
+  }
+  // The same with a UV per vertex (empty, or one per position, finite) for alpha-tested ranges.
+  // INVALID_ARGUMENT also for a UV count that is neither.
   virtual absl::Status SetGeometry(std::span<const glm::vec3> positions_light,
-                                   std::span<const uint32_t> indices) = 0;
+                                   std::span<const uint32_t> indices,
+                                   std::span<const glm::vec2> uvs) = 0;
+
+  // Uploads the alpha masks DrawRange::mask names (k: masks[k - 1]), replacing the previous
+  // ones; the first non-empty call compiles the alpha-tested program. Each mask must be Valid()
+  // (INVALID_ARGUMENT otherwise); INTERNAL when GL fails (out of memory: RESOURCE_EXHAUSTED).
+  virtual absl::Status SetMasks(std::span<const std::shared_ptr<const AlphaMask>> masks) = 0;
 
   // Renders `camera.window` into `depth` (resized to width * height, row-major, row 0 at the
   // window's lowest t). Windows larger than the GL limits are rendered in pieces. Output is
@@ -75,8 +90,9 @@ class ShadowMapRenderer {
   virtual absl::Status Render(const ShadowMapCamera& camera, std::vector<float>* depth) = 0;
 
   // The same, drawing only the triangles of `ranges` (in order; ranges may be adjacent, not
-  // overlapping). Texels no drawn triangle covers hold +infinity. INVALID_ARGUMENT for a range
-  // past the uploaded triangles.
+  // overlapping). Texels no drawn triangle covers hold +infinity. An alpha-tested range covers
+  // only where its mask passes (shaders/shadow_map.frag). INVALID_ARGUMENT for a range past the
+  // uploaded triangles, a mask past those set, or a masked range without uploaded UVs.
   virtual absl::Status Render(const ShadowMapCamera& camera, std::span<const DrawRange> ranges,
                               std::vector<float>* depth) = 0;
 

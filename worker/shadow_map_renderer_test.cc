@@ -408,6 +408,54 @@ TEST_F(ShadowMapRendererTest, RepeatedRendersAreBitIdentical) {
   EXPECT_TRUE(BitIdentical(from_fresh, first));
 }
 
+// (9) Alpha-tested ranges (core/scene/alpha_mask.h): a quad at z = 5 over s, t in [0, 2.1]
+// whose mask is opaque on its left half (u < 1/2, s < 1.05) and clear on its right, drawn with
+// an opaque quad behind it at z = 8: through the hole the map reads the quad behind.
+TEST_F(ShadowMapRendererTest, AlphaTestedRangesCoverOnlyWhereTheirMaskPasses) {
+  Mesh mesh;
+  mesh.AddParallelQuad(0, 10.5, 0, 10.5, 5);  // triangles 0, 1: the card
+  mesh.AddParallelQuad(0, 16.8, 0, 16.8, 8);  // triangles 2, 3: behind it, the same s, t
+  std::vector<glm::vec2> uvs;
+  for (const glm::vec3& p : mesh.positions) uvs.emplace_back(p.x / 10.5f, p.y / 10.5f);
+  ASSERT_TRUE(renderer_->SetGeometry(mesh.positions, mesh.indices, uvs).ok());
+  auto mask = std::make_shared<AlphaMask>();
+  mask->width = 2;
+  mask->height = 1;
+  mask->alpha = {255, 0};
+  mask->wrap_u = mask->wrap_v = TextureWrap::kClampToEdge;
+  const std::shared_ptr<const AlphaMask> masks[] = {mask};
+  ASSERT_TRUE(renderer_->SetMasks(masks).ok());
+  const ShadowMapCamera camera = TestCamera();
+  const DrawRange card_and_back[] = {{0, 2, 1}, {2, 2, 0}};
+  std::vector<float> depth;
+  ASSERT_TRUE(renderer_->Render(camera, card_and_back, &depth).ok());
+  // Texels within one of s = 1.05 are not checked: the filtered alpha crosses 1/2 there.
+  ExpectDepths(camera, depth, [](double s, double t) -> double {
+    if (!Inside(t, 0, 2.1) || !Inside(s, 0, 2.1)) return INFINITY;
+    if (std::abs(s - 1.05) < 0.0625) return NAN;
+    return s < 1.05 ? 5.0 : 8.0;
+  });
+  // Opaque, the same card covers its whole square.
+  const DrawRange opaque_card[] = {{0, 2, 0}};
+  ASSERT_TRUE(renderer_->Render(camera, opaque_card, &depth).ok());
+  ExpectDepths(camera, depth, [](double s, double t) {
+    return Inside(s, 0, 2.1) && Inside(t, 0, 2.1) ? 5.0 : INFINITY;
+  });
+  // A mask past those set, or masks without UVs, are refused.
+  const DrawRange second_mask[] = {{0, 2, 2}};
+  EXPECT_EQ(renderer_->Render(camera, second_mask, &depth).code(),
+            absl::StatusCode::kInvalidArgument);
+  ASSERT_TRUE(renderer_->SetGeometry(mesh.positions, mesh.indices).ok());
+  EXPECT_EQ(renderer_->Render(camera, card_and_back, &depth).code(),
+            absl::StatusCode::kInvalidArgument);
+  // A UV count that is not the position count is refused, as is an invalid mask.
+  uvs.pop_back();
+  EXPECT_EQ(renderer_->SetGeometry(mesh.positions, mesh.indices, uvs).code(),
+            absl::StatusCode::kInvalidArgument);
+  mask->cutoff = 0;
+  EXPECT_EQ(renderer_->SetMasks(masks).code(), absl::StatusCode::kInvalidArgument);
+}
+
 // (8) Renderers on two threads at once give the same bits as one on the test thread.
 TEST_F(ShadowMapRendererTest, RenderersOnTwoThreads) {
   const Mesh mesh = BusyScene();

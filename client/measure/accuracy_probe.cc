@@ -17,7 +17,7 @@ absl::StatusOr<AccuracyProbe> AccuracyProbe::Create(const Scene& scene,
   absl::StatusOr<AccuracyPoints> points = MakeAccuracyPoints(scene, counts, seed);
   if (!points.ok()) return points.status();
   probe.points_ = *std::move(points);
-  probe.method_ = ResolveReferenceMethod(reference.method, scene.light);
+  probe.method_ = ResolveReferenceMethod(reference.method, scene);
   const auto start = std::chrono::steady_clock::now();
   for (auto [set, values] : {std::pair{&probe.points_.surface, &probe.surface_reference_},
                              std::pair{&probe.points_.free_space, &probe.free_space_reference_},

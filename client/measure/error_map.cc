@@ -59,7 +59,7 @@ absl::StatusOr<ErrorMap> MeasureErrorMap(const PdsmImage& pdsm, const Scene& sce
   map.step = step;
   map.width = (surface->width + step - 1) / step;
   map.height = (surface->height + step - 1) / step;
-  map.method = ResolveReferenceMethod(reference.method, scene.light);
+  map.method = ResolveReferenceMethod(reference.method, scene);
   map.reference_samples = map.method == ReferenceMethod::kEmbree ? reference.samples : 0;
   const size_t pixels = static_cast<size_t>(map.width) * map.height;
   map.pdsm.assign(pixels, kNaN);

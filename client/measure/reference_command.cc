@@ -31,7 +31,7 @@ int RunReference(const ReferenceFlags& flags) {
   if (!scene.ok()) return ReportError(scene.status());
   absl::StatusOr<std::vector<QueryPoint>> points = ReadPointsCsv(flags.points_path);
   if (!points.ok()) return ReportError(points.status());
-  const ReferenceMethod resolved = ResolveReferenceMethod(*method, scene->light);
+  const ReferenceMethod resolved = ResolveReferenceMethod(*method, *scene);
   if (resolved == ReferenceMethod::kExact && scene->light.shape == LightShape::kSun) {
     return ReportError(absl::InvalidArgumentError(
         absl::StrFormat("--method exact: %s has a sun light; the exact method "

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <utility>
 
 #include "absl/status/status.h"
@@ -21,8 +22,10 @@ namespace {
 constexpr char kMagic[8] = {'P', 'D', 'S', 'M', 'M', 'E', 'S', 'H'};
 // magic, version, vertex_count, index_count.
 constexpr size_t kHeaderBytes = sizeof(kMagic) + 4 + 8 + 8;
-constexpr size_t kVertexBytes = 3 * 8;  // float64 x, y, z
-constexpr size_t kIndexBytes = 4;       // uint32
+constexpr size_t kVertexBytes = 3 * 8;                  // float64 x, y, z
+constexpr size_t kIndexBytes = 4;                       // uint32
+constexpr size_t kMaskHeaderBytes = 4 + 4 + 1 + 1 + 4;  // width, height, wraps, cutoff
+constexpr size_t kUvBytes = 2 * 4;                      // float32 u, v
 
 // The JSON spellings of the non-finite values, as in scene messages.
 std::string FormatDouble(double x) {
@@ -47,15 +50,88 @@ void CheckOpenSsl(int ok) {
   if (ok != 1) std::abort();
 }
 
+// Version 2's mask section: `left` bytes follow in `in`, all of them the section's.
+absl::Status DecodeMasks(ByteReader& in, size_t left, uint64_t vertex_count,
+                         uint64_t triangle_count, MeshFileData* mesh) {
+  const auto invalid = [](absl::string_view what) { return absl::InvalidArgumentError(what); };
+  const auto truncated = [&] {
+    return invalid(absl::StrCat("size mismatch: the alpha masks, ", vertex_count, " UVs and ",
+                                triangle_count, " triangle masks need more than the ", left,
+                                " bytes left"));
+  };
+  if (left < 4) return truncated();
+  const uint32_t mask_count = in.U32();
+  left -= 4;
+  if (mask_count == 0 || mask_count > UINT16_MAX) {
+    return invalid(
+        absl::StrCat("the mask count must be in [1, ", UINT16_MAX, "] (got ", mask_count, ")"));
+  }
+  for (uint32_t k = 0; k < mask_count; ++k) {
+    if (left < kMaskHeaderBytes) return truncated();
+    auto mask = std::make_shared<AlphaMask>();
+    const uint32_t width = in.U32(), height = in.U32();
+    const uint8_t wrap_u = in.U8(), wrap_v = in.U8();
+    mask->cutoff = in.F32();
+    left -= kMaskHeaderBytes;
+    mask->label = absl::StrCat("mask ", k + 1);
+    if (width == 0 || height == 0 || width > kMaxAlphaMaskSide || height > kMaxAlphaMaskSide ||
+        wrap_u > 2 || wrap_v > 2 || !(mask->cutoff > 0 && mask->cutoff <= 1)) {
+      return invalid(absl::StrCat("mask ", k + 1, ": ", width, "x", height, " texels (at most ",
+                                  kMaxAlphaMaskSide, " a side), wraps ", int{wrap_u}, " ",
+                                  int{wrap_v}, " (0..2), cutoff ", mask->cutoff,
+                                  " (in (0, 1]): not a mask"));
+    }
+    const size_t texels = size_t{width} * height;
+    if (left < texels) return truncated();
+    mask->width = static_cast<int>(width);
+    mask->height = static_cast<int>(height);
+    mask->wrap_u = static_cast<TextureWrap>(wrap_u);
+    mask->wrap_v = static_cast<TextureWrap>(wrap_v);
+    mask->alpha.resize(texels);
+    in.Bytes(reinterpret_cast<char*>(mask->alpha.data()), texels);
+    left -= texels;
+    mesh->masks.push_back(std::move(mask));
+  }
+  if (left != vertex_count * kUvBytes + triangle_count * 2) {
+    return invalid(absl::StrCat(
+        "size mismatch: ", vertex_count, " UVs and ", triangle_count, " triangle masks need ",
+        vertex_count * kUvBytes + triangle_count * 2, " bytes after the masks (got ", left, ")"));
+  }
+  mesh->uvs.reserve(vertex_count);
+  for (uint64_t v = 0; v < vertex_count; ++v) {
+    const float u = in.F32(), w = in.F32();
+    if (!std::isfinite(u) || !std::isfinite(w)) {
+      return invalid(absl::StrCat("the UV of vertex ", v, " must be finite (got ", FormatDouble(u),
+                                  ", ", FormatDouble(w), ")"));
+    }
+    mesh->uvs.emplace_back(u, w);
+  }
+  mesh->triangle_masks.reserve(triangle_count);
+  for (uint64_t t = 0; t < triangle_count; ++t) {
+    const uint16_t k = in.U16();
+    if (k > mask_count) {
+      return invalid(absl::StrCat("triangle ", t, "'s mask must be <= ", mask_count,
+                                  ", the mask count (got ", k, ")"));
+    }
+    mesh->triangle_masks.push_back(k);
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 std::string EncodeMeshAsset(const MeshFileData& mesh) {
-  const size_t size =
+  size_t size =
       kHeaderBytes + mesh.positions.size() * kVertexBytes + mesh.indices.size() * kIndexBytes;
+  if (mesh.has_masks()) {
+    size += 4;
+    for (const auto& mask : mesh.masks) size += kMaskHeaderBytes + mask->alpha.size();
+    size += mesh.uvs.size() * kUvBytes + mesh.triangle_masks.size() * 2;
+  }
   std::string bytes(size, '\0');
   ByteWriter out(bytes.data());
   out.Bytes(kMagic, sizeof(kMagic));
-  out.U32(kMeshAssetVersion);
+  out.U32(mesh.has_masks() ? kMaskedMeshAssetVersion : kMeshAssetVersion);
   out.U64(mesh.positions.size());
   out.U64(mesh.indices.size());
   for (const glm::dvec3& p : mesh.positions) {
@@ -64,6 +140,22 @@ std::string EncodeMeshAsset(const MeshFileData& mesh) {
     out.F64(p.z);
   }
   for (const uint32_t index : mesh.indices) out.U32(index);
+  if (mesh.has_masks()) {
+    out.U32(static_cast<uint32_t>(mesh.masks.size()));
+    for (const auto& mask : mesh.masks) {
+      out.U32(static_cast<uint32_t>(mask->width));
+      out.U32(static_cast<uint32_t>(mask->height));
+      out.U8(static_cast<uint8_t>(mask->wrap_u));
+      out.U8(static_cast<uint8_t>(mask->wrap_v));
+      out.F32(mask->cutoff);
+      out.Bytes(reinterpret_cast<const char*>(mask->alpha.data()), mask->alpha.size());
+    }
+    for (const glm::vec2& uv : mesh.uvs) {
+      out.F32(uv.x);
+      out.F32(uv.y);
+    }
+    for (const uint16_t k : mesh.triangle_masks) out.U16(k);
+  }
   return bytes;
 }
 
@@ -82,18 +174,21 @@ absl::StatusOr<MeshFileData> DecodeMeshAsset(std::string_view bytes, const std::
   }
   ByteReader in(bytes.data() + sizeof(kMagic));
   const uint32_t version = in.U32();
-  if (version != kMeshAssetVersion) {
+  if (version != kMeshAssetVersion && version != kMaskedMeshAssetVersion) {
     return invalid(absl::StrCat("unsupported mesh asset version ", version, " (this build reads ",
-                                kMeshAssetVersion, ")"));
+                                kMeshAssetVersion, " and ", kMaskedMeshAssetVersion, ")"));
   }
+  const bool masked = version == kMaskedMeshAssetVersion;
   const uint64_t vertex_count = in.U64();
   const uint64_t index_count = in.U64();
   // Each count is bounded by the bytes left before it is multiplied: no overflow, and nothing
   // is allocated for counts the blob cannot hold.
   const size_t body = size - kHeaderBytes;
+  // Version 2's mask section follows the opaque mesh: it needs bytes after it.
   if (vertex_count > body / kVertexBytes ||
       index_count > (body - vertex_count * kVertexBytes) / kIndexBytes ||
-      vertex_count * kVertexBytes + index_count * kIndexBytes != body) {
+      (masked ? vertex_count * kVertexBytes + index_count * kIndexBytes >= body
+              : vertex_count * kVertexBytes + index_count * kIndexBytes != body)) {
     return invalid(absl::StrCat("size mismatch: ", vertex_count, " vertices and ", index_count,
                                 " indices need ", kHeaderBytes, " + ", vertex_count, " * ",
                                 kVertexBytes, " + ", index_count, " * ", kIndexBytes,
@@ -124,6 +219,11 @@ absl::StatusOr<MeshFileData> DecodeMeshAsset(std::string_view bytes, const std::
                                   ", the vertex count (got ", index, ")"));
     }
     mesh.indices.push_back(index);
+  }
+  if (!masked) return mesh;
+  size_t left = body - vertex_count * kVertexBytes - index_count * kIndexBytes;
+  if (absl::Status s = DecodeMasks(in, left, vertex_count, index_count / 3, &mesh); !s.ok()) {
+    return invalid(s.message());
   }
   return mesh;
 }

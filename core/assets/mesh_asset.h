@@ -4,13 +4,20 @@
 //
 // Byte layout (little-endian, no padding):
 //   char[8]  magic "PDSMMESH"
-//   uint32   version (1)
+//   uint32   version (1: opaque; 2: with alpha masks)
 //   uint64   vertex_count
 //   uint64   index_count       (3 per triangle)
 //   float64  x, y, z           vertex_count times, model space
 //   uint32   index             index_count times, each < vertex_count
-// The same mesh always encodes to the same bytes, which is what makes the hash a content
-// address.
+// Version 2 only (a mesh with alpha-tested triangles, core/scene/alpha_mask.h), then:
+//   uint32   mask_count        1 .. 65535
+//   per mask: uint32 width, uint32 height, uint8 wrap_u, uint8 wrap_v, float32 cutoff,
+//             uint8 alpha[width * height]
+//   float32  u, v              vertex_count times
+//   uint16   mask              index_count / 3 times, each <= mask_count (0: opaque)
+// An opaque mesh is written as version 1, so its bytes and hash are what they were before
+// masks existed. The same mesh always encodes to the same bytes, which is what makes the hash
+// a content address. Mask labels are not stored (decoded masks are labelled "mask k").
 #ifndef PDSM_CORE_ASSETS_MESH_ASSET_H_
 #define PDSM_CORE_ASSETS_MESH_ASSET_H_
 
@@ -27,6 +34,7 @@ struct evp_md_ctx_st;  // OpenSSL's EVP_MD_CTX; OpenSSL is private to pdsm_core
 namespace pdsm {
 
 inline constexpr uint32_t kMeshAssetVersion = 1;
+inline constexpr uint32_t kMaskedMeshAssetVersion = 2;
 
 // The canonical bytes of `mesh`. Encodes what it is given; DecodeMeshAsset is the validator.
 std::string EncodeMeshAsset(const MeshFileData& mesh);
@@ -35,7 +43,8 @@ std::string EncodeMeshAsset(const MeshFileData& mesh);
 // "job 7: meshes[0] (asset 0123456789ab)".
 // Errors: INVALID_ARGUMENT "<context>: ..." for a bad magic or version, counts that do not
 // match the byte length exactly (checked before anything is allocated), an index count that is
-// zero or not a multiple of 3, an index >= vertex_count, a non-finite coordinate.
+// zero or not a multiple of 3, an index >= vertex_count, a non-finite coordinate; in version 2
+// a mask that is not Valid(), a non-finite UV, a triangle's mask > mask_count.
 absl::StatusOr<MeshFileData> DecodeMeshAsset(std::string_view bytes, const std::string& context);
 
 // Lowercase hex SHA-256 of `bytes` (64 characters).

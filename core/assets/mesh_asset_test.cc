@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <string>
 #include <utility>
@@ -13,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "absl/strings/str_cat.h"
+#include "core/scene/alpha_mask.h"
 
 namespace pdsm {
 namespace {
@@ -38,6 +40,24 @@ MeshFileData Triangle() {
   MeshFileData mesh;
   mesh.positions = {{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}};
   mesh.indices = {0, 1, 2};
+  return mesh;
+}
+
+// Two triangles sharing an edge, the second tested by a 3 x 2 mask.
+MeshFileData MaskedQuad() {
+  MeshFileData mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  mesh.indices = {0, 1, 2, 0, 2, 3};
+  mesh.uvs = {{0, 0}, {1, 0}, {1, 1}, {-0.5f, 2.25f}};
+  mesh.triangle_masks = {0, 1};
+  auto mask = std::make_shared<AlphaMask>();
+  mask->width = 3;
+  mask->height = 2;
+  mask->alpha = {0, 10, 20, 30, 40, 255};
+  mask->wrap_u = TextureWrap::kMirroredRepeat;
+  mask->wrap_v = TextureWrap::kClampToEdge;
+  mask->cutoff = 0.3f;
+  mesh.masks = {mask};
   return mesh;
 }
 
@@ -107,16 +127,20 @@ TEST(MeshAssetTest, LayoutIsLittleEndianAsDocumented) {
 // ---- Decoding errors -------------------------------------------------------------------
 
 TEST(MeshAssetTest, EveryTruncationIsInvalidArgument) {
-  const std::string bytes = EncodeMeshAsset(Triangle());
-  for (size_t n = 0; n < bytes.size(); ++n) {
-    SCOPED_TRACE(absl::StrCat(n, " of ", bytes.size(), " bytes"));
-    absl::StatusOr<MeshFileData> mesh =
-        DecodeMeshAsset(std::string_view(bytes).substr(0, n), "ctx");
-    ASSERT_FALSE(mesh.ok());
-    EXPECT_EQ(mesh.status().code(), absl::StatusCode::kInvalidArgument) << mesh.status();
-    EXPECT_THAT(std::string(mesh.status().message()), StartsWith("ctx: "));
+  // An opaque mesh (version 1) and an alpha-tested one (version 2, its masks after the mesh).
+  for (const MeshFileData& mesh : {Triangle(), MaskedQuad()}) {
+    const std::string bytes = EncodeMeshAsset(mesh);
+    for (size_t n = 0; n < bytes.size(); ++n) {
+      SCOPED_TRACE(absl::StrCat(n, " of ", bytes.size(), " bytes"));
+      absl::StatusOr<MeshFileData> decoded =
+          DecodeMeshAsset(std::string_view(bytes).substr(0, n), "ctx");
+      ASSERT_FALSE(decoded.ok());
+      EXPECT_EQ(decoded.status().code(), absl::StatusCode::kInvalidArgument) << decoded.status();
+      EXPECT_THAT(std::string(decoded.status().message()), StartsWith("ctx: "));
+    }
+    ExpectInvalid(DecodeMeshAsset(bytes + '\0', "ctx"), "size mismatch");
   }
-  ExpectInvalid(DecodeMeshAsset(bytes + '\0', "ctx"), "size mismatch");
+  const std::string bytes = EncodeMeshAsset(Triangle());
   ExpectInvalid(DecodeMeshAsset(bytes.substr(0, 20), "ctx"), "truncated");
   ExpectInvalid(DecodeMeshAsset(bytes.substr(0, bytes.size() - 1), "ctx"), "size mismatch");
 }
@@ -130,8 +154,54 @@ TEST(MeshAssetTest, BadMagic) {
 
 TEST(MeshAssetTest, UnknownVersion) {
   std::string bytes = EncodeMeshAsset(Triangle());
+  PutU32(&bytes, 8, 3);
+  ExpectInvalid(DecodeMeshAsset(bytes, "ctx"), "unsupported mesh asset version 3");
+  // Version 2 says masks follow: an opaque mesh's bytes end before them.
   PutU32(&bytes, 8, 2);
-  ExpectInvalid(DecodeMeshAsset(bytes, "ctx"), "unsupported mesh asset version 2");
+  ExpectInvalid(DecodeMeshAsset(bytes, "ctx"), "size mismatch");
+}
+
+// ---- Alpha-tested meshes (version 2) ---------------------------------------------------
+
+TEST(MeshAssetTest, MaskedMeshRoundTripsAsVersionTwo) {
+  const MeshFileData mesh = MaskedQuad();
+  const std::string bytes = EncodeMeshAsset(mesh);
+  EXPECT_EQ(bytes.substr(8, 4), std::string("\x02\x00\x00\x00", 4));
+  ASSERT_EQ(bytes.size(), kHeaderBytes + 4 * 24 + 6 * 4 + 4 + (14 + 6) + 4 * 8 + 2 * 2);
+  absl::StatusOr<MeshFileData> decoded = DecodeMeshAsset(bytes, "ctx");
+  ASSERT_TRUE(decoded.ok()) << decoded.status();
+  ExpectBitIdentical(*decoded, mesh);
+  EXPECT_EQ(decoded->uvs, mesh.uvs);
+  EXPECT_EQ(decoded->triangle_masks, mesh.triangle_masks);
+  ASSERT_EQ(decoded->masks.size(), 1u);
+  EXPECT_TRUE(SameMask(*decoded->masks[0], *mesh.masks[0]));
+  EXPECT_EQ(decoded->masks[0]->label, "mask 1");
+  EXPECT_EQ(EncodeMeshAsset(*decoded), bytes);
+  // Opaque meshes stay version 1: their hashes are what they were before masks.
+  EXPECT_EQ(EncodeMeshAsset(Triangle()).substr(8, 4), std::string("\x01\x00\x00\x00", 4));
+}
+
+TEST(MeshAssetTest, BadMasksAreInvalidArgument) {
+  const std::string good = EncodeMeshAsset(MaskedQuad());
+  const size_t masks_at = kHeaderBytes + 4 * 24 + 6 * 4;  // the mask count
+  std::string bytes = good;
+  PutU32(&bytes, masks_at, 0);
+  ExpectInvalid(DecodeMeshAsset(bytes, "ctx"), "the mask count must be in [1, 65535] (got 0)");
+  bytes = good;
+  PutU32(&bytes, masks_at + 4, 0);  // width 0
+  ExpectInvalid(DecodeMeshAsset(bytes, "ctx"), "mask 1: 0x2 texels");
+  bytes = good;
+  bytes[masks_at + 12] = 3;  // wrap_u
+  ExpectInvalid(DecodeMeshAsset(bytes, "ctx"), "not a mask");
+  bytes = good;
+  PutU32(&bytes, masks_at + 14, std::bit_cast<uint32_t>(0.0f));  // cutoff
+  ExpectInvalid(DecodeMeshAsset(bytes, "ctx"), "not a mask");
+  bytes = good;
+  PutU32(&bytes, masks_at + 18 + 6, std::bit_cast<uint32_t>(std::nanf("")));  // vertex 0's u
+  ExpectInvalid(DecodeMeshAsset(bytes, "ctx"), "the UV of vertex 0 must be finite");
+  bytes = good;
+  bytes[bytes.size() - 2] = 2;  // triangle 1's mask: 2 of 1
+  ExpectInvalid(DecodeMeshAsset(bytes, "ctx"), "triangle 1's mask must be <= 1");
 }
 
 TEST(MeshAssetTest, IndexOutOfRange) {

@@ -168,6 +168,47 @@ void AppendMesh(const TriangleMesh& mesh, const LightFrame& frame, LightSpaceMes
   for (uint32_t i : mesh.indices) out->indices.push_back(base + i);
 }
 
+// The casters' masks, UVs and per-triangle mask indices (after AppendMesh has added every
+// caster mesh, in the same order); nothing when every caster is opaque. Equal masks of
+// different meshes (one file referenced twice) become one.
+absl::Status AppendCasterMasks(const Scene& scene, BakePlan* plan) {
+  bool any = false;
+  for (const TriangleMesh& mesh : scene.meshes) any = any || (Casts(mesh.role) && mesh.has_masks());
+  if (!any) return absl::OkStatus();
+  LightSpaceMesh& casters = plan->casters;
+  casters.uvs.reserve(casters.positions.size());
+  casters.triangle_masks.reserve(casters.TriangleCount());
+  for (const TriangleMesh& mesh : scene.meshes) {
+    if (!Casts(mesh.role)) continue;
+    const size_t triangles = mesh.indices.size() / 3;
+    if (!mesh.has_masks()) {
+      casters.uvs.insert(casters.uvs.end(), mesh.positions_world.size(), glm::vec2(0.0f));
+      casters.triangle_masks.insert(casters.triangle_masks.end(), triangles, 0);
+      continue;
+    }
+    std::vector<uint16_t> plan_index(mesh.masks.size() + 1, 0);
+    for (size_t k = 0; k < mesh.masks.size(); ++k) {
+      size_t index = std::find_if(plan->masks.begin(), plan->masks.end(),
+                                  [&](const auto& m) {
+                                    return m == mesh.masks[k] || SameMask(*m, *mesh.masks[k]);
+                                  }) -
+                     plan->masks.begin();
+      if (index == plan->masks.size()) {
+        if (index == UINT16_MAX) {
+          return absl::InvalidArgumentError(
+              absl::StrFormat("%s: more than %d alpha-tested textures in the scene",
+                              scene.source_path, UINT16_MAX));
+        }
+        plan->masks.push_back(mesh.masks[k]);
+      }
+      plan_index[k + 1] = static_cast<uint16_t>(index + 1);
+    }
+    casters.uvs.insert(casters.uvs.end(), mesh.uvs.begin(), mesh.uvs.end());
+    for (const uint16_t k : mesh.triangle_masks) casters.triangle_masks.push_back(plan_index[k]);
+  }
+  return absl::OkStatus();
+}
+
 void MakeTiles(BakePlan* plan) {
   const PdsmGeometry& g = plan->header.geometry;
   const int size = plan->header.tile_size;
@@ -364,6 +405,7 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
     if (Casts(mesh.role)) AppendMesh(mesh, g.frame, &plan.casters);
     if (Receives(mesh.role)) AppendMesh(mesh, g.frame, &plan.receivers);
   }
+  if (absl::Status s = AppendCasterMasks(scene, &plan); !s.ok()) return s;
   plan.caster_clusters = ClusterCasters(&plan.casters);
   plan.tile_group_size = scene.bake.tile_group_size;
   plan.group_side = GroupSideInTiles(plan);
@@ -407,6 +449,7 @@ TileGroup BakePlan::group(int index) const {
 void ReleaseRenderGeometry(BakePlan* plan) {
   plan->casters = LightSpaceMesh{};
   plan->caster_clusters = std::vector<CasterCluster>{};
+  plan->masks = {};
   if (!plan->header.surfaces_only) {
     plan->receivers = LightSpaceMesh{};
   } else {

@@ -6,6 +6,7 @@
 #define PDSM_CORE_BAKE_BAKE_PLAN_H_
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -29,7 +30,14 @@ struct TileRect {
 struct LightSpaceMesh {
   std::vector<glm::vec3> positions;
   std::vector<uint32_t> indices;
+  // Alpha-tested casters (core/scene/alpha_mask.h): empty when every triangle is opaque; else a
+  // UV per vertex and, per triangle, 0 (opaque) or k (tested by the plan's masks[k - 1]).
+  std::vector<glm::vec2> uvs;
+  std::vector<uint16_t> triangle_masks;
   size_t TriangleCount() const { return indices.size() / 3; }
+  uint16_t MaskOf(size_t triangle) const {
+    return triangle_masks.empty() ? 0 : triangle_masks[triangle];
+  }
 };
 
 struct BakePlan {
@@ -54,6 +62,9 @@ struct BakePlan {
   int tile_group_size = 0;  // the scene's bake.tileGroupSize (0: chosen by GroupSideInTiles)
   LightSpaceMesh casters;   // triangles in spatial order, cut into caster_clusters
   std::vector<CasterCluster> caster_clusters;
+  // The masks casters.triangle_masks index (1-based), shared with the scene: empty when every
+  // caster is opaque.
+  std::vector<std::shared_ptr<const AlphaMask>> masks;
   LightSpaceMesh receivers;
 
   const PdsmGeometry& geometry() const { return header.geometry; }

@@ -23,11 +23,14 @@ inline constexpr uint32_t kClusterTriangles = 128;
 struct CasterCluster {
   uint32_t first_triangle = 0;
   uint32_t triangle_count = 0;
+  uint16_t mask = 0;            // every triangle's: 0 opaque, k the plan's masks[k - 1]
   glm::dvec3 lo{0.0}, hi{0.0};  // bounds of its vertices, light space (exact: float -> double)
 };
 
 // Sorts `mesh`'s triangles spatially (each triangle's vertex order is kept) and returns the
-// clusters covering them, in order. Deterministic: the order depends only on the mesh.
+// clusters covering them, in order. Alpha-tested triangles (mesh->triangle_masks) come after
+// the opaque ones, grouped by mask, each group sorted on its own: a cluster never mixes masks.
+// Deterministic: the order depends only on the mesh.
 std::vector<CasterCluster> ClusterCasters(LightSpaceMesh* mesh);
 
 }  // namespace pdsm

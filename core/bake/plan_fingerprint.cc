@@ -62,6 +62,15 @@ std::string PlanFingerprint(const BakePlan& plan) {
   }
   for (const glm::vec3& p : plan.casters.positions) f.Add(p);
   for (uint32_t i : plan.casters.indices) f.Add(i);
+  if (!plan.masks.empty()) {  // alpha-tested casters; nothing is added for an opaque scene
+    for (const glm::vec2& uv : plan.casters.uvs) f.Add(uv.x), f.Add(uv.y);
+    for (uint16_t k : plan.casters.triangle_masks) f.Add(k);
+    for (const auto& mask : plan.masks) {
+      f.Add(mask->width), f.Add(mask->height), f.Add(static_cast<int>(mask->wrap_u));
+      f.Add(static_cast<int>(mask->wrap_v)), f.Add(mask->cutoff);
+      f.Add(std::string(mask->alpha.begin(), mask->alpha.end()));
+    }
+  }
   f.Add(plan.z_scan_floor);
   if (plan.header.surfaces_only) {  // the receivers place the depth windows
     for (const glm::vec3& p : plan.receivers.positions) f.Add(p);

@@ -22,7 +22,8 @@ int64_t StringBytes(const std::string& s) {
 }
 
 int64_t MeshBytes(const LightSpaceMesh& mesh) {
-  return VectorBytes(mesh.positions) + VectorBytes(mesh.indices);
+  return VectorBytes(mesh.positions) + VectorBytes(mesh.indices) + VectorBytes(mesh.uvs) +
+         VectorBytes(mesh.triangle_masks);
 }
 
 }  // namespace
@@ -34,6 +35,9 @@ int64_t PlanHeldBytes(const BakePlan& plan) {
   // Tiles and groups are made on demand (BakePlan::tile, group): a bit per tile is all.
   bytes += VectorBytes(plan.samples) + VectorBytes(plan.tile_has_casters);
   bytes += MeshBytes(plan.casters) + VectorBytes(plan.caster_clusters) + MeshBytes(plan.receivers);
+  // Masks are shared with the scene; counted here as if the plan held them alone.
+  bytes += VectorBytes(plan.masks);
+  for (const auto& mask : plan.masks) bytes += sizeof(AlphaMask) + VectorBytes(mask->alpha);
   return bytes;
 }
 

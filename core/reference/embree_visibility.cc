@@ -30,8 +30,13 @@ constexpr int kMaxReferenceSamples = 1 << 20;
 // Casters in rebased light space, in double (for the filter) and float (for Embree).
 struct Casters {
   std::vector<glm::dvec3> vertices;  // 3 per triangle
-  glm::dvec3 origin_light{0.0};      // subtracted from light-space coordinates
-  double scale = 1.0;                // largest rebased coordinate magnitude
+  // Alpha-tested casters (core/scene/alpha_mask.h): per triangle its mask (null: opaque) and
+  // 3 UVs; both empty when every caster is opaque.
+  std::vector<const AlphaMask*> masks;
+  std::vector<glm::vec2> uvs;
+  std::vector<std::shared_ptr<const AlphaMask>> held;  // keeps `masks` alive
+  glm::dvec3 origin_light{0.0};                        // subtracted from light-space coordinates
+  double scale = 1.0;                                  // largest rebased coordinate magnitude
 };
 
 // The ray context Embree hands to the filter: extended with the query point in double.
@@ -45,8 +50,22 @@ absl::StatusOr<Casters> GatherCasters(const Scene& scene) {
   Casters casters;
   const LightFrame& frame = scene.light.frame;
   glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
+  bool any_masks = false;
+  for (const TriangleMesh& mesh : scene.meshes) any_masks |= Casts(mesh.role) && mesh.has_masks();
   for (const TriangleMesh& mesh : scene.meshes) {
     if (!Casts(mesh.role)) continue;
+    if (any_masks) {
+      const size_t triangles = mesh.indices.size() / 3;
+      for (size_t t = 0; t < triangles; ++t) {
+        const uint16_t k = mesh.has_masks() ? mesh.triangle_masks[t] : 0;
+        casters.masks.push_back(k == 0 ? nullptr : mesh.masks[k - 1].get());
+        for (int c = 0; c < 3; ++c) {
+          casters.uvs.push_back(mesh.has_masks() ? mesh.uvs[mesh.indices[3 * t + c]]
+                                                 : glm::vec2(0.0f));
+        }
+      }
+      casters.held.insert(casters.held.end(), mesh.masks.begin(), mesh.masks.end());
+    }
     for (uint32_t index : mesh.indices) {
       if (index >= mesh.positions_world.size()) {
         return absl::InvalidArgumentError(absl::StrFormat("%s: index %d out of range (%d vertices)",
@@ -71,13 +90,25 @@ absl::StatusOr<Casters> GatherCasters(const Scene& scene) {
   return casters;
 }
 
-// Rejects hits on the query point's own surface (a plane through the point), in double.
-void RejectOwnSurface(const RTCFilterFunctionNArguments* args) {
+// Rejects hits on the query point's own surface (a plane through the point), in double, and
+// hits where an alpha-tested caster's mask lets the light through.
+void FilterHits(const RTCFilterFunctionNArguments* args) {
   const auto* context = reinterpret_cast<const PointContext*>(args->context);
   const auto* casters = static_cast<const Casters*>(args->geometryUserPtr);
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] == 0) continue;
     const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+    if (!casters->masks.empty() && casters->masks[prim] != nullptr) {
+      // Embree's barycentrics: u weights the second vertex, v the third.
+      const double u = RTCHitN_u(args->hit, args->N, i), v = RTCHitN_v(args->hit, args->N, i);
+      const glm::dvec2 uv = (1 - u - v) * glm::dvec2(casters->uvs[3 * prim]) +
+                            u * glm::dvec2(casters->uvs[3 * prim + 1]) +
+                            v * glm::dvec2(casters->uvs[3 * prim + 2]);
+      if (!casters->masks[prim]->CastsAt(uv)) {
+        args->valid[i] = 0;
+        continue;
+      }
+    }
     const glm::dvec3& a = casters->vertices[3 * prim];
     const glm::dvec3 normal =
         glm::cross(casters->vertices[3 * prim + 1] - a, casters->vertices[3 * prim + 2] - a);
@@ -111,7 +142,7 @@ absl::StatusOr<RTCScene> BuildScene(RTCDevice device, const Casters& casters) {
       indices[k] = static_cast<unsigned>(k);
     }
     rtcSetGeometryUserData(geometry, const_cast<Casters*>(&casters));
-    rtcSetGeometryOccludedFilterFunction(geometry, RejectOwnSurface);
+    rtcSetGeometryOccludedFilterFunction(geometry, FilterHits);
     rtcCommitGeometry(geometry);
     rtcAttachGeometry(rtc_scene, geometry);
     rtcReleaseGeometry(geometry);

@@ -14,9 +14,18 @@ absl::StatusOr<ReferenceMethod> ParseReferenceMethod(const std::string& text,
       absl::StrFormat("%s: expected exact, embree or auto (got \"%s\")", flag, text));
 }
 
-ReferenceMethod ResolveReferenceMethod(ReferenceMethod method, const LightSpec& light) {
+bool HasAlphaTestedCasters(const Scene& scene) {
+  for (const TriangleMesh& mesh : scene.meshes) {
+    if (Casts(mesh.role) && mesh.has_masks()) return true;
+  }
+  return false;
+}
+
+ReferenceMethod ResolveReferenceMethod(ReferenceMethod method, const Scene& scene) {
   if (method != ReferenceMethod::kAuto) return method;
-  return light.shape == LightShape::kRect ? ReferenceMethod::kExact : ReferenceMethod::kEmbree;
+  return scene.light.shape == LightShape::kRect && !HasAlphaTestedCasters(scene)
+             ? ReferenceMethod::kExact
+             : ReferenceMethod::kEmbree;
 }
 
 const char* ReferenceMethodName(ReferenceMethod method) {
@@ -34,11 +43,16 @@ const char* ReferenceMethodName(ReferenceMethod method) {
 absl::StatusOr<std::vector<double>> ReferenceAttenuation(const Scene& scene,
                                                          std::span<const glm::dvec3> points,
                                                          const ReferenceOptions& options) {
-  if (ResolveReferenceMethod(options.method, scene.light) == ReferenceMethod::kExact) {
+  if (ResolveReferenceMethod(options.method, scene) == ReferenceMethod::kExact) {
     if (scene.light.is_sphere_face()) {
       // The exact method projects a planar light; a sphere's outline moves with the point.
       return absl::UnimplementedError(
           "the exact reference has no sphere light: use --method embree (or auto)");
+    }
+    if (HasAlphaTestedCasters(scene)) {
+      // It clips whole triangles' shadows on the light; a texture's holes are not polygons.
+      return absl::UnimplementedError(
+          "the exact reference has no alpha-tested casters: use --method embree (or auto)");
     }
     return ExactAttenuation(scene, points);
   }

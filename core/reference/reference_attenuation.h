@@ -18,14 +18,17 @@
 namespace pdsm {
 
 // kAuto: exact for rect lights (no sampling error at all), Embree otherwise (disk: the exact
-// method's 512-gon is close but Embree samples the true disk; sun: only Embree applies).
+// method's 512-gon is close but Embree samples the true disk; sun: only Embree applies; and
+// alpha-tested casters, whose holes only Embree's per-hit test sees).
 enum class ReferenceMethod { kAuto, kExact, kEmbree };
 
 // "auto", "exact", "embree"; INVALID_ARGUMENT naming `flag` otherwise.
 absl::StatusOr<ReferenceMethod> ParseReferenceMethod(const std::string& text,
                                                      const std::string& flag);
-// What kAuto resolves to for this light.
-ReferenceMethod ResolveReferenceMethod(ReferenceMethod method, const LightSpec& light);
+// What kAuto resolves to for this scene's light and casters.
+ReferenceMethod ResolveReferenceMethod(ReferenceMethod method, const Scene& scene);
+// Whether any caster of `scene` is alpha-tested (core/scene/alpha_mask.h).
+bool HasAlphaTestedCasters(const Scene& scene);
 const char* ReferenceMethodName(ReferenceMethod method);
 
 struct ReferenceOptions {

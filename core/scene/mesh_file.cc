@@ -1,5 +1,6 @@
 #include "core/scene/mesh_file.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -11,7 +12,9 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 #include "absl/strings/string_view.h"
+#include "core/scene/material_masks.h"
 
 namespace pdsm {
 namespace {
@@ -37,18 +40,54 @@ absl::Status CheckIsRegularFile(const std::string& path, const std::string& cont
 }
 
 // Appends the triangles of one (already pre-transformed) Assimp mesh; points and lines, which
-// triangulation leaves alone, cast no shadow and are skipped.
-void AppendTriangles(const aiMesh& mesh, MeshFileData* data) {
+// triangulation leaves alone, cast no shadow and are skipped. `mask_index` 0: opaque; else the
+// mesh's triangles are tested by masks[mask_index - 1] through its UV channel `alpha.uv_channel`.
+absl::Status AppendTriangles(const aiMesh& mesh, const internal::MaterialAlpha& alpha,
+                             uint16_t mask_index, MeshFileData* data) {
   const uint32_t base = static_cast<uint32_t>(data->positions.size());
+  const aiVector3D* uvs = nullptr;
+  if (mask_index > 0) {
+    if (alpha.uv_channel >= AI_MAX_NUMBER_OF_TEXTURECOORDS ||
+        mesh.mTextureCoords[alpha.uv_channel] == nullptr) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "mesh \"", mesh.mName.C_Str(), "\" is alpha-tested (", data->masks[mask_index - 1]->label,
+          ") but has no texture coordinates ", alpha.uv_channel));
+    }
+    uvs = mesh.mTextureCoords[alpha.uv_channel];
+  }
   for (unsigned i = 0; i < mesh.mNumVertices; ++i) {
     const aiVector3D& p = mesh.mVertices[i];
     data->positions.emplace_back(p.x, p.y, p.z);
+    data->uvs.emplace_back(uvs != nullptr ? glm::vec2(uvs[i].x, uvs[i].y) : glm::vec2(0.0f));
   }
   for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
     const aiFace& face = mesh.mFaces[f];
     if (face.mNumIndices != 3) continue;
     for (unsigned k = 0; k < 3; ++k) data->indices.push_back(base + face.mIndices[k]);
+    data->triangle_masks.push_back(mask_index);
   }
+  return absl::OkStatus();
+}
+
+// Gives each distinct mask of the file's materials an index (1-based, as triangle_masks holds).
+absl::StatusOr<std::vector<uint16_t>> IndexMasks(const std::vector<internal::MaterialAlpha>& alphas,
+                                                 MeshFileData* data) {
+  std::vector<uint16_t> index_of_material(alphas.size(), 0);
+  for (size_t m = 0; m < alphas.size(); ++m) {
+    if (alphas[m].mask == nullptr) continue;
+    const auto same = std::find(data->masks.begin(), data->masks.end(), alphas[m].mask);
+    if (same == data->masks.end()) {
+      if (data->masks.size() == UINT16_MAX) {
+        return absl::InvalidArgumentError(
+            absl::StrCat("more than ", UINT16_MAX, " alpha-tested textures"));
+      }
+      data->masks.push_back(alphas[m].mask);
+    }
+    index_of_material[m] =
+        static_cast<uint16_t>(std::find(data->masks.begin(), data->masks.end(), alphas[m].mask) -
+                              data->masks.begin() + 1);
+  }
+  return index_of_material;
 }
 
 }  // namespace
@@ -58,11 +97,12 @@ absl::StatusOr<MeshFileData> LoadMeshFile(const std::string& path, const std::st
 
   // PreTransformVertices flattens the node hierarchy (instances are duplicated) so one flat
   // triangle list comes out; JoinIdenticalVertices undoes the per-face vertex copies some
-  // importers (OBJ) make, and drops vertices no face uses.
+  // importers (OBJ) make, and drops vertices no face uses. FlipUVs puts every format's UV origin
+  // at the image's top-left (glTF's; Assimp turns all of them to OpenGL's bottom-left).
   Assimp::Importer importer;
   const aiScene* scene =
       importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                                  aiProcess_PreTransformVertices);
+                                  aiProcess_PreTransformVertices | aiProcess_FlipUVs);
   if (scene == nullptr) return CannotRead(context, path, importer.GetErrorString());
 
   size_t vertex_count = 0;
@@ -73,13 +113,57 @@ absl::StatusOr<MeshFileData> LoadMeshFile(const std::string& path, const std::st
     return CannotRead(context, path, absl::StrCat("too many vertices (", vertex_count, ")"));
   }
 
+  std::vector<std::string> blend_materials, translucent_materials;
+  absl::StatusOr<std::vector<internal::MaterialAlpha>> alphas =
+      internal::ReadMaterialAlphas(*scene, path, &blend_materials, &translucent_materials);
+  if (!alphas.ok()) return CannotRead(context, path, alphas.status().message());
   MeshFileData data;
+  absl::StatusOr<std::vector<uint16_t>> mask_of_material = IndexMasks(*alphas, &data);
+  if (!mask_of_material.ok()) return CannotRead(context, path, mask_of_material.status().message());
   data.positions.reserve(vertex_count);
-  for (unsigned m = 0; m < scene->mNumMeshes; ++m) AppendTriangles(*scene->mMeshes[m], &data);
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh& mesh = *scene->mMeshes[m];
+    // Assimp gives every mesh a material (a default one when the file has none).
+    const unsigned material = mesh.mMaterialIndex;
+    const bool known = material < alphas->size();
+    const internal::MaterialAlpha opaque;
+    if (absl::Status s = AppendTriangles(mesh, known ? (*alphas)[material] : opaque,
+                                         known ? (*mask_of_material)[material] : 0, &data);
+        !s.ok()) {
+      return CannotRead(context, path, s.message());
+    }
+  }
+  // Masks no triangle uses (a material of points or lines only) are dropped with the rest.
+  if (std::none_of(data.triangle_masks.begin(), data.triangle_masks.end(),
+                   [](uint16_t k) { return k != 0; })) {
+    data.masks.clear();
+  }
+  if (!data.has_masks()) {
+    data.uvs.clear();
+    data.triangle_masks.clear();
+  }
+  if (!blend_materials.empty()) {
+    data.warnings.push_back(absl::StrCat(
+        context, " (", path, "): material(s) ", absl::StrJoin(blend_materials, ", "),
+        " use alphaMode BLEND: baked as MASK at alphaCutoff 0.5 (a shadow map stores what "
+        "blocks the light, not how much of it passes)"));
+  }
+  if (!translucent_materials.empty()) {
+    data.warnings.push_back(absl::StrCat(
+        context, " (", path, "): material(s) ", absl::StrJoin(translucent_materials, ", "),
+        " have an opacity below 1 and no opacity texture: baked opaque at opacity >= 0.5, "
+        "casting nothing below"));
+  }
   if (data.indices.empty()) return CannotRead(context, path, "no triangles");
   for (const glm::dvec3& p : data.positions) {
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
       return CannotRead(context, path, "a vertex coordinate is not finite");
+    }
+  }
+  for (const glm::vec2& uv : data.uvs) {
+    if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) {
+      return CannotRead(context, path,
+                        "a texture coordinate of an alpha-tested mesh is not finite");
     }
   }
   return data;

@@ -1,28 +1,56 @@
 // Reads a triangle mesh from a file with Assimp (PLY, OBJ, glTF, FBX, ... anything Assimp
 // imports). All meshes of the file are flattened into one, with their node transforms applied;
 // polygons are triangulated; points and lines are dropped.
+//
+// Alpha-tested materials (core/scene/alpha_mask.h; docs/scene_format.md, "Alpha-tested
+// casters") keep their triangles' UVs and a mask:
+//   glTF alphaMode MASK: the base-colour texture's alpha (255 where the image has none) times
+//     the base-colour factor's alpha, against alphaCutoff; with no texture the factor alone
+//     decides (opaque, or casting nothing);
+//   glTF alphaMode BLEND: the same at cutoff 0.5, named in a warning (a deep shadow map stores
+//     visibility, not partial transmittance);
+//   other formats (OBJ/MTL map_d, FBX): an opacity texture (its alpha, or its gray when it has
+//     no alpha) times the opacity factor, at cutoff 0.5; an opacity factor below 1 without a
+//     texture is the same rule, named in a warning.
+// Textures are PNG, embedded (glb, data URI) or files next to the model; sampled with
+// GL_LINEAR and the texture's wrap modes (filters and KHR_texture_transform are not read).
 #ifndef PDSM_CORE_SCENE_MESH_FILE_H_
 #define PDSM_CORE_SCENE_MESH_FILE_H_
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
 
 #include "absl/status/statusor.h"
+#include "core/scene/alpha_mask.h"
 
 namespace pdsm {
 
 struct MeshFileData {
   std::vector<glm::dvec3> positions;  // model space (the file's units), finite
   std::vector<uint32_t> indices;      // 3 per triangle, each < positions.size()
+  // Alpha-tested triangles: `masks` empty when every triangle is opaque, and then `uvs` and
+  // `triangle_masks` are empty too. Otherwise uvs has one entry per vertex (finite) and
+  // triangle_masks one per triangle: 0 opaque, k in [1, masks.size()] tested by masks[k - 1].
+  std::vector<glm::vec2> uvs;
+  std::vector<uint16_t> triangle_masks;
+  std::vector<std::shared_ptr<const AlphaMask>> masks;  // each Valid(), at most 65535
+  // What the file holds that is baked otherwise than it says (BLEND materials), one line per
+  // kind, each naming the file.
+  std::vector<std::string> warnings;
+
+  bool has_masks() const { return !masks.empty(); }
 };
 
 // Loads `path` (opened as given: the caller resolves relative paths). `context` prefixes every
 // error message and names where the path came from, e.g. "scene.json: meshes[0].path".
 // Errors: INVALID_ARGUMENT "<context>: cannot read \"<path>\": <reason>" when the file is
-// missing, unreadable, has no triangles or a non-finite coordinate.
+// missing, unreadable, has no triangles or a non-finite coordinate, or an alpha-tested material
+// whose texture cannot be read (not PNG, missing, over kMaxAlphaMaskSide) or whose mesh has
+// no texture coordinates.
 // Thread-safe: each call uses its own importer.
 absl::StatusOr<MeshFileData> LoadMeshFile(const std::string& path, const std::string& context);
 

@@ -13,6 +13,8 @@
 
 #include "absl/strings/escaping.h"
 #include "absl/strings/str_cat.h"
+#include "core/util/png_writer.h"
+#include "tests/alpha_card.h"
 #include "tests/test_support.h"
 
 namespace pdsm {
@@ -127,6 +129,176 @@ TEST_F(MeshFileTest, FileWithoutTrianglesIsInvalidArgument) {
   absl::StatusOr<MeshFileData> mesh = LoadMeshFile(path, "ctx");
   ASSERT_EQ(mesh.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(mesh.status().message(), HasSubstr(path));
+}
+
+// ---- Alpha-tested materials (tests/alpha_card.h) ----------------------------------------
+
+// The triangles of `mesh` whose vertices all lie at y = kCardHeight: the card's.
+std::vector<size_t> CardTriangles(const MeshFileData& mesh) {
+  std::vector<size_t> card;
+  for (size_t t = 0; t < mesh.indices.size() / 3; ++t) {
+    if (mesh.positions[mesh.indices[3 * t]].y == testing::kCardHeight) card.push_back(t);
+  }
+  return card;
+}
+
+TEST_F(MeshFileTest, MaskMaterialKeepsItsUvsAndTextureAlpha) {
+  const std::string path = Write("card.gltf", testing::AlphaCardGltf());
+  absl::StatusOr<MeshFileData> mesh = LoadMeshFile(path, "ctx");
+  ASSERT_TRUE(mesh.ok()) << mesh.status();
+  ASSERT_EQ(mesh->masks.size(), 1u);
+  const AlphaMask& mask = *mesh->masks[0];
+  EXPECT_EQ(mask.width, 64);
+  EXPECT_EQ(mask.height, 64);
+  EXPECT_EQ(mask.cutoff, 0.5f);  // glTF's default alphaCutoff
+  EXPECT_EQ(mask.wrap_u, TextureWrap::kClampToEdge);
+  EXPECT_THAT(mask.label, HasSubstr("\"card\""));
+  ASSERT_EQ(mesh->uvs.size(), mesh->positions.size());
+  ASSERT_EQ(mesh->triangle_masks.size(), 4u);
+  const std::vector<size_t> card = CardTriangles(*mesh);
+  ASSERT_EQ(card.size(), 2u);
+  for (size_t t = 0; t < 4; ++t) {
+    const bool on_card = t == card[0] || t == card[1];
+    EXPECT_EQ(mesh->triangle_masks[t], on_card ? 1 : 0) << "triangle " << t;
+  }
+  // glTF's UVs come through as the file holds them: u = (x + 1) / 2, v = (z + 1) / 2, v = 0 at
+  // the image's top row.
+  for (size_t t : card) {
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = mesh->indices[3 * t + k];
+      const glm::dvec3& p = mesh->positions[v];
+      EXPECT_EQ(mesh->uvs[v], glm::vec2((p.x + 1) / 2, (p.z + 1) / 2)) << "vertex " << v;
+    }
+  }
+  EXPECT_TRUE(mask.CastsAt({0.25, 0.5}));    // u < 1/2: opaque
+  EXPECT_FALSE(mask.CastsAt({0.75, 0.5}));   // clear
+  EXPECT_TRUE(mask.CastsAt({0.75, 0.125}));  // v < 1/4 (the image's top rows): opaque
+  EXPECT_TRUE(mesh->warnings.empty());
+}
+
+TEST_F(MeshFileTest, OpaqueMaterialsHaveNoMasks) {
+  testing::AlphaCardOptions opaque;
+  opaque.alpha_mode = "OPAQUE";
+  absl::StatusOr<MeshFileData> mesh =
+      LoadMeshFile(Write("card.gltf", testing::AlphaCardGltf(opaque)), "ctx");
+  ASSERT_TRUE(mesh.ok()) << mesh.status();
+  EXPECT_FALSE(mesh->has_masks());
+  EXPECT_TRUE(mesh->uvs.empty());
+  EXPECT_TRUE(mesh->triangle_masks.empty());
+}
+
+TEST_F(MeshFileTest, MaskWithoutTextureIsDecidedByTheFactorAlone) {
+  // The case: alpha 0.2 under the 0.5 cutoff casts nothing at all.
+  testing::AlphaCardOptions faint;
+  faint.texture = false;
+  faint.factor_alpha = 0.2;
+  absl::StatusOr<MeshFileData> mesh =
+      LoadMeshFile(Write("faint.gltf", testing::AlphaCardGltf(faint)), "ctx");
+  ASSERT_TRUE(mesh.ok()) << mesh.status();
+  ASSERT_EQ(mesh->masks.size(), 1u);
+  EXPECT_FALSE(mesh->masks[0]->CastsAt({0.5, 0.5}));
+  EXPECT_FALSE(mesh->masks[0]->CastsAt({0.01, 0.99}));
+  // Alpha 0.8 passes everywhere: opaque.
+  testing::AlphaCardOptions solid = faint;
+  solid.factor_alpha = 0.8;
+  mesh = LoadMeshFile(Write("solid.gltf", testing::AlphaCardGltf(solid)), "ctx");
+  ASSERT_TRUE(mesh.ok()) << mesh.status();
+  EXPECT_FALSE(mesh->has_masks());
+}
+
+TEST_F(MeshFileTest, TheFactorScalesTheTextureAgainstTheCutoff) {
+  // alpha 255 * 0.5 = 0.5 >= 0.4: the opaque texels still cast; with cutoff 0.6, none do.
+  testing::AlphaCardOptions half;
+  half.factor_alpha = 0.5;
+  half.alpha_cutoff = 0.4;
+  absl::StatusOr<MeshFileData> mesh =
+      LoadMeshFile(Write("half.gltf", testing::AlphaCardGltf(half)), "ctx");
+  ASSERT_TRUE(mesh.ok()) << mesh.status();
+  ASSERT_EQ(mesh->masks.size(), 1u);
+  EXPECT_FLOAT_EQ(mesh->masks[0]->cutoff, 0.8f);
+  EXPECT_TRUE(mesh->masks[0]->CastsAt({0.25, 0.5}));
+  half.alpha_cutoff = 0.6;
+  mesh = LoadMeshFile(Write("half.gltf", testing::AlphaCardGltf(half)), "ctx");
+  ASSERT_TRUE(mesh.ok()) << mesh.status();
+  ASSERT_EQ(mesh->masks.size(), 1u);
+  EXPECT_FALSE(mesh->masks[0]->CastsAt({0.25, 0.5}));
+}
+
+TEST_F(MeshFileTest, BlendIsTestedAtOneHalfWithAWarning) {
+  testing::AlphaCardOptions blend;
+  blend.alpha_mode = "BLEND";
+  blend.alpha_cutoff = 0.9;  // not read for BLEND
+  const std::string path = Write("blend.gltf", testing::AlphaCardGltf(blend));
+  absl::StatusOr<MeshFileData> mesh = LoadMeshFile(path, "scene.json: meshes[0].path");
+  ASSERT_TRUE(mesh.ok()) << mesh.status();
+  ASSERT_EQ(mesh->masks.size(), 1u);
+  EXPECT_EQ(mesh->masks[0]->cutoff, 0.5f);
+  ASSERT_EQ(mesh->warnings.size(), 1u);
+  EXPECT_THAT(mesh->warnings[0], HasSubstr("scene.json: meshes[0].path"));
+  EXPECT_THAT(mesh->warnings[0], HasSubstr("\"card\""));
+  EXPECT_THAT(mesh->warnings[0], HasSubstr("BLEND: baked as MASK at alphaCutoff 0.5"));
+}
+
+TEST_F(MeshFileTest, ExternalTextureIsReadNextToTheFileAndMissingOneIsNamed) {
+  testing::AlphaCardOptions external;
+  external.texture_uri = "leaf.png";
+  const std::string path = Write("card.gltf", testing::AlphaCardGltf(external));
+  absl::StatusOr<MeshFileData> mesh = LoadMeshFile(path, "ctx");
+  ASSERT_EQ(mesh.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(mesh.status().message(), HasSubstr(absl::StrCat("cannot read \"", path, "\"")));
+  EXPECT_THAT(mesh.status().message(), HasSubstr("material \"card\": texture \"leaf.png\""));
+
+  Write("leaf.png", testing::AlphaCardPng());
+  mesh = LoadMeshFile(path, "ctx");
+  ASSERT_TRUE(mesh.ok()) << mesh.status();
+  absl::StatusOr<MeshFileData> embedded =
+      LoadMeshFile(Write("embedded.gltf", testing::AlphaCardGltf()), "ctx");
+  ASSERT_TRUE(embedded.ok()) << embedded.status();
+  ASSERT_EQ(mesh->masks.size(), 1u);
+  EXPECT_TRUE(SameMask(*mesh->masks[0], *embedded->masks[0]));
+
+  Write("leaf.png", "\xff\xd8\xff\xe0 a JPEG, say");
+  mesh = LoadMeshFile(path, "ctx");
+  ASSERT_EQ(mesh.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(mesh.status().message(), HasSubstr("not a readable PNG"));
+}
+
+TEST_F(MeshFileTest, AlphaTestedMeshWithoutTexcoordsIsAnError) {
+  testing::AlphaCardOptions bare;
+  bare.texcoords = false;
+  absl::StatusOr<MeshFileData> mesh =
+      LoadMeshFile(Write("bare.gltf", testing::AlphaCardGltf(bare)), "ctx");
+  ASSERT_EQ(mesh.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(mesh.status().message(), HasSubstr("has no texture coordinates"));
+}
+
+TEST_F(MeshFileTest, ObjMapDIsTestedAtOneHalfOnItsGrayWithObjUvsFlipped) {
+  // map_d without alpha: its gray is the coverage. 2 x 2, gray 255 on the image's top row, 0 on
+  // the bottom row; OBJ's vt (0, 0) is the image's bottom-left.
+  absl::StatusOr<std::string> png = EncodeRgbPng(2, 2,
+                                                 {255, 255, 255, 255, 255, 255,  //
+                                                  0, 0, 0, 0, 0, 0});
+  ASSERT_TRUE(png.ok()) << png.status();
+  Write("cut.png", *png);
+  Write("card.mtl", "newmtl card\nmap_d cut.png\n");
+  const std::string path = Write("card.obj",
+                                 "mtllib card.mtl\n"
+                                 "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                 "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                                 "usemtl card\n"
+                                 "f 1/1 2/2 3/3 4/4\n");
+  absl::StatusOr<MeshFileData> mesh = LoadMeshFile(path, "ctx");
+  ASSERT_TRUE(mesh.ok()) << mesh.status();
+  ASSERT_EQ(mesh->masks.size(), 1u);
+  EXPECT_EQ(mesh->masks[0]->cutoff, 0.5f);
+  // vt v = 1 (y = 1) is the image's top: our v = 0.
+  for (size_t v = 0; v < mesh->positions.size(); ++v) {
+    const glm::dvec3& p = mesh->positions[v];
+    EXPECT_EQ(mesh->uvs[v], glm::vec2(p.x, 1 - p.y)) << "vertex " << v;
+  }
+  // So the quad's upper half (its top row's texels) casts and the lower half does not.
+  EXPECT_TRUE(mesh->masks[0]->CastsAt({0.5, 1 - 0.75}));
+  EXPECT_FALSE(mesh->masks[0]->CastsAt({0.5, 1 - 0.25}));
 }
 
 TEST_F(MeshFileTest, SharedBunny) {

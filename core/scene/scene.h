@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -15,6 +16,7 @@
 #include "absl/status/statusor.h"
 
 #include "core/geometry/light_frame.h"
+#include "core/scene/alpha_mask.h"
 
 namespace pdsm {
 
@@ -28,6 +30,13 @@ struct TriangleMesh {
   MeshRole role = MeshRole::kCasterAndReceiver;
   std::vector<glm::dvec3> positions_world;  // transformed, double
   std::vector<uint32_t> indices;            // 3 per triangle
+  // Alpha-tested triangles, as MeshFileData holds them (core/scene/mesh_file.h): all empty
+  // for an opaque mesh; else a UV per vertex and a mask index per triangle (0 opaque, k:
+  // masks[k - 1]). Only casting is tested; a receiver's surface is its whole triangles.
+  std::vector<glm::vec2> uvs;
+  std::vector<uint16_t> triangle_masks;
+  std::vector<std::shared_ptr<const AlphaMask>> masks;
+  bool has_masks() const { return !masks.empty(); }
 };
 
 enum class LightShape { kRect, kDisk, kSun };

@@ -42,9 +42,10 @@ absl::Status CheckLightName(const FieldChecker& checks, const std::string& field
 }  // namespace
 
 SceneBuilder::SceneBuilder(std::string source, std::string base_dir,
-                           std::set<std::string> overridden, const MeshAssetResolver* assets)
+                           std::set<std::string> overridden, const MeshAssetResolver* assets,
+                           std::vector<std::string>* warnings)
     : checks_(std::move(source), std::move(overridden)),
-      sources_{std::move(base_dir), assets != nullptr && *assets ? assets : nullptr} {}
+      sources_{std::move(base_dir), assets != nullptr && *assets ? assets : nullptr, warnings} {}
 
 absl::StatusOr<Scene> SceneBuilder::Build(const pdsm::v1::Scene& message) const {
   Scene scene;

@@ -24,9 +24,10 @@ class SceneBuilder {
   // `source` prefixes messages and becomes Scene::source_path. `base_dir` resolves relative
   // mesh paths (empty: mesh files refused). `overridden` names the bake fields the overrides
   // replaced, for messages. `assets` loads assetSha256 meshes (null or empty: assets refused);
-  // it must outlive the builder.
+  // it must outlive the builder. `warnings` gets the mesh files' warnings (null: logged).
   SceneBuilder(std::string source, std::string base_dir, std::set<std::string> overridden,
-               const MeshAssetResolver* assets = nullptr);
+               const MeshAssetResolver* assets = nullptr,
+               std::vector<std::string>* warnings = nullptr);
 
   // The light and bake settings first (cheap: a typo there does not wait for a mesh load),
   // then the meshes in order. Stops at the first error.

@@ -158,7 +158,8 @@ absl::StatusOr<Scene> LoadSceneFile(const std::string& path, const pdsm::v1::Bak
       ParseWithOverrides(path, overrides, &message, warnings);
   if (!overridden.ok()) return overridden.status();
   // No asset resolver: a scene file names meshes by path or inline, never by asset.
-  return SceneBuilder(path, SceneFolder(path), *std::move(overridden)).Build(message);
+  return SceneBuilder(path, SceneFolder(path), *std::move(overridden), nullptr, warnings)
+      .Build(message);
 }
 
 absl::StatusOr<Scene> SceneFromProto(const pdsm::v1::Scene& message,

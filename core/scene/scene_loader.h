@@ -18,7 +18,8 @@ namespace pdsm {
 // Parses, applies `overrides` (set fields of the override replace the scene's bake fields;
 // used for command-line flags), loads meshes (relative paths against the scene file's folder)
 // and validates. A world file (IsWorldFile: .gltf, .glb, .fbx, .obj, .dae) is its own scene,
-// with the lights it holds (core/scene/world_file.h); what it holds that is not baked goes to
+// with the lights it holds (core/scene/world_file.h); what it holds that is not baked, and a
+// mesh file's materials baked otherwise than they say (BLEND: core/scene/mesh_file.h), go to
 // `warnings` (null: logged as warnings). Errors: INVALID_ARGUMENT for bad input (malformed
 // JSON, unknown field, missing or unreadable mesh, non-finite number, bad size, out-of-range
 // parameter, a mesh given by assetSha256, which only the coordinator accepts, a world file

@@ -14,6 +14,7 @@
 #include "absl/strings/str_cat.h"
 #include "core/assets/mesh_asset.h"
 #include "core/scene/mesh_file.h"
+#include "spdlog/spdlog.h"
 
 namespace pdsm::internal {
 namespace {
@@ -84,8 +85,7 @@ absl::Status LoadInline(const FieldChecker& checks, absl::string_view field,
 }
 
 absl::Status LoadPath(const FieldChecker& checks, const MeshSources& sources,
-                      absl::string_view field, const std::string& path,
-                      std::vector<glm::dvec3>* positions, std::vector<uint32_t>* indices) {
+                      absl::string_view field, const std::string& path, MeshFileData* out) {
   if (sources.base_dir.empty()) {
     return checks.Error(field, "mesh files are not accepted here; send inline geometry");
   }
@@ -93,14 +93,12 @@ absl::Status LoadPath(const FieldChecker& checks, const MeshSources& sources,
   absl::StatusOr<MeshFileData> data = LoadMeshFile(ResolveAgainst(sources.base_dir, path),
                                                    absl::StrCat(checks.source(), ": ", field));
   if (!data.ok()) return data.status();
-  *positions = std::move(data->positions);
-  *indices = std::move(data->indices);
+  *out = *std::move(data);
   return absl::OkStatus();
 }
 
 absl::Status LoadAsset(const FieldChecker& checks, const MeshSources& sources,
-                       absl::string_view field, const std::string& sha256,
-                       std::vector<glm::dvec3>* positions, std::vector<uint32_t>* indices) {
+                       absl::string_view field, const std::string& sha256, MeshFileData* out) {
   if (sources.assets == nullptr) {
     return checks.Error(field,
                         "mesh assets are only accepted by the coordinator; use path or inline");
@@ -114,28 +112,26 @@ absl::Status LoadAsset(const FieldChecker& checks, const MeshSources& sources,
   absl::StatusOr<MeshFileData> data =
       (*sources.assets)(sha256, absl::StrCat(checks.source(), ": ", field));
   if (!data.ok()) return data.status();
-  *positions = std::move(data->positions);
-  *indices = std::move(data->indices);
+  *out = *std::move(data);
   return absl::OkStatus();
 }
 
-// The model-space positions and the indices of `mesh`, from whichever source it names, and
-// its label for messages.
+// The model-space mesh (positions, indices, alpha masks) of `mesh`, from whichever source it
+// names, and its label for messages.
 absl::Status LoadSource(const FieldChecker& checks, const MeshSources& sources,
-                        const std::string& field, const pdsm::v1::Mesh& mesh,
-                        std::vector<glm::dvec3>* positions_model, TriangleMesh* out) {
+                        const std::string& field, const pdsm::v1::Mesh& mesh, MeshFileData* data,
+                        std::string* label) {
   switch (mesh.source_case()) {
     case pdsm::v1::Mesh::kPath:
-      out->label = absl::StrCat(field, " (", mesh.path(), ")");
-      return LoadPath(checks, sources, field + ".path", mesh.path(), positions_model,
-                      &out->indices);
+      *label = absl::StrCat(field, " (", mesh.path(), ")");
+      return LoadPath(checks, sources, field + ".path", mesh.path(), data);
     case pdsm::v1::Mesh::kInline:
-      out->label = absl::StrCat(field, " (inline)");
-      return LoadInline(checks, field + ".inline", mesh.inline_(), positions_model, &out->indices);
+      *label = absl::StrCat(field, " (inline)");
+      return LoadInline(checks, field + ".inline", mesh.inline_(), &data->positions,
+                        &data->indices);
     case pdsm::v1::Mesh::kAssetSha256:
-      out->label = absl::StrCat(field, " (asset ", mesh.asset_sha256().substr(0, 12), ")");
-      return LoadAsset(checks, sources, field + ".assetSha256", mesh.asset_sha256(),
-                       positions_model, &out->indices);
+      *label = absl::StrCat(field, " (asset ", mesh.asset_sha256().substr(0, 12), ")");
+      return LoadAsset(checks, sources, field + ".assetSha256", mesh.asset_sha256(), data);
     case pdsm::v1::Mesh::SOURCE_NOT_SET:
       break;
   }
@@ -170,10 +166,22 @@ absl::StatusOr<TriangleMesh> BuildMesh(const FieldChecker& checks, const MeshSou
   absl::StatusOr<Transform> transform =
       BuildTransform(checks, field + ".transform", mesh.transform());
   if (!transform.ok()) return transform.status();
-  std::vector<glm::dvec3> positions_model;
-  if (absl::Status s = LoadSource(checks, sources, field, mesh, &positions_model, &out); !s.ok()) {
+  MeshFileData data;
+  if (absl::Status s = LoadSource(checks, sources, field, mesh, &data, &out.label); !s.ok()) {
     return s;
   }
+  for (std::string& warning : data.warnings) {
+    if (sources.warnings != nullptr) {
+      sources.warnings->push_back(std::move(warning));
+    } else {
+      spdlog::warn("{}", warning);
+    }
+  }
+  const std::vector<glm::dvec3>& positions_model = data.positions;
+  out.indices = std::move(data.indices);
+  out.uvs = std::move(data.uvs);
+  out.triangle_masks = std::move(data.triangle_masks);
+  out.masks = std::move(data.masks);
 
   // World positions in double, in a fixed order of operations, so a world far from the origin
   // keeps its precision and every build computes the same bits.

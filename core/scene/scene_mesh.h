@@ -5,6 +5,7 @@
 #define PDSM_CORE_SCENE_SCENE_MESH_H_
 
 #include <string>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/scene/field_checker.h"
@@ -18,6 +19,9 @@ namespace pdsm::internal {
 struct MeshSources {
   std::string base_dir;                       // resolves relative paths; empty: files refused
   const MeshAssetResolver* assets = nullptr;  // loads assetSha256 meshes; null: assets refused
+  // Gets what a mesh file holds that is baked otherwise than it says (mesh_file.h); null:
+  // logged as warnings.
+  std::vector<std::string>* warnings = nullptr;
 };
 
 // `path` as is when absolute, else against `base_dir`, normalized lexically.

@@ -19,6 +19,10 @@ class ByteWriter {
     std::memcpy(out_, data, n);
     out_ += n;
   }
+  void U8(uint8_t v) { *out_++ = static_cast<char>(v); }
+  void U16(uint16_t v) {
+    for (int i = 0; i < 2; ++i) *out_++ = static_cast<char>(v >> (8 * i));
+  }
   void U32(uint32_t v) {
     for (int i = 0; i < 4; ++i) *out_++ = static_cast<char>(v >> (8 * i));
   }
@@ -37,6 +41,16 @@ class ByteWriter {
 class ByteReader {
  public:
   explicit ByteReader(const char* in) : in_(reinterpret_cast<const unsigned char*>(in)) {}
+  uint8_t U8() { return *in_++; }
+  uint16_t U16() {
+    const uint16_t v = static_cast<uint16_t>(in_[0] | (in_[1] << 8));
+    in_ += 2;
+    return v;
+  }
+  void Bytes(char* out, size_t n) {
+    std::memcpy(out, in_, n);
+    in_ += n;
+  }
   uint32_t U32() {
     uint32_t v = 0;
     for (int i = 0; i < 4; ++i) v |= static_cast<uint32_t>(*in_++) << (8 * i);

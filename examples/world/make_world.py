@@ -2,29 +2,19 @@
 
 A 16 x 16 ground, a unit box resting on it, a pillar and a tilted bar; a sun (a directional
 light, 2 degrees across from the node's extras), a spot with a radius from its node's extras
-and its own sample count, and a point light, which pdsm cannot bake yet (no sphere light) and
-names in a warning. One buffer, embedded as base64, so the file stands alone.
+and its own sample count, and a point light (a bulb: baked as a sphere, its radius and samples
+from its node's extras). One buffer, embedded as base64, so the file stands alone.
 
     /usr/bin/python3 examples/world/make_world.py   # rewrites examples/world/world.gltf
 """
 
-import base64
-import json
 import math
 import os
 import struct
+import sys
 
-
-def box(cx, cy, cz, sx, sy, sz):
-    """A closed box, 8 corners and 12 outward triangles."""
-    xs, ys, zs = (cx - sx / 2, cx + sx / 2), (cy, cy + sy), (cz - sz / 2, cz + sz / 2)
-    corners = [(x, y, z) for y in ys for z in zs for x in xs]
-    # corner index = 4 * (y) + 2 * (z) + (x)
-    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
-    tris = []
-    for a, b, c, d in quads:
-        tris += [a, b, c, a, c, d]
-    return corners, tris
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from gltf_common import box, look_down, write_gltf  # noqa: E402  (examples/gltf_common.py)
 
 
 def main():
@@ -51,17 +41,6 @@ def main():
                           "count": len(indices), "type": "SCALAR"})
         gltf_meshes.append({"name": name, "primitives": [
             {"attributes": {"POSITION": len(accessors) - 2}, "indices": len(accessors) - 1}]})
-
-    def look_down(direction):
-        """A rotation quaternion (x, y, z, w) taking the light's -Z onto `direction`."""
-        d = [c / math.sqrt(sum(c * c for c in direction)) for c in direction]
-        axis = (d[1], -d[0], 0.0)  # (0, 0, -1) x d
-        s = math.sqrt(sum(c * c for c in axis))
-        angle = math.atan2(s, -d[2])
-        if s < 1e-12:
-            return [0.0, 0.0, 0.0, 1.0]
-        k = math.sin(angle / 2) / s
-        return [axis[0] * k, axis[1] * k, axis[2] * k, math.cos(angle / 2)]
 
     nodes = [
         {"name": "ground", "mesh": 0},
@@ -94,14 +73,8 @@ def main():
         "meshes": gltf_meshes,
         "accessors": accessors,
         "bufferViews": views,
-        "buffers": [{"byteLength": len(blob),
-                     "uri": "data:application/octet-stream;base64,"
-                            + base64.b64encode(blob).decode()}],
     }
-    out = os.path.join(os.path.dirname(os.path.abspath(__file__)), "world.gltf")
-    with open(out, "w") as f:
-        json.dump(gltf, f, indent=1)
-        f.write("\n")
+    write_gltf(os.path.join(os.path.dirname(os.path.abspath(__file__)), "world.gltf"), gltf, blob)
 
 
 if __name__ == "__main__":

@@ -421,6 +421,25 @@ inline std::string LocalBakeBytes(const TempDir& dir, const std::string& scene_p
   return ReadBytes(out);
 }
 
+// Submits `scene_path` to the cluster's coordinator, adds `workers` workers, waits for the job
+// to end and expects it to succeed with `pdsm bake`'s bytes. Returns the job (its id empty when
+// it could not be submitted).
+inline pdsm::v1::Job ExpectServiceBakesAsLocal(ServiceCluster& cluster,
+                                               const std::string& scene_path, int workers = 2) {
+  const std::string expected = LocalBakeBytes(cluster.dir(), scene_path);
+  EXPECT_FALSE(expected.empty());
+  const std::string job_id = cluster.Submit(scene_path);
+  EXPECT_FALSE(job_id.empty());
+  if (job_id.empty()) return {};
+  for (int i = 0; i < workers; ++i) cluster.AddWorker();
+  const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
+  EXPECT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error() << cluster.Log("coordinator.log");
+  if (job.state() == pdsm::v1::SUCCEEDED) {
+    EXPECT_TRUE(FetchBytes(cluster, job_id) == expected) << "fetched PDSM differs from local bake";
+  }
+  return job;
+}
+
 }  // namespace pdsm::testing
 
 #endif  // PDSM_TESTS_SERVICE_SERVICE_CLUSTER_H_
