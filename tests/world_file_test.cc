@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <glm/glm.hpp>
 
+#include "absl/strings/str_cat.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_lights.h"
 #include "core/pdsm/pdsm_query.h"
@@ -122,6 +123,63 @@ TEST(WorldFile, BakesWithItsLightsAndTheSunShadowsTheGroundBehindTheBox) {
   for (size_t i = 0; i < points.size(); ++i) {
     EXPECT_NEAR((*a)[i], (*ref)[i], 0.1) << points[i].x << "," << points[i].z;
   }
+}
+
+// `"lightsFrom": "file"` in a scene JSON: the mesh file's lights join the scene's own, moved
+// by the entry's transform (here: scaled by 2 about the origin, then moved 10 along x).
+TEST(WorldFile, ASceneJsonTakesAMeshFilesLightsMovedByItsTransform) {
+  TempDir dir;
+  const std::string scene_path = dir.File("scene.json");
+  WriteText(
+      scene_path,
+      absl::StrCat(R"({"name": "lit", "meshes": [{"path": ")", WorldPath(),
+                   R"(", "lightsFrom": "file",)",
+                   R"( "transform": [2,0,0,10, 0,2,0,0, 0,0,2,0, 0,0,0,1]}],)",
+                   R"( "light": {"rect": {"center": [0,9,0], "normal": [0,-1,0], "up": [0,0,1],)",
+                   R"( "size": [1,1]}}})"));
+  absl::StatusOr<pdsm::v1::Scene> message = ParseSceneFile(scene_path);
+  ASSERT_TRUE(message.ok()) << message.status();
+  EXPECT_FALSE(message->has_light());
+  ASSERT_EQ(message->lights_size(), 4);
+  EXPECT_EQ(message->lights(0).name(), "light");  // the scene's own, named to join a list
+  EXPECT_EQ(message->lights(1).name(), "sun");
+  EXPECT_EQ(message->lights(2).name(), "spot");
+  EXPECT_EQ(message->lights(3).name(), "bulb");
+  EXPECT_TRUE(message->meshes(0).lights_from().empty());
+  const glm::dvec3 sun_dir = glm::normalize(glm::dvec3(0.35, -1, 0.25));
+  EXPECT_NEAR(glm::length(Vec3(message->lights(1).sun().direction()) - sun_dir), 0, 1e-6);
+  const pdsm::v1::SpotLight& spot = message->lights(2).spot();
+  EXPECT_NEAR(glm::length(Vec3(spot.center()) - glm::dvec3(-4 * 2 + 10, 12, 8)), 0, 1e-5);
+  EXPECT_NEAR(spot.radius(), 0.6, 1e-12);
+  EXPECT_NEAR(spot.cone_half_angle_deg(), 40.0, 1e-4);
+  EXPECT_NEAR(glm::length(Vec3(message->lights(3).sphere().center()) - glm::dvec3(10, 6, 6)), 0,
+              1e-5);
+  EXPECT_NEAR(message->lights(3).sphere().radius(), 0.4, 1e-12);
+  absl::StatusOr<Scene> scene = LoadSceneFile(scene_path);
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  EXPECT_EQ(scene->LightCount(), 3u + kSphereFaceCount);
+
+  // Only "file", only with a path; a message that still says so is not a scene file's.
+  WriteText(scene_path, absl::StrCat(R"({"meshes": [{"path": ")", WorldPath(),
+                                     R"(", "lightsFrom": "files"}]})"));
+  absl::StatusOr<pdsm::v1::Scene> bad = ParseSceneFile(scene_path);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.status().message().find(scene_path + ": meshes[0].lightsFrom: must be \"file\""),
+            std::string::npos)
+      << bad.status();
+  WriteText(scene_path,
+            R"({"meshes": [{"inline": {"positions": [0,0,0, 1,0,0, 0,0,1], "indices": [0,1,2]},)"
+            R"( "lightsFrom": "file"}]})");
+  bad = ParseSceneFile(scene_path);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.status().message().find("needs the mesh's `path`"), std::string::npos)
+      << bad.status();
+  pdsm::v1::Scene sent = *message;
+  sent.mutable_meshes(0)->set_lights_from("file");
+  absl::StatusOr<Scene> remote = SceneFromProto(sent, "job 1", "");
+  ASSERT_FALSE(remote.ok());
+  EXPECT_NE(remote.status().message().find("meshes[0].lightsFrom"), std::string::npos)
+      << remote.status();
 }
 
 TEST(WorldFile, AWorldWithoutALightToBakeIsRefusedNamingTheFile) {

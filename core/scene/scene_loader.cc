@@ -19,6 +19,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/string_view.h"
+#include "core/scene/file_lights.h"
 #include "core/scene/json_number_range.h"
 #include "core/scene/scene_bake.h"
 #include "core/scene/scene_builder.h"
@@ -81,6 +82,17 @@ absl::StatusOr<std::string> ReadSceneFile(const std::string& path) {
   return std::move(text).str();
 }
 
+// Moves `from`'s lines to `to`, or logs them as warnings when `to` is null.
+void PassOn(std::vector<std::string>* from, std::vector<std::string>* to) {
+  for (std::string& w : *from) {
+    if (to != nullptr) {
+      to->push_back(std::move(w));
+    } else {
+      spdlog::warn("{}", w);
+    }
+  }
+}
+
 // Reads and parses the scene file and applies the overrides. Returns the JSON names of the
 // overridden bake fields, for messages.
 absl::StatusOr<std::set<std::string>> ParseWithOverrides(const std::string& path,
@@ -92,13 +104,7 @@ absl::StatusOr<std::set<std::string>> ParseWithOverrides(const std::string& path
     absl::StatusOr<pdsm::v1::Scene> world = ReadWorldFile(path, &world_warnings);
     if (!world.ok()) return world.status();
     *message = *std::move(world);
-    for (std::string& w : world_warnings) {
-      if (warnings != nullptr) {
-        warnings->push_back(std::move(w));
-      } else {
-        spdlog::warn("{}", w);
-      }
-    }
+    PassOn(&world_warnings, warnings);
     return ApplyOverrides(overrides, message);
   }
   absl::StatusOr<std::string> text = ReadSceneFile(path);
@@ -117,6 +123,11 @@ absl::StatusOr<std::set<std::string>> ParseWithOverrides(const std::string& path
     return absl::InvalidArgumentError(absl::StrCat(
         path, ": invalid scene JSON: ", OneLineJsonError(std::string(parsed.message()))));
   }
+  std::vector<std::string> file_warnings;
+  if (absl::Status s = internal::AddLightsFromMeshFiles(path, message, &file_warnings); !s.ok()) {
+    return s;
+  }
+  PassOn(&file_warnings, warnings);
   return ApplyOverrides(overrides, message);
 }
 

@@ -149,6 +149,12 @@ std::string ResolveAgainst(const std::string& base_dir, const std::string& path)
 absl::StatusOr<TriangleMesh> BuildMesh(const FieldChecker& checks, const MeshSources& sources,
                                        int index, const pdsm::v1::Mesh& mesh) {
   const std::string field = Indexed("meshes", index);
+  if (!mesh.lights_from().empty()) {
+    // Reading the scene file resolves it (file_lights.h); a message arriving otherwise (a
+    // coordinator's) must hold the lights themselves.
+    return checks.Error(field + ".lightsFrom",
+                        "is resolved where the scene file is read; send the file's lights");
+  }
   TriangleMesh out;
   switch (mesh.role()) {
     case pdsm::v1::CASTER_AND_RECEIVER:
