@@ -190,17 +190,15 @@ absl::StatusOr<std::vector<MaterialAlpha>> ReadMaterialAlphas(
     const double cutoff = rule.factor > 0 ? rule.cutoff / rule.factor : 2.0;
     MaterialAlpha& alpha = alphas[m];
     alpha.uv_channel = rule.uv_channel;
-    if (rule.texture.empty()) {
-      if (cutoff > 1) alpha.mask = NeverCasts(label);  // else the factor alone passes: opaque
-      continue;
-    }
-    if (cutoff > 1) {
+    if (cutoff > 1) {  // no texel can pass: no texture is read, no UVs needed
       alpha.mask = NeverCasts(label);
       continue;
     }
+    if (rule.texture.empty()) continue;               // the factor alone passes: opaque
     if (!(static_cast<float>(cutoff) > 0)) continue;  // below float's range: every point passes
     const auto key = std::make_tuple(rule.texture, static_cast<int>(rule.coverage), cutoff,
                                      static_cast<int>(rule.wrap_u), static_cast<int>(rule.wrap_v));
+    alpha.needs_uvs = true;
     if (auto it = made.find(key); it != made.end()) {
       alpha.mask = it->second;
       continue;
@@ -224,6 +222,7 @@ absl::StatusOr<std::vector<MaterialAlpha>> ReadMaterialAlphas(
     }
     made.emplace(key, mask);
     alpha.mask = std::move(mask);
+    alpha.needs_uvs = true;
   }
   return alphas;
 }

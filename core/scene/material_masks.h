@@ -21,6 +21,7 @@ namespace pdsm::internal {
 struct MaterialAlpha {
   std::shared_ptr<const AlphaMask> mask;  // null: opaque
   unsigned uv_channel = 0;
+  bool needs_uvs = false;  // false for a mask that casts nowhere (no texture looked up)
 };
 
 // Reads the alpha test of every material of `scene` (imported from `path`; external textures

@@ -46,7 +46,7 @@ absl::Status AppendTriangles(const aiMesh& mesh, const internal::MaterialAlpha& 
                              uint16_t mask_index, MeshFileData* data) {
   const uint32_t base = static_cast<uint32_t>(data->positions.size());
   const aiVector3D* uvs = nullptr;
-  if (mask_index > 0) {
+  if (mask_index > 0 && alpha.needs_uvs) {
     if (alpha.uv_channel >= AI_MAX_NUMBER_OF_TEXTURECOORDS ||
         mesh.mTextureCoords[alpha.uv_channel] == nullptr) {
       return absl::InvalidArgumentError(absl::StrCat(

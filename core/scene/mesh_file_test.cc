@@ -198,6 +198,13 @@ TEST_F(MeshFileTest, MaskWithoutTextureIsDecidedByTheFactorAlone) {
   ASSERT_EQ(mesh->masks.size(), 1u);
   EXPECT_FALSE(mesh->masks[0]->CastsAt({0.5, 0.5}));
   EXPECT_FALSE(mesh->masks[0]->CastsAt({0.01, 0.99}));
+  // It looks up no texture, so it needs no UVs.
+  faint.texcoords = false;
+  mesh = LoadMeshFile(Write("faint_bare.gltf", testing::AlphaCardGltf(faint)), "ctx");
+  ASSERT_TRUE(mesh.ok()) << mesh.status();
+  ASSERT_EQ(mesh->masks.size(), 1u);
+  EXPECT_FALSE(mesh->masks[0]->CastsAt({0.5, 0.5}));
+  faint.texcoords = true;
   // Alpha 0.8 passes everywhere: opaque.
   testing::AlphaCardOptions solid = faint;
   solid.factor_alpha = 0.8;
