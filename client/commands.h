@@ -11,6 +11,7 @@ void RegisterBakeCommand(CLI::App& app, int* exit_code);
 void RegisterQueryCommand(CLI::App& app, int* exit_code);
 void RegisterInfoCommand(CLI::App& app, int* exit_code);
 void RegisterExportImageCommand(CLI::App& app, int* exit_code);
+void RegisterShadowmaskCommand(CLI::App& app, int* exit_code);
 // Accuracy: the ground truth, the speed/accuracy sweep, where a bake's error lives.
 void RegisterReferenceCommand(CLI::App& app, int* exit_code);
 void RegisterSweepCommand(CLI::App& app, int* exit_code);

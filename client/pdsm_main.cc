@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   pdsm::RegisterQueryCommand(app, &exit_code);
   pdsm::RegisterInfoCommand(app, &exit_code);
   pdsm::RegisterExportImageCommand(app, &exit_code);
+  pdsm::RegisterShadowmaskCommand(app, &exit_code);
   pdsm::RegisterReferenceCommand(app, &exit_code);
   pdsm::RegisterSweepCommand(app, &exit_code);
   pdsm::RegisterCompareCommand(app, &exit_code);

@@ -17,27 +17,32 @@
 #include "core/scene/material_masks.h"
 
 namespace pdsm {
-namespace {
+namespace internal {
 
-absl::Status CannotRead(const std::string& context, const std::string& path,
-                        absl::string_view reason) {
+absl::Status CannotReadMesh(const std::string& context, const std::string& path,
+                            absl::string_view reason) {
   return absl::InvalidArgumentError(
       absl::StrCat(context, ": cannot read \"", path, "\": ", reason));
 }
 
-// Assimp reports a missing file as a generic open failure; say what happened instead.
-absl::Status CheckIsRegularFile(const std::string& path, const std::string& context) {
+absl::Status CheckMeshFileExists(const std::string& path, const std::string& context) {
   std::error_code ec;
   const std::filesystem::file_status status = std::filesystem::status(path, ec);
   if (status.type() == std::filesystem::file_type::not_found) {
-    return CannotRead(context, path, "no such file");
+    return CannotReadMesh(context, path, "no such file");
   }
-  if (ec) return CannotRead(context, path, ec.message());
+  if (ec) return CannotReadMesh(context, path, ec.message());
   if (status.type() != std::filesystem::file_type::regular) {
-    return CannotRead(context, path, "not a regular file");
+    return CannotReadMesh(context, path, "not a regular file");
   }
   return absl::OkStatus();
 }
+
+}  // namespace internal
+
+namespace {
+
+using internal::CannotReadMesh;
 
 // Appends the triangles of one (already pre-transformed) Assimp mesh; points and lines, which
 // triangulation leaves alone, cast no shadow and are skipped. `mask_index` 0: opaque; else the
@@ -93,7 +98,8 @@ absl::StatusOr<std::vector<uint16_t>> IndexMasks(const std::vector<internal::Mat
 }  // namespace
 
 absl::StatusOr<MeshFileData> LoadMeshFile(const std::string& path, const std::string& context) {
-  if (absl::Status status = CheckIsRegularFile(path, context); !status.ok()) return status;
+  if (absl::Status status = internal::CheckMeshFileExists(path, context); !status.ok())
+    return status;
 
   // PreTransformVertices flattens the node hierarchy (instances are duplicated) so one flat
   // triangle list comes out; JoinIdenticalVertices undoes the per-face vertex copies some
@@ -103,23 +109,24 @@ absl::StatusOr<MeshFileData> LoadMeshFile(const std::string& path, const std::st
   const aiScene* scene =
       importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
                                   aiProcess_PreTransformVertices | aiProcess_FlipUVs);
-  if (scene == nullptr) return CannotRead(context, path, importer.GetErrorString());
+  if (scene == nullptr) return CannotReadMesh(context, path, importer.GetErrorString());
 
   size_t vertex_count = 0;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     vertex_count += scene->mMeshes[m]->mNumVertices;
   }
   if (vertex_count > std::numeric_limits<uint32_t>::max()) {
-    return CannotRead(context, path, absl::StrCat("too many vertices (", vertex_count, ")"));
+    return CannotReadMesh(context, path, absl::StrCat("too many vertices (", vertex_count, ")"));
   }
 
   std::vector<std::string> blend_materials, translucent_materials;
   absl::StatusOr<std::vector<internal::MaterialAlpha>> alphas =
       internal::ReadMaterialAlphas(*scene, path, &blend_materials, &translucent_materials);
-  if (!alphas.ok()) return CannotRead(context, path, alphas.status().message());
+  if (!alphas.ok()) return CannotReadMesh(context, path, alphas.status().message());
   MeshFileData data;
   absl::StatusOr<std::vector<uint16_t>> mask_of_material = IndexMasks(*alphas, &data);
-  if (!mask_of_material.ok()) return CannotRead(context, path, mask_of_material.status().message());
+  if (!mask_of_material.ok())
+    return CannotReadMesh(context, path, mask_of_material.status().message());
   data.positions.reserve(vertex_count);
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     const aiMesh& mesh = *scene->mMeshes[m];
@@ -130,7 +137,7 @@ absl::StatusOr<MeshFileData> LoadMeshFile(const std::string& path, const std::st
     if (absl::Status s = AppendTriangles(mesh, known ? (*alphas)[material] : opaque,
                                          known ? (*mask_of_material)[material] : 0, &data);
         !s.ok()) {
-      return CannotRead(context, path, s.message());
+      return CannotReadMesh(context, path, s.message());
     }
   }
   // Masks no triangle uses (a material of points or lines only) are dropped with the rest.
@@ -154,16 +161,16 @@ absl::StatusOr<MeshFileData> LoadMeshFile(const std::string& path, const std::st
         " have an opacity below 1 and no opacity texture: baked opaque at opacity >= 0.5, "
         "casting nothing below"));
   }
-  if (data.indices.empty()) return CannotRead(context, path, "no triangles");
+  if (data.indices.empty()) return CannotReadMesh(context, path, "no triangles");
   for (const glm::dvec3& p : data.positions) {
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-      return CannotRead(context, path, "a vertex coordinate is not finite");
+      return CannotReadMesh(context, path, "a vertex coordinate is not finite");
     }
   }
   for (const glm::vec2& uv : data.uvs) {
     if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) {
-      return CannotRead(context, path,
-                        "a texture coordinate of an alpha-tested mesh is not finite");
+      return CannotReadMesh(context, path,
+                            "a texture coordinate of an alpha-tested mesh is not finite");
     }
   }
   return data;

@@ -25,6 +25,7 @@
 #include <glm/glm.hpp>
 
 #include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
 #include "core/scene/alpha_mask.h"
 
 namespace pdsm {
@@ -53,6 +54,16 @@ struct MeshFileData {
 // no texture coordinates.
 // Thread-safe: each call uses its own importer.
 absl::StatusOr<MeshFileData> LoadMeshFile(const std::string& path, const std::string& context);
+
+namespace internal {
+// The mesh readers' (this one, core/scene/lightmap_parts.h) error: INVALID_ARGUMENT
+// "<context>: cannot read \"<path>\": <reason>".
+absl::Status CannotReadMesh(const std::string& context, const std::string& path,
+                            absl::string_view reason);
+// OK when `path` is a regular file; else CannotReadMesh saying what it is (Assimp reports a
+// missing file as a generic open failure).
+absl::Status CheckMeshFileExists(const std::string& path, const std::string& context);
+}  // namespace internal
 
 }  // namespace pdsm
 

@@ -20,6 +20,11 @@ absl::StatusOr<std::string> EncodeRgbPng(int width, int height, const std::vecto
 absl::StatusOr<std::string> EncodeGrayAlphaPng(int width, int height,
                                                const std::vector<uint8_t>& gray_alpha);
 
+// The same for `channels` bytes a pixel: 1 gray, 2 gray + alpha, 3 RGB, 4 RGBA (alpha 0:
+// transparent). INVALID_ARGUMENT for another count.
+absl::StatusOr<std::string> EncodePng(int width, int height, int channels,
+                                      const std::vector<uint8_t>& pixels);
+
 // Encodes, then writes `path` through WriteFileAtomically (core/util/atomic_file.h): on any
 // failure `path` is left as it was and no temporary file remains. `fs` null means
 // FileSystem::Default().
@@ -27,6 +32,8 @@ absl::Status WriteRgbPng(const std::string& path, int width, int height,
                          const std::vector<uint8_t>& rgb, FileSystem* fs = nullptr);
 absl::Status WriteGrayAlphaPng(const std::string& path, int width, int height,
                                const std::vector<uint8_t>& gray_alpha, FileSystem* fs = nullptr);
+absl::Status WritePng(const std::string& path, int width, int height, int channels,
+                      const std::vector<uint8_t>& pixels, FileSystem* fs = nullptr);
 
 }  // namespace pdsm
 

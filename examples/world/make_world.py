@@ -1,6 +1,6 @@
 """Writes world.gltf, the bundled glTF world (docs/scene_format.md, "A world file as the scene").
 
-A 16 x 16 ground, a unit box resting on it, a pillar and a tilted bar; a sun (a directional
+A 16 x 16 ground (with a lightmap UV set, TEXCOORD_1, for `pdsm shadowmask`), a unit box resting on it, a pillar and a tilted bar; a sun (a directional
 light, 2 degrees across from the node's extras), a spot with a radius from its node's extras
 and its own sample count, and a point light (a bulb: baked as a sphere, its radius and samples
 from its node's extras). One buffer, embedded as base64, so the file stands alone.
@@ -39,8 +39,21 @@ def main():
                           "count": len(positions), "type": "VEC3", "min": lo, "max": hi})
         accessors.append({"bufferView": len(views) - 1, "componentType": 5125,
                           "count": len(indices), "type": "SCALAR"})
+        attributes = {"POSITION": len(accessors) - 2}
+        if name == "ground":
+            # A material UV set that tiles (TEXCOORD_0, a 1-unit texture) and the lightmap's
+            # own unwrap (TEXCOORD_1, the quad over [0, 1]^2, v = 0 at z = -8): what
+            # `pdsm shadowmask` lays the ground's texture out in.
+            for k, uv_of in enumerate((lambda x, z: (x, z), lambda x, z: ((x + 8) / 16, (z + 8) / 16))):
+                data = b"".join(struct.pack("<2f", *uv_of(p[0], p[2])) for p in positions)
+                views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data),
+                              "target": 34962})
+                blob += data
+                accessors.append({"bufferView": len(views) - 1, "componentType": 5126,
+                                  "count": len(positions), "type": "VEC2"})
+                attributes["TEXCOORD_%d" % k] = len(accessors) - 1
         gltf_meshes.append({"name": name, "primitives": [
-            {"attributes": {"POSITION": len(accessors) - 2}, "indices": len(accessors) - 1}]})
+            {"attributes": attributes, "indices": len(accessors) - 1 - (2 if name == "ground" else 0)}]})
 
     nodes = [
         {"name": "ground", "mesh": 0},

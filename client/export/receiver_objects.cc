@@ -1,0 +1,91 @@
+#include "client/export/receiver_objects.h"
+
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <set>
+
+#include "absl/strings/str_cat.h"
+#include "core/scene/lightmap_parts.h"
+#include "core/scene/scene_loader.h"
+
+namespace pdsm {
+namespace {
+
+// `base` made of [A-Za-z0-9_.-] (at most 64 bytes), unique among `used`.
+std::string UniqueName(const std::string& base, std::set<std::string>* used) {
+  std::string clean;
+  for (char c : base.substr(0, 64)) {
+    clean +=
+        std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-' ? c : '_';
+  }
+  if (clean.empty() || clean == "." || clean == "..") clean = "object";
+  std::string out = clean;
+  for (int k = 2; !used->insert(out).second; ++k) out = absl::StrCat(clean, "-", k);
+  return out;
+}
+
+bool Receives(pdsm::v1::Role role) { return role != pdsm::v1::CASTER_ONLY; }
+
+}  // namespace
+
+absl::StatusOr<ReceiverObjects> LoadReceiverObjects(const std::string& scene_path) {
+  absl::StatusOr<pdsm::v1::Scene> scene = ParseSceneFile(scene_path);
+  if (!scene.ok()) return scene.status();
+  ReceiverObjects out;
+  out.scene_name = scene->name();
+  std::set<std::string> used;
+  for (int i = 0; i < scene->meshes_size(); ++i) {
+    const pdsm::v1::Mesh& mesh = scene->meshes(i);
+    const std::string field = absl::StrCat("meshes[", i, "]");
+    if (!Receives(mesh.role())) continue;
+    if (!mesh.has_path()) {
+      out.without_uvs.push_back(absl::StrCat(field, " (inline: no UVs)"));
+      continue;
+    }
+    const std::string file = ResolveMeshPath(scene_path, mesh.path());
+    // The bake's transform (scene_mesh.cc): row-major, translation in 3, 7, 11, applied in
+    // double in the same order of operations.
+    double m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    if (mesh.transform_size() == 16) {
+      for (int k = 0; k < 16; ++k) m[k] = mesh.transform(k);
+    } else if (mesh.transform_size() != 0) {
+      return absl::InvalidArgumentError(absl::StrCat(scene_path, ": ", field,
+                                                     ".transform: must have 0 or 16 numbers (got ",
+                                                     mesh.transform_size(), ")"));
+    }
+    absl::StatusOr<std::vector<LightmapPart>> parts =
+        LoadLightmapParts(file, absl::StrCat(scene_path, ": ", field, ".path"));
+    if (!parts.ok()) return parts.status();
+    const std::string stem = std::filesystem::path(mesh.path()).stem().string();
+    for (LightmapPart& part : *parts) {
+      const std::string source =
+          absl::StrCat(field, " (", mesh.path(), "), node \"", part.node, "\"");
+      if (part.uv_set < 0) {
+        out.without_uvs.push_back(source);
+        continue;
+      }
+      ReceiverObject object;
+      object.name = UniqueName(part.node.empty() ? stem : part.node, &used);
+      object.source = source;
+      object.uv_set = part.uv_set;
+      object.indices = std::move(part.indices);
+      object.uvs = std::move(part.uvs);
+      object.positions_world.reserve(part.positions.size());
+      for (const glm::dvec3& p : part.positions) {
+        const glm::dvec3 w(m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3],
+                           m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+                           m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]);
+        if (!std::isfinite(w.x) || !std::isfinite(w.y) || !std::isfinite(w.z)) {
+          return absl::InvalidArgumentError(absl::StrCat(
+              scene_path, ": ", field, ".transform: moves a vertex out of the finite range"));
+        }
+        object.positions_world.push_back(w);
+      }
+      out.objects.push_back(std::move(object));
+    }
+  }
+  return out;
+}
+
+}  // namespace pdsm
