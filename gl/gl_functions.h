@@ -26,6 +26,7 @@ using GetProcAddressFn = GlProc (*)(const char* name);
   X(PFNGLSCISSORPROC, Scissor)                                   \
   X(PFNGLDEPTHFUNCPROC, DepthFunc)                               \
   X(PFNGLDEPTHMASKPROC, DepthMask)                               \
+  X(PFNGLPOLYGONOFFSETPROC, PolygonOffset)                       \
   X(PFNGLCLIPCONTROLPROC, ClipControl)                           \
   X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv)                       \
   X(PFNGLPIXELSTOREIPROC, PixelStorei)                           \

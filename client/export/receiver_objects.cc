@@ -68,6 +68,7 @@ absl::StatusOr<ReceiverObjects> LoadReceiverObjects(const std::string& scene_pat
       ReceiverObject object;
       object.name = UniqueName(part.node.empty() ? stem : part.node, &used);
       object.source = source;
+      object.mesh_entry = i;
       object.uv_set = part.uv_set;
       object.indices = std::move(part.indices);
       object.uvs = std::move(part.uvs);

@@ -20,6 +20,7 @@ struct ReceiverObject {
   // mesh file's stem for a node with none; repeats get "-2", "-3", ... in scene order.
   std::string name;
   std::string source;  // "meshes[0] (world.gltf), node \"ground\"", for messages
+  int mesh_entry = 0;  // the scene's meshes[] entry it comes from
   int uv_set = 0;      // the UV set `uvs` is (LightmapPart::uv_set)
   std::vector<glm::dvec3> positions_world;
   std::vector<uint32_t> indices;  // 3 per triangle

@@ -181,7 +181,8 @@ absl::Status WriteObject(const ReceiverObject& object, int size, const Shadowmas
           std::count(covered.begin(), covered.end(), uint8_t{1}) - texture->texels_covered;
     }
     ShadowmaskFile file;
-    const std::string stem = absl::StrCat(object.name, "-shadowmask", first / kLightsPerShadowmask);
+    const std::string stem =
+        ShadowmaskFileStem(object.name, static_cast<int>(first / kLightsPerShadowmask));
     file.exr = stem + ".exr";
     file.png = stem + ".png";
     for (const PdsmLightParts& l : group) file.lights.push_back(l.name);
@@ -273,6 +274,10 @@ absl::StatusOr<ShadowmaskReport> WriteShadowmasks(const std::string& scene_path,
     return s;
   }
   return report;
+}
+
+std::string ShadowmaskFileStem(const std::string& object, int group) {
+  return absl::StrCat(object, "-shadowmask", group);
 }
 
 absl::StatusOr<ShadowmaskImage> ReadShadowmaskExr(const std::string& path) {

@@ -81,6 +81,10 @@ absl::StatusOr<ShadowmaskReport> WriteShadowmasks(const std::string& scene_path,
                                                   const ShadowmaskOptions& options,
                                                   std::vector<std::string>* warnings);
 
+// The name of an object's texture of lights [4 group, 4 group + 4) without its extension:
+// "ground-shadowmask0".
+std::string ShadowmaskFileStem(const std::string& object, int group);
+
 // A shadowmask EXR read back (for pdsm-view and tests): `channels` floats a texel, row 0 at the
 // top, and the light each channel holds. INVALID_ARGUMENT naming `path` for a file that is not
 // one (no pdsmShadowmask attribute), NOT_FOUND for no file.

@@ -25,7 +25,7 @@ double SecondsSince(Clock::time_point start) {
 
 // Texture units of shade.frag's samplers, and its SSBO bindings.
 constexpr int kUnitPdsmIndex = 0, kUnitCpuAttenuation = 1, kUnitShadowMap = 2, kUnitShadowMaps = 3,
-              kUnitDynamicMaps = 4;
+              kUnitDynamicMaps = 4, kUnitShadowmask = 5;
 constexpr int kBindingPdsmVertices = 0, kBindingLightSamples = 1, kBindingDynamicSamples = 2;
 constexpr float kBackgroundColour[4] = {0.11f, 0.12f, 0.14f, 1.0f};
 
@@ -35,6 +35,8 @@ struct MeshGpu {
   GLsizei vertex_count = 0;
   glm::vec3 albedo{0.8f};
   bool casts = true;
+  gl::Buffer uv_buffer;    // shadowmasked receivers: UVs at attribute 2
+  gl::Texture shadowmask;  // and their texture of A (R32F)
 };
 
 MeshGpu UploadMesh(const gl::GlFunctions& gl, const DrawMesh& mesh, bool casts) {
@@ -61,6 +63,32 @@ MeshGpu UploadMesh(const gl::GlFunctions& gl, const DrawMesh& mesh, bool casts) 
   gl.VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride,
                          reinterpret_cast<const void*>(sizeof(glm::vec3)));
   gl.BindVertexArray(0);
+  return gpu;
+}
+
+// A receiver with its shadowmask texture, drawn over its baked mesh in shadowmask mode.
+MeshGpu UploadShadowmasked(const gl::GlFunctions& gl, const ShadowmaskedMesh& textured) {
+  MeshGpu gpu = UploadMesh(gl, textured.mesh, /*casts=*/false);
+  gpu.uv_buffer = gl::MakeBuffer(gl);
+  gl.BindVertexArray(gpu.vertex_array.name());
+  gl.BindBuffer(GL_ARRAY_BUFFER, gpu.uv_buffer.name());
+  gl.BufferData(GL_ARRAY_BUFFER, textured.uvs.size() * sizeof(glm::vec2), textured.uvs.data(),
+                GL_STATIC_DRAW);
+  gl.EnableVertexAttribArray(2);
+  gl.VertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, sizeof(glm::vec2), nullptr);
+  gl.BindVertexArray(0);
+  // Bilinear and clamped, as an engine samples a lightmap; row 0 (the image's top) at v = 0,
+  // the UVs' convention, so the rows go up as they are.
+  gpu.shadowmask = gl::MakeTexture(gl);
+  gl.BindTexture(GL_TEXTURE_2D, gpu.shadowmask.name());
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  gl.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  gl.TexImage2D(GL_TEXTURE_2D, 0, GL_R32F, textured.width, textured.height, 0, GL_RED, GL_FLOAT,
+                textured.attenuation.data());
+  gl.BindTexture(GL_TEXTURE_2D, 0);
   return gpu;
 }
 
@@ -104,9 +132,10 @@ struct FrameRenderer::Impl {
   gl::Program shade, gbuffer, depth;
   PdsmGpu pdsm;
   std::vector<MeshGpu> baked;
-  std::vector<MeshGpu> dynamic;  // parallel to ViewScene::dynamic_objects
-  gl::Buffer samples;            // SSBO of vec2, multi-sm
-  gl::Buffer dynamic_samples;    // SSBO of vec2, the dynamic objects' maps
+  std::vector<MeshGpu> dynamic;       // parallel to ViewScene::dynamic_objects
+  std::vector<MeshGpu> shadowmasked;  // parallel to ViewScene::shadowmasked
+  gl::Buffer samples;                 // SSBO of vec2, multi-sm
+  gl::Buffer dynamic_samples;         // SSBO of vec2, the dynamic objects' maps
   ShadowMapTargets shadow_maps;
   ShadowMapTargets dynamic_maps;  // layers of the dynamic objects alone (pdsm, cpu)
   ShadowMapLayout single_layout, multi_layout, dynamic_layout;
@@ -163,6 +192,11 @@ absl::Status FrameRenderer::Init() {
   for (const DynamicObject& object : scene_->dynamic_objects) {
     im.dynamic.push_back(UploadMesh(gl_, object.mesh, true));
   }
+  for (const ShadowmaskedMesh& textured : scene_->shadowmasked) {
+    im.shadowmasked.push_back(UploadShadowmasked(gl_, textured));
+    const size_t entry = static_cast<size_t>(textured.mesh_entry);
+    if (entry < im.baked.size()) im.shadowmasked.back().albedo = im.baked[entry].albedo;
+  }
 
   const PdsmHeader& header = scene_->pdsm.header;
   const int sm_size = settings_.sm_size > 0 ? settings_.sm_size : header.shadow_map_resolution;
@@ -197,6 +231,7 @@ absl::Status FrameRenderer::Init() {
   u.Int("shadow_map", kUnitShadowMap);
   u.Int("shadow_maps", kUnitShadowMaps);
   u.Int("dynamic_maps", kUnitDynamicMaps);
+  u.Int("shadowmask", kUnitShadowmask);
   gl_.UseProgram(0);
   return gl::CheckGlError(gl_, "uploading the scene");
 }
@@ -276,6 +311,34 @@ void FrameRenderer::DrawScene(const gl::UniformSetter& u, DrawSet set) const {
   gl_.BindVertexArray(0);
 }
 
+void FrameRenderer::DrawShadowmasked(const gl::UniformSetter& u) const {
+  const Impl& im = *impl_;
+  if (im.shadowmasked.empty()) return;
+  // Each textured receiver is part of a baked mesh again (the same triangles and transforms,
+  // composed in double here and by the mesh import in float: equal within rounding). Drawn
+  // second, pulled a few depth steps towards the eye, it wins the depth test over its own
+  // baked copy and stays behind whatever was in front of it.
+  gl_.Enable(GL_POLYGON_OFFSET_FILL);
+  gl_.PolygonOffset(-1.0f, -4.0f);
+  gl_.DepthFunc(GL_LEQUAL);
+  u.Int("shadowmask_textured", 1);
+  u.Mat4("light_from_object", glm::mat4(1.0f));
+  u.Mat3("normal_from_object", glm::mat3(1.0f));
+  gl_.ActiveTexture(GL_TEXTURE0 + kUnitShadowmask);
+  for (const MeshGpu& mesh : im.shadowmasked) {
+    gl_.BindTexture(GL_TEXTURE_2D, mesh.shadowmask.name());
+    u.Vec3("albedo", mesh.albedo);
+    gl_.BindVertexArray(mesh.vertex_array.name());
+    gl_.DrawArrays(GL_TRIANGLES, 0, mesh.vertex_count);
+  }
+  gl_.BindVertexArray(0);
+  gl_.ActiveTexture(GL_TEXTURE0);
+  u.Int("shadowmask_textured", 0);
+  gl_.DepthFunc(GL_LESS);
+  gl_.PolygonOffset(0.0f, 0.0f);
+  gl_.Disable(GL_POLYGON_OFFSET_FILL);
+}
+
 void FrameRenderer::SetDepthUniforms(const gl::UniformSetter& u) const {
   const PdsmHeader& header = scene_->pdsm.header;
   u.Float("depth_bias", static_cast<float>(header.depth_bias));
@@ -330,8 +393,8 @@ void FrameRenderer::UpdateDynamicReach() {
 }
 
 bool FrameRenderer::CastsDynamicShadows(ViewMode mode) const {
-  return (mode == ViewMode::kPdsm || mode == ViewMode::kCpu) && settings_.dynamic_shadows &&
-         !dynamic_samples_.empty();
+  return (mode == ViewMode::kPdsm || mode == ViewMode::kCpu || mode == ViewMode::kShadowmask) &&
+         settings_.dynamic_shadows && !dynamic_samples_.empty();
 }
 
 absl::Status FrameRenderer::EnsureDynamicShadowMaps(ViewMode mode) {
@@ -520,7 +583,9 @@ absl::Status FrameRenderer::Render(ViewMode mode, const Camera& camera, int widt
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, kBindingPdsmVertices, im.pdsm.vertices.name());
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, kBindingLightSamples, im.samples.name());
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, kBindingDynamicSamples, im.dynamic_samples.name());
+  u.Int("shadowmask_textured", 0);
   DrawScene(u, DrawSet::kAll);
+  if (mode == ViewMode::kShadowmask) DrawShadowmasked(u);
   gl_.Finish();
   timings_.shade_seconds = SecondsSince(start);
   return gl::CheckGlError(gl_, absl::StrCat("rendering mode ", ModeName(mode)));

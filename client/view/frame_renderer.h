@@ -117,6 +117,8 @@ class FrameRenderer {
   // and the dynamic objects), or the dynamic objects alone.
   enum class DrawSet { kAll, kCasters, kDynamic };
   void DrawScene(const gl::UniformSetter& u, DrawSet set) const;
+  // Shadowmask mode: the receivers that have a texture, over what DrawScene drew.
+  void DrawShadowmasked(const gl::UniformSetter& u) const;
   void SetDepthUniforms(const gl::UniformSetter& u) const;
   void SetShadeUniforms(ViewMode mode, const Camera& camera, const gl::UniformSetter& u) const;
 

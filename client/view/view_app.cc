@@ -14,6 +14,7 @@
 #include "client/view/image_io.h"
 #include "client/view/job_follower.h"
 #include "client/view/pdsm_source.h"
+#include "client/view/shadowmask_textures.h"
 #include "client/view/text_overlay.h"
 #include "core/bake/bake_plan.h"
 #include "core/scene/scene_loader.h"
@@ -103,6 +104,17 @@ absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
     spdlog::warn("{}", std::string(s.message()));
   }
   PrepareViewScene(&view);
+  if (!options.shadowmask_dir.empty()) {
+    std::vector<std::string> missing;
+    absl::StatusOr<std::vector<ShadowmaskedMesh>> textured = LoadShadowmaskTextures(
+        options.scene_path, options.shadowmask_dir, view.scene.light_name, view.frame(), &missing);
+    if (!textured.ok()) return textured.status();
+    view.shadowmasked = *std::move(textured);
+    for (const std::string& m : missing) {
+      spdlog::warn("{}: no shadowmask texture in {}: --mode shadowmask shades it with the PDSM", m,
+                   options.shadowmask_dir);
+    }
+  }
   for (size_t i = 0; i < options.objects.size(); ++i) {
     absl::StatusOr<DynamicObject> object = MakeDynamicObject(options.objects[i], i);
     if (!object.ok()) return object.status();

@@ -21,6 +21,8 @@ const char* ModeName(ViewMode mode) {
       return "vsm";
     case ViewMode::kMultiSm:
       return "multi-sm";
+    case ViewMode::kShadowmask:
+      return "shadowmask";
   }
   return "?";
 }
@@ -29,6 +31,7 @@ std::optional<ViewMode> ModeFromName(const std::string& name) {
   for (ViewMode mode : kAllModes) {
     if (name == ModeName(mode)) return mode;
   }
+  if (name == ModeName(ViewMode::kShadowmask)) return ViewMode::kShadowmask;
   return std::nullopt;
 }
 
@@ -38,8 +41,9 @@ absl::StatusOr<std::vector<ViewMode>> ParseModeList(const std::string& list,
   for (absl::string_view part : absl::StrSplit(list, ',')) {
     std::optional<ViewMode> mode = ModeFromName(std::string(part));
     if (!mode) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          flag, ": unknown mode \"", part, "\" (pdsm, cpu, hard, pcf, pcss, vsm, multi-sm)"));
+      return absl::InvalidArgumentError(
+          absl::StrCat(flag, ": unknown mode \"", part,
+                       "\" (pdsm, cpu, hard, pcf, pcss, vsm, multi-sm, shadowmask)"));
     }
     modes.push_back(*mode);
   }

@@ -11,14 +11,25 @@
 
 namespace pdsm::view {
 
-// The numbers are the `mode` uniform of shaders/view/shade.frag.
-enum class ViewMode { kPdsm = 0, kCpu = 1, kHard = 2, kPcf = 3, kPcss = 4, kVsm = 5, kMultiSm = 6 };
+// The numbers are the `mode` uniform of shaders/view/shade.frag. kShadowmask draws the
+// textures `pdsm shadowmask` wrote on their receivers (--shadowmask DIR); it is not among
+// kAllModes (the default --compare and keys 1-7) because it needs that folder.
+enum class ViewMode {
+  kPdsm = 0,
+  kCpu = 1,
+  kHard = 2,
+  kPcf = 3,
+  kPcss = 4,
+  kVsm = 5,
+  kMultiSm = 6,
+  kShadowmask = 7,
+};
 
 inline constexpr ViewMode kAllModes[] = {ViewMode::kPdsm,   ViewMode::kCpu,  ViewMode::kHard,
                                          ViewMode::kPcf,    ViewMode::kPcss, ViewMode::kVsm,
                                          ViewMode::kMultiSm};
 
-// "pdsm", "cpu", "hard", "pcf", "pcss", "vsm", "multi-sm".
+// "pdsm", "cpu", "hard", "pcf", "pcss", "vsm", "multi-sm", "shadowmask".
 const char* ModeName(ViewMode mode);
 std::optional<ViewMode> ModeFromName(const std::string& name);
 

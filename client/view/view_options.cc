@@ -1,5 +1,6 @@
 #include "client/view/view_options.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <CLI/CLI.hpp>
@@ -85,8 +86,11 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
   app.add_option("--save-attenuation", o.attenuation_path,
                  "Also write the attenuation per pixel (PFM float32; -1 outside the PDSM, "
                  "-2 background)");
-  app.add_option("--mode", mode, "pdsm | cpu | hard | pcf | pcss | vsm | multi-sm")
+  app.add_option("--mode", mode, "pdsm | cpu | hard | pcf | pcss | vsm | multi-sm | shadowmask")
       ->default_val(mode);
+  app.add_option("--shadowmask", o.shadowmask_dir,
+                 "Folder of `pdsm shadowmask` textures: --mode shadowmask draws them on their "
+                 "receivers (key 8)");
   app.add_option("--compare", compare, "Comma-separated modes tiled side by side");
   app.add_option("--compare-columns", o.compare_columns, "Tiles per row in --compare");
   app.add_option("--camera", camera,
@@ -175,6 +179,13 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
       ParseObjects(spheres, meshes, transforms);
   if (!objects.ok()) return objects.status();
   o.objects = *objects;
+  const bool shows_shadowmask =
+      o.mode == ViewMode::kShadowmask ||
+      std::find(o.compare.begin(), o.compare.end(), ViewMode::kShadowmask) != o.compare.end();
+  if (shows_shadowmask && o.shadowmask_dir.empty()) {
+    return absl::InvalidArgumentError(
+        "--mode shadowmask needs --shadowmask DIR (the folder pdsm shadowmask wrote)");
+  }
   if (o.pdsm_path.empty() == o.job_id.empty()) {
     return absl::InvalidArgumentError("give either --pdsm PDSM.exr or --server ADDR --job JOB");
   }

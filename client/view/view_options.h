@@ -40,8 +40,9 @@ struct ViewOptions {
   int frames = 0;        // window: render this many frames, screenshot, exit
   int bench_frames = 0;  // headless: time this many frames of each mode
   bool allow_mismatch = false;
-  std::string light;     // --light: of a scene and PDSM of several lights
-  bool partial = false;  // --server, headless: the tiles finished now, no waiting
+  std::string light;           // --light: of a scene and PDSM of several lights
+  std::string shadowmask_dir;  // --shadowmask: the folder `pdsm shadowmask` wrote
+  bool partial = false;        // --server, headless: the tiles finished now, no waiting
   bool verbose = false;
 };
 

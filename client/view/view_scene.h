@@ -35,6 +35,17 @@ struct DynamicObject {
   glm::dmat4 world_from_object{1.0};
 };
 
+// A receiver with its shadowmask texture (`--mode shadowmask`, client/view/shadowmask_textures.h):
+// the attenuation A (a `--visibility` file turned back into A = 1 - value), one float a texel,
+// row 0 at the top of the image (v = 0).
+struct ShadowmaskedMesh {
+  DrawMesh mesh;               // light space, flat normals, 3 vertices a triangle
+  int mesh_entry = 0;          // the scene's meshes[] entry (whose colour it takes)
+  std::vector<glm::vec2> uvs;  // parallel to mesh.positions
+  int width = 0, height = 0;
+  std::vector<float> attenuation;
+};
+
 struct ViewScene {
   Scene scene;
   PdsmImage pdsm;
@@ -42,7 +53,8 @@ struct ViewScene {
   std::shared_ptr<const BakePlan> plan;  // the scene's plan, when following a running job
   std::vector<DrawMesh> baked;           // light space: the scene file's meshes
   std::vector<DynamicObject> dynamic_objects;
-  glm::dvec3 bounds_min_world{0.0};  // of the baked meshes
+  std::vector<ShadowmaskedMesh> shadowmasked;  // --shadowmask: receivers with their textures
+  glm::dvec3 bounds_min_world{0.0};            // of the baked meshes
   glm::dvec3 bounds_max_world{0.0};
   glm::dvec3 casters_min_world{0.0};  // of the casting meshes: what the default camera frames
   glm::dvec3 casters_max_world{0.0};

@@ -73,6 +73,7 @@ void OnKey(GLFWwindow* window, int key, int, int action, int) {
   forward = glm::length(forward) > 0 ? glm::normalize(forward) : glm::dvec3(0, 0, -1);
   const glm::dvec3 right = glm::cross(forward, glm::dvec3(0, 1, 0));
   if (key >= GLFW_KEY_1 && key <= GLFW_KEY_7) s.mode = kAllModes[key - GLFW_KEY_1];
+  if (key == GLFW_KEY_8 && !s.scene->shadowmasked.empty()) s.mode = ViewMode::kShadowmask;
   switch (key) {
     case GLFW_KEY_ESCAPE:
     case GLFW_KEY_Q:
@@ -246,11 +247,12 @@ absl::Status RunWindow(const ViewOptions& options, ViewScene& scene) {
                                 job.tiles_done(), job.tiles_total());
       glfwSetWindowTitle(
           window->get(),
-          absl::StrFormat("pdsm-view: %s%s  %.1f ms%s  [1-7 mode, B bilinear, "
+          absl::StrFormat("pdsm-view: %s%s  %.1f ms%s  [1-7%s mode, B bilinear, "
                           "arrows/PgUp/PgDn move, P screenshot]",
                           ModeName(state.mode),
                           (*renderer)->settings().bilinear ? "" : " (nearest)",
-                          1e3 * (t.shade_seconds + t.cpu_seconds + t.shadow_map_seconds), job_line)
+                          1e3 * (t.shade_seconds + t.cpu_seconds + t.shadow_map_seconds), job_line,
+                          state.scene->shadowmasked.empty() ? "" : ", 8 shadowmask")
               .c_str());
     }
     if (state.screenshot_requested) {

@@ -10,9 +10,11 @@ const int kModePcf = 3;
 const int kModePcss = 4;
 const int kModeVsm = 5;
 const int kModeMultiSm = 6;
+const int kModeShadowmask = 7;
 
 in vec3 position_light;
 in vec3 normal_light;
+in vec2 texture_uv;
 
 layout(location = 0) out vec4 colour;
 layout(location = 1) out float attenuation_out;  // A; -1 outside the PDSM frustum, -3 pending
@@ -36,6 +38,11 @@ const float kPending = -3.0;
 
 // ---- cpu mode: A per screen pixel, computed by the CPU.
 uniform sampler2D cpu_attenuation;  // R32F, NaN outside the PDSM frustum
+
+// ---- shadowmask mode: A from the texture `pdsm shadowmask` wrote over this receiver's UVs
+// (bilinear, as an engine samples it); surfaces without one are shaded with the PDSM.
+uniform int shadowmask_textured;  // 1 while drawing a receiver with its texture
+uniform sampler2D shadowmask;     // R32F, row 0 at v = 0
 
 // ---- shadow-map modes.
 uniform sampler2D shadow_map;        // RG32F: biased z, normalised second moment
@@ -266,6 +273,10 @@ float WithDynamicShadow(float baked, vec3 p) {
 
 float Attenuation(vec3 p) {
   if (mode == kModePdsm) return WithDynamicShadow(PdsmAttenuation(p), p);
+  if (mode == kModeShadowmask) {
+    float baked = shadowmask_textured != 0 ? texture(shadowmask, texture_uv).r : PdsmAttenuation(p);
+    return WithDynamicShadow(baked, p);
+  }
   if (mode == kModeCpu) {
     float a = texelFetch(cpu_attenuation, ivec2(gl_FragCoord.xy), 0).r;
     return WithDynamicShadow(isnan(a) ? -1.0 : a, p);
