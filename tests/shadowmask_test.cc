@@ -226,6 +226,71 @@ TEST_F(Shadowmask, VisibilityStoresOneMinusTheAttenuationAndOneLightIsGray) {
   png_image_free(&image);
 }
 
+TEST_F(Shadowmask, PointsALightDoesNotReachAreNotHidden) {
+  // The lamp alone, its PDSM's window narrowed to tangents of 0.3: at the ground (4 below) a
+  // 2.4-unit square of the 6-unit ground; the rest is outside (NaN in a query).
+  WriteText(dir_.File("narrow.json"),
+            R"({"name": "narrow", "meshes": [{"path": "world.gltf"}],
+  "lights": [{"name": "lamp", "rect": {"center": [0, 4, 0.2], "normal": [0, -1, 0],
+                                       "up": [0, 0, 1], "size": [0.6, 0.6]}}],
+  "bake": {"resolution": [32, 32], "samples": 8, "tileSize": 16,
+           "frustum": {"window": [-0.3, 0.3, -0.3, 0.3], "depthRange": [1, 10]}}})");
+  ASSERT_EQ(RunCommand(kPdsm + " bake " + dir_.File("narrow.json") + " -o " +
+                           dir_.File("narrow.exr") + " --no-preview",
+                       dir_)
+                .exit_code,
+            0);
+  const auto shadowmask = [&](const std::string& out, const std::string& flags) {
+    return RunCommand(kPdsm + " shadowmask " + dir_.File("narrow.json") + " --pdsm " +
+                          dir_.File("narrow.exr") + " -o " + dir_.File(out) +
+                          " --texels-per-unit 4 " + flags,
+                      dir_);
+  };
+  const CommandResult r = shadowmask("a", "");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("texels lie outside a light's PDSM"));
+  ASSERT_EQ(shadowmask("v", "--visibility").exit_code, 0);
+  absl::StatusOr<ShadowmaskImage> a = ReadShadowmaskExr(dir_.File("a/ground-shadowmask0.exr"));
+  absl::StatusOr<ShadowmaskImage> v = ReadShadowmaskExr(dir_.File("v/ground-shadowmask0.exr"));
+  ASSERT_TRUE(a.ok() && v.ok());
+  ASSERT_EQ(a->width, 24);
+  std::vector<glm::dvec3> points;
+  for (int row = 0; row < 24; ++row) {
+    for (int column = 0; column < 24; ++column) {
+      points.push_back(GroundPoint((column + 0.5) / 24, (row + 0.5) / 24));
+    }
+  }
+  std::ostringstream csv;
+  csv.precision(17);
+  for (const glm::dvec3& p : points) csv << p.x << "," << p.y << "," << p.z << "\n";
+  WriteText(dir_.File("points.csv"), csv.str());
+  const CommandResult q = RunCommand(
+      kPdsm + " query " + dir_.File("narrow.exr") + " --points " + dir_.File("points.csv"), dir_);
+  ASSERT_EQ(q.exit_code, 0) << q.err;
+  std::vector<double> expected;
+  for (absl::string_view line : absl::StrSplit(q.out, '\n', absl::SkipEmpty())) {
+    const std::vector<std::string> fields = absl::StrSplit(line, ',');
+    if (fields.size() == 4 && fields[0] != "x") expected.push_back(std::stod(fields[3]));
+  }
+  ASSERT_EQ(expected.size(), points.size());
+  int outside = 0, shadowed = 0;
+  for (size_t t = 0; t < points.size(); ++t) {
+    if (std::isnan(expected[t])) {
+      ++outside;
+      ASSERT_EQ(a->values[t], 0.0f) << t;  // not hidden
+      ASSERT_EQ(v->values[t], 1.0f) << t;  // fully visible
+    } else {
+      ASSERT_NEAR(a->values[t], expected[t], 1e-6) << t;
+      ASSERT_NEAR(v->values[t], 1.0 - expected[t], 1e-6) << t;
+      shadowed += expected[t] > 0.5;
+    }
+  }
+  // Both kinds of texel are there: most of the ground is outside, the card's umbra inside.
+  EXPECT_GT(outside, 200);
+  EXPECT_GT(shadowed, 10);
+  EXPECT_THAT(r.err, HasSubstr(absl::StrCat(outside, " texels lie outside")));
+}
+
 TEST_F(Shadowmask, AnotherScenesPdsmAndBadOptionsAreNamed) {
   std::string other = kSceneJson;
   other.replace(other.find("lightmapped"), 11, "elsewhere");

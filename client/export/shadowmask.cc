@@ -164,10 +164,10 @@ absl::Status WriteObject(const ReceiverObject& object, int size, const Shadowmas
       for (size_t k = begin; k < end; ++k) {
         const size_t t = covered_texels[k];
         for (size_t c = 0; c < count; ++c) {
-          const double a = (*answers)[(k - begin) * count + c];
+          double a = (*answers)[(k - begin) * count + c];
           if (std::isnan(a)) {
             outside[t] = 1;
-            continue;  // 0: not hidden (the light does not reach there)
+            a = 0;  // not hidden: the light does not reach there, the engine's falloff decides
           }
           values[t * count + c] = static_cast<float>(options.visibility ? 1.0 - a : a);
         }

@@ -13,9 +13,10 @@
 //         ("attenuation" or "visibility").
 //   .png  8-bit, linear (not sRGB): gray for one light, RGB for two or three (unused 0), RGBA
 //         for four.
-// Texels no chart reaches (after dilation) hold 0; so do points outside a light's PDSM (NaN
-// in a query: the light does not reach there, and an engine's own falloff decides). With
-// `visibility` every value is 1 - attenuation (lit = 1, as Unity's and Godot's masks are).
+// A point outside a light's PDSM (NaN in a query: the light does not reach there, and an
+// engine's own falloff decides) counts as not hidden: attenuation 0. With `visibility` every
+// value is 1 - attenuation (lit = 1, as Unity's and Godot's masks are). Texels no chart reaches
+// (after dilation) hold 0 in either case.
 // Also writes shadowmask.json: the lights, and per object its source, UV set, size, files and
 // channels.
 #ifndef PDSM_CLIENT_EXPORT_SHADOWMASK_H_
