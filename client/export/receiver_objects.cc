@@ -1,7 +1,6 @@
 #include "client/export/receiver_objects.h"
 
 #include <cctype>
-#include <cmath>
 #include <filesystem>
 #include <set>
 
@@ -43,19 +42,7 @@ absl::StatusOr<ReceiverObjects> LoadReceiverObjects(const std::string& scene_pat
       out.without_uvs.push_back(absl::StrCat(field, " (inline: no UVs)"));
       continue;
     }
-    const std::string file = ResolveMeshPath(scene_path, mesh.path());
-    // The bake's transform (scene_mesh.cc): row-major, translation in 3, 7, 11, applied in
-    // double in the same order of operations.
-    double m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
-    if (mesh.transform_size() == 16) {
-      for (int k = 0; k < 16; ++k) m[k] = mesh.transform(k);
-    } else if (mesh.transform_size() != 0) {
-      return absl::InvalidArgumentError(absl::StrCat(scene_path, ": ", field,
-                                                     ".transform: must have 0 or 16 numbers (got ",
-                                                     mesh.transform_size(), ")"));
-    }
-    absl::StatusOr<std::vector<LightmapPart>> parts =
-        LoadLightmapParts(file, absl::StrCat(scene_path, ": ", field, ".path"));
+    absl::StatusOr<std::vector<LightmapPart>> parts = LoadSceneMeshParts(scene_path, i, mesh);
     if (!parts.ok()) return parts.status();
     const std::string stem = std::filesystem::path(mesh.path()).stem().string();
     for (LightmapPart& part : *parts) {
@@ -72,17 +59,7 @@ absl::StatusOr<ReceiverObjects> LoadReceiverObjects(const std::string& scene_pat
       object.uv_set = part.uv_set;
       object.indices = std::move(part.indices);
       object.uvs = std::move(part.uvs);
-      object.positions_world.reserve(part.positions.size());
-      for (const glm::dvec3& p : part.positions) {
-        const glm::dvec3 w(m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3],
-                           m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
-                           m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]);
-        if (!std::isfinite(w.x) || !std::isfinite(w.y) || !std::isfinite(w.z)) {
-          return absl::InvalidArgumentError(absl::StrCat(
-              scene_path, ": ", field, ".transform: moves a vertex out of the finite range"));
-        }
-        object.positions_world.push_back(w);
-      }
+      object.positions_world = std::move(part.positions);
       out.objects.push_back(std::move(object));
     }
   }

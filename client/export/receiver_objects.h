@@ -35,9 +35,9 @@ struct ReceiverObjects {
 };
 
 // The receiver objects of the scene file (or world file) at `scene_path`: for each mesh entry
-// whose role receives, its file's parts moved by the entry's transform (the bake's arithmetic,
-// core/scene/scene_mesh.h). Inline meshes have no UVs. Errors: those of ParseSceneFile and of
-// LoadLightmapParts, naming the file and the field.
+// whose role receives, its file's parts moved by the entry's transform as the bake moves them
+// (LoadSceneMeshParts, core/scene/lightmap_parts.h). Inline meshes have no UVs. Errors: those
+// of ParseSceneFile and of LoadSceneMeshParts, naming the file and the field.
 absl::StatusOr<ReceiverObjects> LoadReceiverObjects(const std::string& scene_path);
 
 }  // namespace pdsm

@@ -8,7 +8,10 @@
 #include <assimp/Importer.hpp>
 
 #include "absl/strings/str_cat.h"
+#include "core/scene/field_checker.h"
 #include "core/scene/mesh_file.h"
+#include "core/scene/scene_loader.h"
+#include "core/scene/scene_mesh.h"
 
 namespace pdsm {
 namespace {
@@ -117,6 +120,23 @@ absl::StatusOr<std::vector<LightmapPart>> LoadLightmapParts(const std::string& p
             absl::StrCat("node \"", part.node, "\": a texture coordinate is not finite"));
       }
     }
+  }
+  return parts;
+}
+
+absl::StatusOr<std::vector<LightmapPart>> LoadSceneMeshParts(const std::string& scene_path,
+                                                             int index,
+                                                             const pdsm::v1::Mesh& mesh) {
+  const std::string field = absl::StrCat("meshes[", index, "]");
+  absl::StatusOr<std::vector<LightmapPart>> parts = LoadLightmapParts(
+      ResolveMeshPath(scene_path, mesh.path()), absl::StrCat(scene_path, ": ", field, ".path"));
+  if (!parts.ok()) return parts.status();
+  const internal::FieldChecker checks(scene_path, {});
+  for (LightmapPart& part : *parts) {
+    absl::StatusOr<std::vector<glm::dvec3>> world =
+        internal::PlaceInWorld(checks, field + ".transform", mesh.transform(), part.positions);
+    if (!world.ok()) return world.status();
+    part.positions = *std::move(world);
   }
   return parts;
 }

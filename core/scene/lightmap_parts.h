@@ -12,6 +12,7 @@
 #include <glm/glm.hpp>
 
 #include "absl/status/statusor.h"
+#include "pdsm/v1/scene.pb.h"
 
 namespace pdsm {
 
@@ -34,6 +35,14 @@ struct LightmapPart {
 // position or UV. Thread-safe: each call uses its own importer.
 absl::StatusOr<std::vector<LightmapPart>> LoadLightmapParts(const std::string& path,
                                                             const std::string& context);
+
+// The parts of the file a scene's mesh entry names (`mesh` is meshes[index] of the scene file
+// at `scene_path`, with a `path`), moved to world space by the entry's transform exactly as
+// the bake moves its triangles (core/scene/scene_mesh.h, PlaceInWorld: the same checks, the
+// same bits); `positions` are then world points. Errors: LoadLightmapParts' with the context
+// "<scene_path>: meshes[index].path", and a bad transform naming "meshes[index].transform".
+absl::StatusOr<std::vector<LightmapPart>> LoadSceneMeshParts(const std::string& scene_path,
+                                                             int index, const pdsm::v1::Mesh& mesh);
 
 }  // namespace pdsm
 

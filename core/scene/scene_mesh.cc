@@ -169,9 +169,10 @@ absl::StatusOr<TriangleMesh> BuildMesh(const FieldChecker& checks, const MeshSou
     default:
       return checks.Error(field + ".role", absl::StrCat("unknown value (got ", mesh.role(), ")"));
   }
-  absl::StatusOr<Transform> transform =
-      BuildTransform(checks, field + ".transform", mesh.transform());
-  if (!transform.ok()) return transform.status();
+  if (absl::Status s = BuildTransform(checks, field + ".transform", mesh.transform()).status();
+      !s.ok()) {
+    return s;  // before the mesh is read: a bad transform is named whatever the file holds
+  }
   MeshFileData data;
   if (absl::Status s = LoadSource(checks, sources, field, mesh, &data, &out.label); !s.ok()) {
     return s;
@@ -183,29 +184,41 @@ absl::StatusOr<TriangleMesh> BuildMesh(const FieldChecker& checks, const MeshSou
       spdlog::warn("{}", warning);
     }
   }
-  const std::vector<glm::dvec3>& positions_model = data.positions;
   out.indices = std::move(data.indices);
   out.uvs = std::move(data.uvs);
   out.triangle_masks = std::move(data.triangle_masks);
   out.masks = std::move(data.masks);
 
+  absl::StatusOr<std::vector<glm::dvec3>> world =
+      PlaceInWorld(checks, field + ".transform", mesh.transform(), data.positions);
+  if (!world.ok()) return world.status();
+  out.positions_world = *std::move(world);
+  return out;
+}
+
+absl::StatusOr<std::vector<glm::dvec3>> PlaceInWorld(const FieldChecker& checks,
+                                                     absl::string_view field,
+                                                     const RepeatedDoubles& transform,
+                                                     const std::vector<glm::dvec3>& model) {
+  absl::StatusOr<Transform> checked = BuildTransform(checks, field, transform);
+  if (!checked.ok()) return checked.status();
   // World positions in double, in a fixed order of operations, so a world far from the origin
   // keeps its precision and every build computes the same bits.
-  const Transform& m = *transform;
-  out.positions_world.reserve(positions_model.size());
-  for (const glm::dvec3& p : positions_model) {
-    out.positions_world.emplace_back(m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3],
-                                     m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
-                                     m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]);
+  const Transform& m = *checked;
+  std::vector<glm::dvec3> world;
+  world.reserve(model.size());
+  for (const glm::dvec3& p : model) {
+    world.emplace_back(m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3],
+                       m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+                       m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]);
   }
-  for (size_t v = 0; v < out.positions_world.size(); ++v) {
-    const glm::dvec3& p = out.positions_world[v];
+  for (size_t v = 0; v < world.size(); ++v) {
+    const glm::dvec3& p = world[v];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-      return checks.Error(field + ".transform",
-                          absl::StrCat("moves vertex ", v, " out of the finite range"));
+      return checks.Error(field, absl::StrCat("moves vertex ", v, " out of the finite range"));
     }
   }
-  return out;
+  return world;
 }
 
 }  // namespace pdsm::internal

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <glm/glm.hpp>
+
 #include "absl/status/statusor.h"
 #include "core/scene/field_checker.h"
 #include "core/scene/scene.h"
@@ -26,6 +28,16 @@ struct MeshSources {
 
 // `path` as is when absolute, else against `base_dir`, normalized lexically.
 std::string ResolveAgainst(const std::string& base_dir, const std::string& path);
+
+// Model positions moved to world space by a mesh entry's `transform` (row-major, 0 or 16
+// numbers): checked (finite, last row 0 0 0 1, invertible 3x3) and applied in double in one
+// fixed order of operations, so that every caller (BuildMesh, lightmap_parts.h) gets the same
+// bits. Errors (from `checks`, naming `field`): a malformed transform, or one that moves a
+// vertex out of the finite range.
+absl::StatusOr<std::vector<glm::dvec3>> PlaceInWorld(const FieldChecker& checks,
+                                                     absl::string_view field,
+                                                     const RepeatedDoubles& transform,
+                                                     const std::vector<glm::dvec3>& model);
 
 // meshes[index] of a scene. World positions are computed in double in a fixed order of
 // operations, so every build gives the same bits. Errors (from `checks`, fields under
