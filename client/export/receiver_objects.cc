@@ -24,7 +24,7 @@ std::string UniqueName(const std::string& base, std::set<std::string>* used) {
   return out;
 }
 
-bool Receives(pdsm::v1::Role role) { return role != pdsm::v1::CASTER_ONLY; }
+bool EntryReceives(pdsm::v1::Role role) { return role != pdsm::v1::CASTER_ONLY; }
 
 }  // namespace
 
@@ -37,8 +37,8 @@ absl::StatusOr<ReceiverObjects> LoadReceiverObjects(const std::string& scene_pat
   for (int i = 0; i < scene->meshes_size(); ++i) {
     const pdsm::v1::Mesh& mesh = scene->meshes(i);
     const std::string field = absl::StrCat("meshes[", i, "]");
-    if (!Receives(mesh.role())) continue;
     if (!mesh.has_path()) {
+      if (!EntryReceives(mesh.role())) continue;
       out.without_uvs.push_back(absl::StrCat(field, " (inline: no UVs)"));
       continue;
     }
@@ -46,6 +46,10 @@ absl::StatusOr<ReceiverObjects> LoadReceiverObjects(const std::string& scene_pat
     if (!parts.ok()) return parts.status();
     const std::string stem = std::filesystem::path(mesh.path()).stem().string();
     for (LightmapPart& part : *parts) {
+      // A node's own role (its extras, core/scene/node_roles.h) before the entry's.
+      if (part.node_role.has_value() ? !Receives(*part.node_role) : !EntryReceives(mesh.role())) {
+        continue;
+      }
       const std::string source =
           absl::StrCat(field, " (", mesh.path(), "), node \"", part.node, "\"");
       if (part.uv_set < 0) {

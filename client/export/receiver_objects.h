@@ -34,8 +34,9 @@ struct ReceiverObjects {
   std::vector<std::string> without_uvs;
 };
 
-// The receiver objects of the scene file (or world file) at `scene_path`: for each mesh entry
-// whose role receives, its file's parts moved by the entry's transform as the bake moves them
+// The receiver objects of the scene file (or world file) at `scene_path`: for each mesh entry,
+// its file's parts that receive (by the role the node's extras set, core/scene/node_roles.h,
+// else the entry's role), moved by the entry's transform as the bake moves them
 // (LoadSceneMeshParts, core/scene/lightmap_parts.h). Inline meshes have no UVs. Errors: those
 // of ParseSceneFile and of LoadSceneMeshParts, naming the file and the field.
 absl::StatusOr<ReceiverObjects> LoadReceiverObjects(const std::string& scene_path);

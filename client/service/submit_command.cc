@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <map>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
@@ -34,23 +36,69 @@ std::string RandomKey() {
   return key;
 }
 
-// Replaces every mesh path by the SHA-256 of its asset blob; returns the blobs by hash.
-absl::StatusOr<std::map<std::string, std::string>> MeshesToAssets(const std::string& scene_path,
-                                                                  pdsm::v1::Scene* scene) {
-  std::map<std::string, std::string> blobs;
-  for (int i = 0; i < scene->meshes_size(); ++i) {
-    pdsm::v1::Mesh* mesh = scene->mutable_meshes(i);
-    if (mesh->source_case() != pdsm::v1::Mesh::kPath) continue;
-    const std::string context = absl::StrCat(scene_path, ": meshes[", i, "].path");
-    absl::StatusOr<MeshFileData> data =
-        LoadMeshFile(ResolveMeshPath(scene_path, mesh->path()), context);
-    if (!data.ok()) return data.status();
-    std::string blob = EncodeMeshAsset(*data);
-    std::string sha256 = Sha256Hex(blob);
-    mesh->set_asset_sha256(sha256);  // replaces the path (same oneof)
-    blobs.emplace(std::move(sha256), std::move(blob));
+pdsm::v1::Role ToProtoRole(MeshRole role) {
+  switch (role) {
+    case MeshRole::kCasterOnly:
+      return pdsm::v1::CASTER_ONLY;
+    case MeshRole::kReceiverOnly:
+      return pdsm::v1::RECEIVER_ONLY;
+    case MeshRole::kCasterAndReceiver:
+      break;
   }
+  return pdsm::v1::CASTER_AND_RECEIVER;
+}
+
+// Replaces every mesh path by the SHA-256 of its asset blob; returns the blobs by hash. A file
+// whose nodes set roles (core/scene/node_roles.h) becomes one entry per role, in the order
+// the local bake splits it (LoadMeshFileByRole), so both bake the same meshes in the same order.
+// `entry_of` gets, for each entry sent, the scene file's entry it comes from.
+absl::StatusOr<std::map<std::string, std::string>> MeshesToAssets(const std::string& scene_path,
+                                                                  pdsm::v1::Scene* scene,
+                                                                  std::vector<int>* entry_of) {
+  std::map<std::string, std::string> blobs;
+  google::protobuf::RepeatedPtrField<pdsm::v1::Mesh> entries;
+  for (int i = 0; i < scene->meshes_size(); ++i) {
+    const pdsm::v1::Mesh& mesh = scene->meshes(i);
+    if (mesh.source_case() != pdsm::v1::Mesh::kPath) {
+      *entries.Add() = mesh;
+      entry_of->push_back(i);
+      continue;
+    }
+    const std::string context = absl::StrCat(scene_path, ": meshes[", i, "].path");
+    absl::StatusOr<std::vector<MeshFileData>> parts =
+        LoadMeshFileByRole(ResolveMeshPath(scene_path, mesh.path()), context);
+    if (!parts.ok()) return parts.status();
+    for (const MeshFileData& part : *parts) {
+      for (const std::string& w : part.warnings) {
+        std::fprintf(stderr, "pdsm: warning: %s\n", w.c_str());
+      }
+      std::string blob = EncodeMeshAsset(part);
+      std::string sha256 = Sha256Hex(blob);
+      pdsm::v1::Mesh& entry = *entries.Add();
+      entry = mesh;
+      entry.set_asset_sha256(sha256);  // replaces the path (same oneof)
+      if (part.node_role.has_value()) entry.set_role(ToProtoRole(*part.node_role));
+      entry_of->push_back(i);
+      blobs.emplace(std::move(sha256), std::move(blob));
+    }
+  }
+  scene->mutable_meshes()->Swap(&entries);
   return blobs;
+}
+
+// An error of the scene as sent names its entry "meshes[k]"; the user's file has entry
+// entry_of[k] there (they differ after a file split by roles).
+absl::Status NameFileEntry(const absl::Status& error, const std::string& scene_path,
+                           const std::vector<int>& entry_of) {
+  const std::string message(error.message());
+  for (size_t k = 0; k < entry_of.size(); ++k) {
+    const std::string sent = absl::StrCat(scene_path, ": meshes[", k, "]");
+    if (message.rfind(sent, 0) == 0) {
+      return absl::Status(error.code(), absl::StrCat(scene_path, ": meshes[", entry_of[k], "]",
+                                                     message.substr(sent.size())));
+    }
+  }
+  return error;
 }
 
 absl::Status Upload(const ServiceConnection& c, const std::string& server,
@@ -102,8 +150,9 @@ int RunSubmit(const SubmitFlags& flags) {
                                                   "the coordinator; use path or inline")));
     }
   }
+  std::vector<int> entry_of;
   absl::StatusOr<std::map<std::string, std::string>> blobs =
-      MeshesToAssets(flags.scene_path, &*scene);
+      MeshesToAssets(flags.scene_path, &*scene, &entry_of);
   if (!blobs.ok()) return ReportError(blobs.status());
   // Validate fully here, from the blobs just made (each mesh file is read once), so errors
   // name the scene file and field before anything is sent.
@@ -112,7 +161,7 @@ int RunSubmit(const SubmitFlags& flags) {
   };
   absl::StatusOr<Scene> local =
       SceneFromProto(*scene, flags.scene_path, /*base_dir=*/"", from_blobs);
-  if (!local.ok()) return ReportError(local.status());
+  if (!local.ok()) return ReportError(NameFileEntry(local.status(), flags.scene_path, entry_of));
 
   absl::StatusOr<ServiceConnection> connection = Connect(flags.service);
   if (!connection.ok()) return ReportError(connection.status());

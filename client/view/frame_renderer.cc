@@ -194,8 +194,14 @@ absl::Status FrameRenderer::Init() {
   }
   for (const ShadowmaskedMesh& textured : scene_->shadowmasked) {
     im.shadowmasked.push_back(UploadShadowmasked(gl_, textured));
-    const size_t entry = static_cast<size_t>(textured.mesh_entry);
-    if (entry < im.baked.size()) im.shadowmasked.back().albedo = im.baked[entry].albedo;
+    // The colour of the entry's receiving part (a file whose nodes set roles bakes as several).
+    for (size_t m = 0; m < im.baked.size(); ++m) {
+      const TriangleMesh& baked = scene_->scene.meshes[m];
+      if (baked.entry == textured.mesh_entry && Receives(baked.role)) {
+        im.shadowmasked.back().albedo = im.baked[m].albedo;
+        break;
+      }
+    }
   }
 
   const PdsmHeader& header = scene_->pdsm.header;

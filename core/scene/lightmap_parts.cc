@@ -10,6 +10,7 @@
 #include "absl/strings/str_cat.h"
 #include "core/scene/field_checker.h"
 #include "core/scene/mesh_file.h"
+#include "core/scene/node_roles.h"
 #include "core/scene/scene_loader.h"
 #include "core/scene/scene_mesh.h"
 
@@ -58,10 +59,11 @@ int CommonUvSet(const aiScene& scene, const aiNode& node) {
 }
 
 void AppendNode(const aiScene& scene, const aiNode& node, const Affine& parent,
-                std::vector<LightmapPart>* parts) {
+                const internal::NodeRoles& roles, std::vector<LightmapPart>* parts) {
   const Affine world = Compose(parent, node.mTransformation);
   LightmapPart part;
   part.node = node.mName.C_Str();
+  part.node_role = roles.at(&node);
   part.uv_set = CommonUvSet(scene, node);
   for (unsigned k = 0; k < node.mNumMeshes; ++k) {
     const aiMesh& mesh = *scene.mMeshes[node.mMeshes[k]];
@@ -81,7 +83,7 @@ void AppendNode(const aiScene& scene, const aiNode& node, const Affine& parent,
   }
   if (!part.indices.empty()) parts->push_back(std::move(part));
   for (unsigned c = 0; c < node.mNumChildren; ++c) {
-    AppendNode(scene, *node.mChildren[c], world, parts);
+    AppendNode(scene, *node.mChildren[c], world, roles, parts);
   }
 }
 
@@ -103,8 +105,10 @@ absl::StatusOr<std::vector<LightmapPart>> LoadLightmapParts(const std::string& p
   if (vertices > std::numeric_limits<uint32_t>::max()) {
     return CannotReadMesh(context, path, absl::StrCat("too many vertices (", vertices, ")"));
   }
+  absl::StatusOr<internal::NodeRoles> roles = internal::ReadNodeRoles(*scene, path, context);
+  if (!roles.ok()) return roles.status();
   std::vector<LightmapPart> parts;
-  AppendNode(*scene, *scene->mRootNode, Affine{}, &parts);
+  AppendNode(*scene, *scene->mRootNode, Affine{}, *roles, &parts);
   if (parts.empty()) return CannotReadMesh(context, path, "no triangles");
   for (const LightmapPart& part : parts) {
     for (const glm::dvec3& p : part.positions) {

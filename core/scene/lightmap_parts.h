@@ -6,18 +6,23 @@
 #define PDSM_CORE_SCENE_LIGHTMAP_PARTS_H_
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
 
 #include "absl/status/statusor.h"
+#include "core/scene/scene.h"
 #include "pdsm/v1/scene.pb.h"
 
 namespace pdsm {
 
 struct LightmapPart {
   std::string node;  // the node's name in the file ("" when it has none)
+  // The role the node's extras (or an ancestor's) set (core/scene/node_roles.h); nullopt: the
+  // scene entry's role.
+  std::optional<MeshRole> node_role;
   // The UV set the texture is laid out in: 1 (glTF TEXCOORD_1) when every mesh of the node
   // has a second set, else 0 when every one has a first; -1 when not (then `uvs` is empty).
   int uv_set = -1;
@@ -31,8 +36,9 @@ struct LightmapPart {
 // The parts of `path`, one per node holding triangles, in depth-first node order (a node's
 // meshes, e.g. a glTF mesh's primitives, are one part). Points and lines are dropped.
 // `context` prefixes errors, as LoadMeshFile's: INVALID_ARGUMENT "<context>: cannot read
-// \"<path>\": <reason>" for a missing or unreadable file, no triangles, or a non-finite
-// position or UV. Thread-safe: each call uses its own importer.
+// \"<path>\": <reason>" for a missing or unreadable file, no triangles, a non-finite
+// position or UV, or a node whose extras.role is not a role name. Thread-safe: each call uses its
+// own importer.
 absl::StatusOr<std::vector<LightmapPart>> LoadLightmapParts(const std::string& path,
                                                             const std::string& context);
 

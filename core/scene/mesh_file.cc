@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <system_error>
 
 #include <assimp/postprocess.h>
@@ -15,6 +16,7 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/string_view.h"
 #include "core/scene/material_masks.h"
+#include "core/scene/node_roles.h"
 
 namespace pdsm {
 namespace internal {
@@ -95,22 +97,16 @@ absl::StatusOr<std::vector<uint16_t>> IndexMasks(const std::vector<internal::Mat
   return index_of_material;
 }
 
-}  // namespace
+// PreTransformVertices flattens the node hierarchy (instances are duplicated) so one flat
+// triangle list comes out; JoinIdenticalVertices undoes the per-face vertex copies some
+// importers (OBJ) make, and drops vertices no face uses. FlipUVs puts every format's UV origin
+// at the image's top-left (glTF's; Assimp turns all of them to OpenGL's bottom-left).
+constexpr unsigned kFlattenSteps = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                   aiProcess_PreTransformVertices | aiProcess_FlipUVs;
 
-absl::StatusOr<MeshFileData> LoadMeshFile(const std::string& path, const std::string& context) {
-  if (absl::Status status = internal::CheckMeshFileExists(path, context); !status.ok())
-    return status;
-
-  // PreTransformVertices flattens the node hierarchy (instances are duplicated) so one flat
-  // triangle list comes out; JoinIdenticalVertices undoes the per-face vertex copies some
-  // importers (OBJ) make, and drops vertices no face uses. FlipUVs puts every format's UV origin
-  // at the image's top-left (glTF's; Assimp turns all of them to OpenGL's bottom-left).
-  Assimp::Importer importer;
-  const aiScene* scene =
-      importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                                  aiProcess_PreTransformVertices | aiProcess_FlipUVs);
-  if (scene == nullptr) return CannotReadMesh(context, path, importer.GetErrorString());
-
+// The flattened scene (kFlattenSteps applied) as MeshFileData, checked.
+absl::StatusOr<MeshFileData> Convert(const aiScene* scene, const std::string& path,
+                                     const std::string& context) {
   size_t vertex_count = 0;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     vertex_count += scene->mMeshes[m]->mNumVertices;
@@ -174,6 +170,99 @@ absl::StatusOr<MeshFileData> LoadMeshFile(const std::string& path, const std::st
     }
   }
   return data;
+}
+
+// Whether a node holds a mesh with polygons (what triangulation turns into triangles).
+bool HoldsPolygons(const aiScene& scene, const aiNode& node) {
+  for (unsigned k = 0; k < node.mNumMeshes; ++k) {
+    const unsigned types = scene.mMeshes[node.mMeshes[k]]->mPrimitiveTypes;
+    if ((types & (aiPrimitiveType_TRIANGLE | aiPrimitiveType_POLYGON)) != 0) return true;
+  }
+  return false;
+}
+
+// The meshes of the nodes whose role is `role`, flattened. `importer` holds the file read
+// without steps; the other nodes' mesh references are dropped (PreTransformVertices builds its
+// meshes from the nodes' references alone), then LoadMeshFile's steps run. Assimp documents
+// ReadFile(0) then ApplyPostProcessing(steps) as equal to ReadFile(steps), so a file without
+// roles gives LoadMeshFile's bytes. Consumes the importer's scene.
+absl::StatusOr<MeshFileData> FlattenNodesOfRole(Assimp::Importer& importer, const std::string& path,
+                                                const std::string& context,
+                                                std::optional<MeshRole> role) {
+  // The importer owns the scene; dropping references before the steps run is the use
+  // ApplyPostProcessing exists for. aiNode frees mMeshes whatever mNumMeshes says.
+  aiScene* scene = const_cast<aiScene*>(importer.GetScene());
+  absl::StatusOr<internal::NodeRoles> roles = internal::ReadNodeRoles(*scene, path, context);
+  if (!roles.ok()) return roles.status();
+  for (const auto& [node, node_role] : *roles) {
+    if (node_role != role) const_cast<aiNode*>(node)->mNumMeshes = 0;
+  }
+  const aiScene* flat = importer.ApplyPostProcessing(kFlattenSteps);
+  if (flat == nullptr) return CannotReadMesh(context, path, importer.GetErrorString());
+  absl::StatusOr<MeshFileData> data = Convert(flat, path, context);
+  if (data.ok()) data->node_role = role;
+  return data;
+}
+
+}  // namespace
+
+absl::StatusOr<MeshFileData> LoadMeshFile(const std::string& path, const std::string& context) {
+  if (absl::Status status = internal::CheckMeshFileExists(path, context); !status.ok())
+    return status;
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(path, kFlattenSteps);
+  if (scene == nullptr) return CannotReadMesh(context, path, importer.GetErrorString());
+  return Convert(scene, path, context);
+}
+
+absl::StatusOr<std::vector<MeshFileData>> LoadMeshFileByRole(const std::string& path,
+                                                             const std::string& context) {
+  if (absl::Status status = internal::CheckMeshFileExists(path, context); !status.ok())
+    return status;
+  // A first import without steps reads the roles; it serves the last role flattened, so a file
+  // with k roles is imported k times (a file without roles once, as LoadMeshFile does).
+  Assimp::Importer first;
+  const aiScene* scene = first.ReadFile(path, 0);
+  if (scene == nullptr) return CannotReadMesh(context, path, first.GetErrorString());
+  absl::StatusOr<internal::NodeRoles> roles = internal::ReadNodeRoles(*scene, path, context);
+  if (!roles.ok()) return roles.status();
+  std::vector<std::optional<MeshRole>> present;
+  if (!internal::AnyNodeRole(*roles)) {
+    present.push_back(std::nullopt);
+  } else {
+    for (const std::optional<MeshRole> role :
+         {std::optional<MeshRole>(), std::optional(MeshRole::kCasterAndReceiver),
+          std::optional(MeshRole::kCasterOnly), std::optional(MeshRole::kReceiverOnly)}) {
+      for (const auto& [node, node_role] : *roles) {
+        if (node_role == role && HoldsPolygons(*scene, *node)) {
+          present.push_back(role);
+          break;
+        }
+      }
+    }
+    if (present.empty()) return CannotReadMesh(context, path, "no triangles");
+  }
+  std::vector<MeshFileData> parts;
+  std::vector<std::string> warnings;
+  for (size_t i = 0; i < present.size(); ++i) {
+    Assimp::Importer again;
+    const bool last = i + 1 == present.size();
+    if (!last && again.ReadFile(path, 0) == nullptr) {
+      return CannotReadMesh(context, path, again.GetErrorString());
+    }
+    absl::StatusOr<MeshFileData> part =
+        FlattenNodesOfRole(last ? first : again, path, context, present[i]);
+    if (!part.ok()) return part.status();
+    for (std::string& w : part->warnings) {
+      if (std::find(warnings.begin(), warnings.end(), w) == warnings.end()) {
+        warnings.push_back(std::move(w));
+      }
+    }
+    part->warnings.clear();
+    parts.push_back(*std::move(part));
+  }
+  parts.front().warnings = std::move(warnings);
+  return parts;
 }
 
 }  // namespace pdsm

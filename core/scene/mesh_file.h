@@ -19,6 +19,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,7 @@
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
 #include "core/scene/alpha_mask.h"
+#include "core/scene/scene.h"
 
 namespace pdsm {
 
@@ -42,6 +44,10 @@ struct MeshFileData {
   // What the file holds that is baked otherwise than it says (BLEND materials), one line per
   // kind, each naming the file.
   std::vector<std::string> warnings;
+  // LoadMeshFileByRole: the role its nodes' extras give these triangles (core/scene/
+  // node_roles.h); nullopt: no node says, the scene entry's role applies. Not encoded in mesh
+  // assets: `pdsm submit` sends it as the entry's role.
+  std::optional<MeshRole> node_role;
 
   bool has_masks() const { return !masks.empty(); }
 };
@@ -54,6 +60,16 @@ struct MeshFileData {
 // no texture coordinates.
 // Thread-safe: each call uses its own importer.
 absl::StatusOr<MeshFileData> LoadMeshFile(const std::string& path, const std::string& context);
+
+// The file as the bake reads a scene's mesh entry: split by the roles its nodes' extras set
+// (core/scene/node_roles.h). A file no node of which has a role gives one element, node_role
+// nullopt, the same bytes as LoadMeshFile. Otherwise one element per role some node holding
+// polygons has, in the order: no role (the entry's), CASTER_AND_RECEIVER, CASTER_ONLY,
+// RECEIVER_ONLY; each is what LoadMeshFile gives for the file with only those nodes' meshes
+// (the file is imported once per element). Warnings are deduplicated into the first element.
+// Errors: LoadMeshFile's, and ReadNodeRoles' for a node whose role is not a role name.
+absl::StatusOr<std::vector<MeshFileData>> LoadMeshFileByRole(const std::string& path,
+                                                             const std::string& context);
 
 namespace internal {
 // The mesh readers' (this one, core/scene/lightmap_parts.h) error: INVALID_ARGUMENT

@@ -27,6 +27,9 @@ inline bool Receives(MeshRole role) { return role != MeshRole::kCasterOnly; }
 
 struct TriangleMesh {
   std::string label;  // "meshes[2] (models/dragon.ply)", for messages
+  // The scene file's meshes[] entry it comes from. A file whose nodes set roles
+  // (core/scene/node_roles.h) gives one TriangleMesh per role, all of the same entry.
+  int entry = 0;
   MeshRole role = MeshRole::kCasterAndReceiver;
   std::vector<glm::dvec3> positions_world;  // transformed, double
   std::vector<uint32_t> indices;            // 3 per triangle

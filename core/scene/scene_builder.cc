@@ -65,9 +65,10 @@ absl::StatusOr<Scene> SceneBuilder::Build(const pdsm::v1::Scene& message) const 
                            std::make_move_iterator(lights->end()));
   scene.meshes.reserve(message.meshes_size());
   for (int i = 0; i < message.meshes_size(); ++i) {
-    absl::StatusOr<TriangleMesh> mesh = BuildMesh(checks_, sources_, i, message.meshes(i));
-    if (!mesh.ok()) return mesh.status();
-    scene.meshes.push_back(*std::move(mesh));
+    absl::StatusOr<std::vector<TriangleMesh>> parts =
+        BuildMesh(checks_, sources_, i, message.meshes(i));
+    if (!parts.ok()) return parts.status();
+    for (TriangleMesh& part : *parts) scene.meshes.push_back(std::move(part));
   }
   return scene;
 }

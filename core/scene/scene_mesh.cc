@@ -14,6 +14,7 @@
 #include "absl/strings/str_cat.h"
 #include "core/assets/mesh_asset.h"
 #include "core/scene/mesh_file.h"
+#include "core/scene/node_roles.h"
 #include "spdlog/spdlog.h"
 
 namespace pdsm::internal {
@@ -85,15 +86,16 @@ absl::Status LoadInline(const FieldChecker& checks, absl::string_view field,
 }
 
 absl::Status LoadPath(const FieldChecker& checks, const MeshSources& sources,
-                      absl::string_view field, const std::string& path, MeshFileData* out) {
+                      absl::string_view field, const std::string& path,
+                      std::vector<MeshFileData>* out) {
   if (sources.base_dir.empty()) {
     return checks.Error(field, "mesh files are not accepted here; send inline geometry");
   }
   if (path.empty()) return checks.Error(field, "must not be empty");
-  absl::StatusOr<MeshFileData> data = LoadMeshFile(ResolveAgainst(sources.base_dir, path),
-                                                   absl::StrCat(checks.source(), ": ", field));
-  if (!data.ok()) return data.status();
-  *out = *std::move(data);
+  absl::StatusOr<std::vector<MeshFileData>> parts = LoadMeshFileByRole(
+      ResolveAgainst(sources.base_dir, path), absl::StrCat(checks.source(), ": ", field));
+  if (!parts.ok()) return parts.status();
+  *out = *std::move(parts);
   return absl::OkStatus();
 }
 
@@ -117,21 +119,24 @@ absl::Status LoadAsset(const FieldChecker& checks, const MeshSources& sources,
 }
 
 // The model-space mesh (positions, indices, alpha masks) of `mesh`, from whichever source it
-// names, and its label for messages.
+// names (a file: one part per role its nodes set), and its label for messages.
 absl::Status LoadSource(const FieldChecker& checks, const MeshSources& sources,
-                        const std::string& field, const pdsm::v1::Mesh& mesh, MeshFileData* data,
-                        std::string* label) {
+                        const std::string& field, const pdsm::v1::Mesh& mesh,
+                        std::vector<MeshFileData>* parts, std::string* label) {
   switch (mesh.source_case()) {
     case pdsm::v1::Mesh::kPath:
       *label = absl::StrCat(field, " (", mesh.path(), ")");
-      return LoadPath(checks, sources, field + ".path", mesh.path(), data);
+      return LoadPath(checks, sources, field + ".path", mesh.path(), parts);
     case pdsm::v1::Mesh::kInline:
       *label = absl::StrCat(field, " (inline)");
-      return LoadInline(checks, field + ".inline", mesh.inline_(), &data->positions,
-                        &data->indices);
+      parts->resize(1);
+      return LoadInline(checks, field + ".inline", mesh.inline_(), &parts->front().positions,
+                        &parts->front().indices);
     case pdsm::v1::Mesh::kAssetSha256:
       *label = absl::StrCat(field, " (asset ", mesh.asset_sha256().substr(0, 12), ")");
-      return LoadAsset(checks, sources, field + ".assetSha256", mesh.asset_sha256(), data);
+      parts->resize(1);
+      return LoadAsset(checks, sources, field + ".assetSha256", mesh.asset_sha256(),
+                       &parts->front());
     case pdsm::v1::Mesh::SOURCE_NOT_SET:
       break;
   }
@@ -146,8 +151,9 @@ std::string ResolveAgainst(const std::string& base_dir, const std::string& path)
   return file.string();
 }
 
-absl::StatusOr<TriangleMesh> BuildMesh(const FieldChecker& checks, const MeshSources& sources,
-                                       int index, const pdsm::v1::Mesh& mesh) {
+absl::StatusOr<std::vector<TriangleMesh>> BuildMesh(const FieldChecker& checks,
+                                                    const MeshSources& sources, int index,
+                                                    const pdsm::v1::Mesh& mesh) {
   const std::string field = Indexed("meshes", index);
   if (!mesh.lights_from().empty()) {
     // Reading the scene file resolves it (file_lights.h); a message arriving otherwise (a
@@ -155,16 +161,16 @@ absl::StatusOr<TriangleMesh> BuildMesh(const FieldChecker& checks, const MeshSou
     return checks.Error(field + ".lightsFrom",
                         "is resolved where the scene file is read; send the file's lights");
   }
-  TriangleMesh out;
+  MeshRole entry_role = MeshRole::kCasterAndReceiver;
   switch (mesh.role()) {
     case pdsm::v1::CASTER_AND_RECEIVER:
-      out.role = MeshRole::kCasterAndReceiver;
+      entry_role = MeshRole::kCasterAndReceiver;
       break;
     case pdsm::v1::CASTER_ONLY:
-      out.role = MeshRole::kCasterOnly;
+      entry_role = MeshRole::kCasterOnly;
       break;
     case pdsm::v1::RECEIVER_ONLY:
-      out.role = MeshRole::kReceiverOnly;
+      entry_role = MeshRole::kReceiverOnly;
       break;
     default:
       return checks.Error(field + ".role", absl::StrCat("unknown value (got ", mesh.role(), ")"));
@@ -173,26 +179,35 @@ absl::StatusOr<TriangleMesh> BuildMesh(const FieldChecker& checks, const MeshSou
       !s.ok()) {
     return s;  // before the mesh is read: a bad transform is named whatever the file holds
   }
-  MeshFileData data;
-  if (absl::Status s = LoadSource(checks, sources, field, mesh, &data, &out.label); !s.ok()) {
+  std::vector<MeshFileData> parts;
+  std::string label;
+  if (absl::Status s = LoadSource(checks, sources, field, mesh, &parts, &label); !s.ok()) {
     return s;
   }
-  for (std::string& warning : data.warnings) {
-    if (sources.warnings != nullptr) {
-      sources.warnings->push_back(std::move(warning));
-    } else {
-      spdlog::warn("{}", warning);
+  std::vector<TriangleMesh> out;
+  for (MeshFileData& data : parts) {
+    for (std::string& warning : data.warnings) {
+      if (sources.warnings != nullptr) {
+        sources.warnings->push_back(std::move(warning));
+      } else {
+        spdlog::warn("{}", warning);
+      }
     }
+    TriangleMesh& part = out.emplace_back();
+    part.entry = index;
+    part.role = data.node_role.value_or(entry_role);
+    part.label = data.node_role.has_value()
+                     ? absl::StrCat(label, " nodes ", MeshRoleName(*data.node_role))
+                     : label;
+    part.indices = std::move(data.indices);
+    part.uvs = std::move(data.uvs);
+    part.triangle_masks = std::move(data.triangle_masks);
+    part.masks = std::move(data.masks);
+    absl::StatusOr<std::vector<glm::dvec3>> world =
+        PlaceInWorld(checks, field + ".transform", mesh.transform(), data.positions);
+    if (!world.ok()) return world.status();
+    part.positions_world = *std::move(world);
   }
-  out.indices = std::move(data.indices);
-  out.uvs = std::move(data.uvs);
-  out.triangle_masks = std::move(data.triangle_masks);
-  out.masks = std::move(data.masks);
-
-  absl::StatusOr<std::vector<glm::dvec3>> world =
-      PlaceInWorld(checks, field + ".transform", mesh.transform(), data.positions);
-  if (!world.ok()) return world.status();
-  out.positions_world = *std::move(world);
   return out;
 }
 

@@ -39,14 +39,17 @@ absl::StatusOr<std::vector<glm::dvec3>> PlaceInWorld(const FieldChecker& checks,
                                                      const RepeatedDoubles& transform,
                                                      const std::vector<glm::dvec3>& model);
 
-// meshes[index] of a scene. World positions are computed in double in a fixed order of
-// operations, so every build gives the same bits. Errors (from `checks`, fields under
-// "meshes[index]."): an unknown role, no source, a malformed transform (not 0 or 16 finite
+// meshes[index] of a scene: one TriangleMesh, or for a file whose nodes set roles
+// (core/scene/node_roles.h) one per role in LoadMeshFileByRole's order, each with its role
+// (the entry's for nodes that set none) and `entry` = index. World positions are computed in double
+// in a fixed order of operations, so every build gives the same bits. Errors (from `checks`, fields
+// under "meshes[index]."): an unknown role, no source, a malformed transform (not 0 or 16 finite
 // numbers, a projective last row, a singular 3x3 part), a transform that moves a vertex out of
 // the finite range, bad inline data, a source `sources` refuses, and the errors of
 // LoadMeshFile and of the asset resolver as they are.
-absl::StatusOr<TriangleMesh> BuildMesh(const FieldChecker& checks, const MeshSources& sources,
-                                       int index, const pdsm::v1::Mesh& mesh);
+absl::StatusOr<std::vector<TriangleMesh>> BuildMesh(const FieldChecker& checks,
+                                                    const MeshSources& sources, int index,
+                                                    const pdsm::v1::Mesh& mesh);
 
 }  // namespace pdsm::internal
 

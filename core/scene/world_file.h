@@ -2,7 +2,8 @@
 // with the lights the file holds, where a scene JSON would name them. The file is read with
 // Assimp, as a scene JSON's mesh `path` is (core/scene/mesh_file.h), and turned into the scene
 // message a JSON file would give: one mesh entry naming the file (every node, its transform
-// applied, role CASTER_AND_RECEIVER) and one light per light of the file that pdsm can bake.
+// applied, role CASTER_AND_RECEIVER where a node's extras set none: core/scene/node_roles.h)
+// and one light per light of the file that pdsm can bake.
 //
 // Lights (glTF KHR_lights_punctual; what Assimp reports for other formats), in world space
 // (the light's node transform applied, as the meshes' are), named by their node:
