@@ -102,6 +102,45 @@ TEST(ReferenceCli, BadInputExits2NamingTheFile) {
   EXPECT_NE(r.err.find("--method"), std::string::npos) << r.err;
 }
 
+// The weightings (issue #15 item 4): in the umbra and fully lit every definition reads 1 and 0;
+// in a penumbra they differ; the flags are checked and named.
+TEST(ReferenceCli, WeightingsAgreeOutsidePenumbraeAndDifferInThem) {
+  TempDir dir;
+  const std::string points = dir.File("pts.csv");
+  WriteText(points, "-1.5,0,-1\n9,0,9\n1.0,0,1.2\n");
+  const std::string base = kPdsm + " reference " + ExamplePath("plates") + " --points " + points;
+  const CommandResult plain = RunCommand(base, dir);
+  const CommandResult emitter = RunCommand(base + " --weighting emitter", dir);
+  const CommandResult irradiance = RunCommand(base + " --weighting irradiance --normal 0,1,0", dir);
+  for (const CommandResult* r : {&plain, &emitter, &irradiance}) {
+    ASSERT_EQ(r->exit_code, 0) << r->err;
+    const std::vector<std::string> lines = Lines(r->out);
+    ASSERT_EQ(lines.size(), 3u) << r->out;
+    EXPECT_NEAR(LastField(lines[0]), 1.0, 1e-6);
+    EXPECT_EQ(LastField(lines[1]), 0.0);
+  }
+  EXPECT_NE(emitter.err.find("emitter-weighted"), std::string::npos) << emitter.err;
+  const double a = LastField(Lines(plain.out)[2]), e = LastField(Lines(emitter.out)[2]),
+               i = LastField(Lines(irradiance.out)[2]);
+  EXPECT_GT(a, 0.05);
+  EXPECT_LT(a, 0.95);
+  EXPECT_GT(std::abs(e - a), 1e-4);
+  EXPECT_GT(std::abs(i - e), 1e-4);
+
+  CommandResult r = RunCommand(base + " --weighting irradiance", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--normal"), std::string::npos) << r.err;
+  r = RunCommand(base + " --weighting emitter --normal 0,1,0", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--normal"), std::string::npos) << r.err;
+  r = RunCommand(base + " --weighting cosine", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--weighting"), std::string::npos) << r.err;
+  r = RunCommand(base + " --weighting irradiance --normal 0,0,0", dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("normal"), std::string::npos) << r.err;
+}
+
 // column name -> value, for each data row.
 std::vector<std::map<std::string, std::string>> ReadCsv(const std::string& path,
                                                         std::string* header) {

@@ -1,6 +1,8 @@
-// `pdsm reference SCENE.json --points PTS.csv [--samples N] [--method exact|embree|auto]`: the
-// ground-truth attenuation at world points, printed exactly like `pdsm query` ("x,y,z,attenuation",
-// nan behind the light), so the two outputs compare line by line.
+// `pdsm reference SCENE.json --points PTS.csv [--samples N] [--method exact|embree|auto]
+// [--weighting unweighted|emitter|irradiance --normal X,Y,Z]`: the ground-truth attenuation at
+// world points, printed exactly like `pdsm query` ("x,y,z,attenuation", nan behind the light), so
+// the two outputs compare line by line. The weightings (core/reference/light_weighting.h) measure
+// how far pdsm's definition sits from a renderer's shadow ratio.
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -21,11 +23,24 @@ struct ReferenceFlags {
   std::string method = "auto";
   int samples = kDefaultReferenceSamples;
   uint64_t seed = 1;
+  std::string weighting = "unweighted";
+  std::vector<double> normal;
 };
 
 int RunReference(const ReferenceFlags& flags) {
   absl::StatusOr<ReferenceMethod> method = ParseReferenceMethod(flags.method, "--method");
   if (!method.ok()) return ReportError(method.status());
+  absl::StatusOr<LightWeighting> weighting = ParseLightWeighting(flags.weighting, "--weighting");
+  if (!weighting.ok()) return ReportError(weighting.status());
+  WeightingSpec spec{*weighting, glm::dvec3(0.0)};
+  const bool irradiance = *weighting == LightWeighting::kIrradiance;
+  if (irradiance != !flags.normal.empty()) {
+    return ReportError(absl::InvalidArgumentError(
+        "--normal: given exactly when --weighting is irradiance (the receiver's normal, world "
+        "space, facing the light)"));
+  }
+  if (!flags.normal.empty())
+    spec.normal_world = {flags.normal[0], flags.normal[1], flags.normal[2]};
   absl::StatusOr<Scene> scene = LoadSceneFile(flags.scene_path);
   if (scene.ok()) scene = OneLight(*std::move(scene), "", "pdsm reference");
   if (!scene.ok()) return ReportError(scene.status());
@@ -42,14 +57,17 @@ int RunReference(const ReferenceFlags& flags) {
   std::vector<glm::dvec3> world;
   world.reserve(points->size());
   for (const QueryPoint& p : *points) world.push_back(p.world);
-  absl::StatusOr<std::vector<double>> attenuation =
-      ReferenceAttenuation(*scene, world, ReferenceOptions{resolved, flags.samples, flags.seed});
+  absl::StatusOr<std::vector<double>> attenuation = ReferenceAttenuation(
+      *scene, world, ReferenceOptions{resolved, flags.samples, flags.seed, spec});
   if (!attenuation.ok()) return ReportError(attenuation.status());
   if (resolved == ReferenceMethod::kEmbree) {
     std::fprintf(stderr, "reference: embree, %d samples per point (std. dev. <= %.4f)\n",
                  flags.samples, EmbreeErrorBound(flags.samples));
   } else {
     std::fprintf(stderr, "reference: exact polygon projection\n");
+  }
+  if (spec.kind != LightWeighting::kUnweighted) {
+    std::fprintf(stderr, "reference: %s-weighted\n", LightWeightingName(spec.kind));
   }
   for (size_t i = 0; i < points->size(); ++i) PrintAttenuationLine((*points)[i], (*attenuation)[i]);
   return kExitOk;
@@ -73,6 +91,14 @@ void RegisterReferenceCommand(CLI::App& app, int* exit_code) {
       ->check(CLI::Range(1, 1 << 20))
       ->capture_default_str();
   cmd->add_option("--seed", flags->seed, "Embree: sample seed")->capture_default_str();
+  cmd->add_option("--weighting", flags->weighting,
+                  "unweighted (pdsm's attenuation), emitter (share of the light's solid angle), "
+                  "irradiance (a renderer's shadow ratio on a surface of --normal)")
+      ->capture_default_str();
+  cmd->add_option("--normal", flags->normal,
+                  "irradiance: the receiver's normal X,Y,Z (world space, facing the light)")
+      ->delimiter(',')
+      ->expected(3);
   cmd->callback([flags, exit_code] { *exit_code = RunReference(*flags); });
 }
 

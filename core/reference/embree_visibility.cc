@@ -204,16 +204,35 @@ SampleRays SphereRays(const Scene& scene, const Casters& casters, const glm::dve
   return rays;
 }
 
+// The weight of the sample along `direction` (light_weighting.h): 1 unweighted; cos θ_light / r²
+// for a planar light's emitter weighting (a sun's directions and a sphere's, drawn by solid
+// angle, weigh 1); times max(0, cos θ_receiver) for irradiance. `normal` is in light space.
+double SampleWeight(const WeightingSpec& weighting, const glm::dvec3& normal, bool planar,
+                    const glm::dvec3& direction) {
+  if (weighting.kind == LightWeighting::kUnweighted) return 1.0;
+  const double r = glm::length(direction);
+  // The planar light's normal is light space's z axis; `direction` reaches the sample at t = 1.
+  double weight = planar ? std::abs(direction.z) / (r * r * r) : 1.0;
+  if (weighting.kind == LightWeighting::kIrradiance) {
+    weight *= std::max(0.0, glm::dot(normal, direction) / r);
+  }
+  return weight;
+}
+
 double HiddenFraction(RTCScene rtc_scene, const Casters& casters, const glm::dvec3& p,
-                      const SampleRays& rays) {
+                      const SampleRays& rays, const WeightingSpec& weighting,
+                      const glm::dvec3& normal, bool planar) {
   const double scale = std::max(casters.scale, glm::length(p));
   const double offset = kRoundingsOffset * std::ldexp(scale, -24);
   PointContext context;
   rtcInitIntersectContext(&context.embree);
   context.point = p;
   context.margin = kCoplanarMargin * scale;
-  int hidden = 0;
+  double hidden = 0.0, whole = 0.0;
   for (const glm::dvec3& direction : rays.directions) {
+    const double weight = SampleWeight(weighting, normal, planar, direction);
+    whole += weight;
+    if (weight == 0.0) continue;
     RTCRay ray;
     ray.org_x = static_cast<float>(p.x);
     ray.org_y = static_cast<float>(p.y);
@@ -228,16 +247,19 @@ double HiddenFraction(RTCScene rtc_scene, const Casters& casters, const glm::dve
     ray.id = 0;
     ray.flags = 0;
     rtcOccluded1(rtc_scene, &context.embree, &ray);
-    if (ray.tfar < 0.0f) ++hidden;  // Embree marks an occluded ray with tfar = -inf
+    if (ray.tfar < 0.0f) hidden += weight;  // Embree marks an occluded ray with tfar = -inf
   }
-  return static_cast<double>(hidden) / rays.directions.size();
+  // Unweighted: a count over the count, as ever. Weighted: NaN where the receiver sees none of
+  // the light (every weight 0).
+  return whole > 0.0 ? hidden / whole : std::numeric_limits<double>::quiet_NaN();
 }
 
 }  // namespace
 
 absl::StatusOr<std::vector<double>> EmbreeAttenuation(const Scene& scene,
                                                       std::span<const glm::dvec3> points_world,
-                                                      int samples, uint64_t seed) {
+                                                      int samples, uint64_t seed,
+                                                      const WeightingSpec& weighting) {
   if (samples < 1 || samples > kMaxReferenceSamples) {
     return absl::InvalidArgumentError(
         absl::StrFormat("--samples: must be in [1, %d] (got %d)", kMaxReferenceSamples, samples));
@@ -252,6 +274,7 @@ absl::StatusOr<std::vector<double>> EmbreeAttenuation(const Scene& scene,
 
   const bool sun = scene.light.shape == LightShape::kSun;
   const bool sphere = scene.light.is_sphere_face();
+  const glm::dvec3 normal_light = weighting.NormalInLightSpace(scene.light.frame);
   std::vector<double> result(points_world.size(), std::numeric_limits<double>::quiet_NaN());
   std::atomic<size_t> next{0};  // points are independent: each writes only its own slot
   RunOnAllCores(points_world.size(), [&] {
@@ -271,7 +294,8 @@ absl::StatusOr<std::vector<double>> EmbreeAttenuation(const Scene& scene,
                        GenerateLightSamples(scene.light, samples, SamplingPattern::kStratified,
                                             HashInts(seed, i)));
       if (rays.directions.empty()) continue;  // inside a sphere light: NaN
-      result[i] = HiddenFraction(rtc_scene.get(), *casters, p, rays);
+      result[i] = HiddenFraction(rtc_scene.get(), *casters, p, rays, weighting, normal_light,
+                                 /*planar=*/!sun && !sphere);
     }
   });
   return result;

@@ -25,6 +25,7 @@
 #include <glm/glm.hpp>
 
 #include "absl/status/statusor.h"
+#include "core/reference/light_weighting.h"
 #include "core/scene/scene.h"
 
 namespace pdsm {
@@ -39,9 +40,13 @@ inline double EmbreeErrorBound(int samples) { return 0.5 / std::sqrt(double(samp
 // the light plane (rect, disk) or not finite. Deterministic in (scene, points, samples, seed)
 // whatever the thread count. INVALID_ARGUMENT for samples outside [1, 1<<20] or a bad mesh;
 // INTERNAL when Embree fails.
+// `weighting` (light_weighting.h): each sample counts with its weight (cos θ_light / r² for a
+// planar light's emitter weighting, times max(0, cos θ_receiver) for irradiance) instead of 1;
+// NaN where every weight is 0 (the light wholly behind the receiver's plane).
 absl::StatusOr<std::vector<double>> EmbreeAttenuation(const Scene& scene,
                                                       std::span<const glm::dvec3> points_world,
-                                                      int samples, uint64_t seed = 1);
+                                                      int samples, uint64_t seed = 1,
+                                                      const WeightingSpec& weighting = {});
 
 }  // namespace pdsm
 

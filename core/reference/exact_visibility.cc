@@ -17,6 +17,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
+#include "core/reference/boundary_measure.h"
 #include "core/reference/convex_set.h"
 #include "core/reference/light_regions.h"
 #include "core/reference/polygon_clip.h"
@@ -26,6 +27,7 @@
 namespace pdsm {
 namespace {
 
+using internal::BoundaryMeasure;
 using internal::ClipConvex;
 using internal::ConvexSet;
 using internal::Cross;
@@ -34,7 +36,7 @@ using internal::PrepareLight;
 using internal::Region;
 using internal::RemoveNearlyCollinear;
 using internal::TwiceSignedArea;
-using internal::UnionArea;
+using internal::UnionMeasure;
 using internal::UnionScratch;
 
 // Geometry within this distance (relative to p.z) below the point's height is ignored: its
@@ -167,15 +169,19 @@ void ProjectAll(const PreparedLight& light, std::span<const glm::dvec3> tris, co
   }
 }
 
+// The hidden share of the light's measure (boundary_measure.h: its area, or its solid angle or
+// projected solid angle from p).
 double HiddenFraction(const PreparedLight& light, std::span<const glm::dvec3> triangles,
-                      const glm::dvec3& p, Workspace* ws) {
+                      const glm::dvec3& p, const BoundaryMeasure& measure, Workspace* ws) {
   if (!(p.z > 0.0) || !Finite(p)) return 0.0;
   const Projector proj{p, p.z * (1.0 - kNearPointMargin), light.lo, light.hi};
   const double min_area = kDegenerateAreaFraction * light.area;
   ProjectAll(light, triangles, proj, min_area, ws);
   const ConvexSet& projected = ws->projected;
-  double hidden_area = 0.0;
+  double hidden = 0.0, whole = 0.0;
   for (const Region& region : light.regions) {
+    const double region_measure = measure.is_area() ? region.area : measure.Polygon(region.ccw);
+    whole += region_measure;
     ConvexSet& pieces = ws->pieces;
     pieces.Clear();
     bool umbra = false;
@@ -192,11 +198,35 @@ double HiddenFraction(const PreparedLight& light, std::span<const glm::dvec3> tr
       umbra = 0.5 * twice_area >= region.area * (1.0 - 1e-12);
       pieces.Add(ws->poly2, twice_area);
     }
-    hidden_area +=
-        umbra ? region.area
-              : UnionArea(pieces, region.lo, region.hi, light.tolerance, &ws->union_scratch);
+    hidden += umbra ? region_measure
+                    : UnionMeasure(pieces, region.lo, region.hi, light.tolerance, measure,
+                                   &ws->union_scratch);
   }
-  return std::clamp(hidden_area / light.area, 0.0, 1.0);
+  if (measure.is_area()) whole = light.area;  // the prepared sum, as before
+  return std::clamp(hidden / whole, 0.0, 1.0);
+}
+
+// HiddenFraction in the measure of `weighting` (light_weighting.h); `normal` (light space, unit)
+// for irradiance. cos θ_receiver is integrated with its sign, so where part of the light lies
+// behind the receiver's plane the point is not measured (NaN) rather than measured wrong.
+double WeightedHiddenFraction(const PreparedLight& light, std::span<const glm::dvec2> polygon,
+                              std::span<const glm::dvec3> triangles, const glm::dvec3& p,
+                              LightWeighting weighting, const glm::dvec3& normal, Workspace* ws) {
+  switch (weighting) {
+    case LightWeighting::kUnweighted:
+      return HiddenFraction(light, triangles, p, BoundaryMeasure::Area(), ws);
+    case LightWeighting::kEmitter:
+      return HiddenFraction(light, triangles, p, BoundaryMeasure::SolidAngle(p), ws);
+    case LightWeighting::kIrradiance:
+      for (const glm::dvec2& q : polygon) {
+        if (!(glm::dot(normal, glm::dvec3(q, 0.0) - p) > 0.0)) {
+          return std::numeric_limits<double>::quiet_NaN();
+        }
+      }
+      return HiddenFraction(light, triangles, p, BoundaryMeasure::ProjectedSolidAngle(p, normal),
+                            ws);
+  }
+  return std::numeric_limits<double>::quiet_NaN();
 }
 
 absl::StatusOr<std::vector<glm::dvec2>> LightPolygon(const LightSpec& light) {
@@ -264,22 +294,27 @@ absl::StatusOr<std::vector<glm::dvec3>> CastersInLightSpace(const Scene& scene) 
 }  // namespace
 
 double ExactHiddenFraction(std::span<const glm::dvec2> light_polygon,
-                           std::span<const glm::dvec3> triangles, const glm::dvec3& p_light) {
+                           std::span<const glm::dvec3> triangles, const glm::dvec3& p_light,
+                           LightWeighting weighting, const glm::dvec3& normal_light) {
   // A degenerate light has nothing to hide.
   const std::optional<PreparedLight> light = PrepareLight(light_polygon);
   if (!light.has_value()) return 0.0;
   Workspace ws;
-  return HiddenFraction(*light, triangles, p_light, &ws);
+  return WeightedHiddenFraction(*light, light_polygon, triangles, p_light, weighting, normal_light,
+                                &ws);
 }
 
 absl::StatusOr<std::vector<double>> ExactAttenuation(const Scene& scene,
-                                                     std::span<const glm::dvec3> points_world) {
+                                                     std::span<const glm::dvec3> points_world,
+                                                     const WeightingSpec& weighting) {
   absl::StatusOr<std::vector<glm::dvec2>> polygon = LightPolygon(scene.light);
   if (!polygon.ok()) return polygon.status();
   absl::StatusOr<std::vector<glm::dvec3>> triangles = CastersInLightSpace(scene);
   if (!triangles.ok()) return triangles.status();
   const std::optional<PreparedLight> light = PrepareLight(*polygon);
   if (!light.has_value()) return absl::InternalError("light polygon is degenerate");
+  const LightFrame& frame = scene.light.frame;
+  const glm::dvec3 normal_light = weighting.NormalInLightSpace(frame);
 
   std::vector<double> result(points_world.size(), std::numeric_limits<double>::quiet_NaN());
   // Points are independent: threads take them one at a time and each writes only its own
@@ -288,9 +323,10 @@ absl::StatusOr<std::vector<double>> ExactAttenuation(const Scene& scene,
   RunOnAllCores(points_world.size(), [&] {
     Workspace ws;
     for (size_t i = next++; i < points_world.size(); i = next++) {
-      const glm::dvec3 p_light = scene.light.frame.LightFromWorld(points_world[i]);
+      const glm::dvec3 p_light = frame.LightFromWorld(points_world[i]);
       if (!(p_light.z > 0.0) || !Finite(p_light)) continue;  // stays NaN
-      result[i] = HiddenFraction(*light, *triangles, p_light, &ws);
+      result[i] = WeightedHiddenFraction(*light, *polygon, *triangles, p_light, weighting.kind,
+                                         normal_light, &ws);
     }
   });
   return result;

@@ -18,6 +18,7 @@
 #include <numbers>
 #include <optional>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "absl/status/status.h"
@@ -82,9 +83,15 @@ bool InsidePolygon(const Polygon& poly, const glm::dvec2& q) {
   return inside;
 }
 
-// Fraction of uniformly drawn light points whose segment to p is blocked.
-double MonteCarloHidden(const Polygon& light, const Tris& tris, const glm::dvec3& p, int samples,
-                        uint64_t seed) {
+// The hidden share of uniformly drawn light points (rejection sampling), each weighted as
+// `weighting` says (light_weighting.h), computed here per sample from its definition: the ratio
+// estimate and its standard error.
+struct WeightedEstimate {
+  double value = 0.0, standard_error = 0.0;
+};
+WeightedEstimate MonteCarloWeighted(const Polygon& light, const Tris& tris, const glm::dvec3& p,
+                                    LightWeighting weighting, const glm::dvec3& normal, int samples,
+                                    uint64_t seed) {
   glm::dvec2 lo = light[0], hi = light[0];
   for (const glm::dvec2& q : light) {
     lo = glm::min(lo, q);
@@ -92,20 +99,42 @@ double MonteCarloHidden(const Polygon& light, const Tris& tris, const glm::dvec3
   }
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> ux(lo.x, hi.x), uy(lo.y, hi.y);
-  int hidden = 0;
+  std::vector<std::pair<double, bool>> drawn;  // weight, hidden
+  double sum_w = 0.0, sum_wh = 0.0;
   for (int s = 0; s < samples;) {
     const glm::dvec2 q(ux(rng), uy(rng));
-    if (!InsidePolygon(light, q)) continue;  // rejection sampling
+    if (!InsidePolygon(light, q)) continue;
     ++s;
     const glm::dvec3 d = glm::dvec3(q, 0.0) - p;
-    for (size_t t = 0; t < tris.size(); t += 3) {
-      if (SegmentHitsTriangle(p, d, tris[t], tris[t + 1], tris[t + 2])) {
-        ++hidden;
-        break;
-      }
+    const double r = glm::length(d);
+    double w = 1.0;
+    if (weighting != LightWeighting::kUnweighted) w = (p.z / r) / (r * r);  // cos_light / r^2
+    if (weighting == LightWeighting::kIrradiance) w *= std::max(0.0, glm::dot(normal, d) / r);
+    bool hidden = false;
+    for (size_t t = 0; t < tris.size() && !hidden; t += 3) {
+      hidden = SegmentHitsTriangle(p, d, tris[t], tris[t + 1], tris[t + 2]);
     }
+    drawn.emplace_back(w, hidden);
+    sum_w += w;
+    sum_wh += hidden ? w : 0.0;
   }
-  return static_cast<double>(hidden) / samples;
+  WeightedEstimate e;
+  e.value = sum_wh / sum_w;
+  double variance = 0.0;  // the ratio estimator's (delta method)
+  for (const auto& [w, hidden] : drawn) {
+    const double r = w * ((hidden ? 1.0 : 0.0) - e.value);
+    variance += r * r;
+  }
+  e.standard_error = std::sqrt(variance) / sum_w;
+  return e;
+}
+
+// Fraction of uniformly drawn light points whose segment to p is blocked.
+double MonteCarloHidden(const Polygon& light, const Tris& tris, const glm::dvec3& p, int samples,
+                        uint64_t seed) {
+  return MonteCarloWeighted(light, tris, p, LightWeighting::kUnweighted, glm::dvec3(0.0), samples,
+                            seed)
+      .value;
 }
 
 Tris RandomTriangles(int count, double size, uint64_t seed) {
@@ -523,6 +552,99 @@ TEST(ExactAttenuationTest, ManyPointsKeepTheirOrder) {
     const double s = points[i].x;
     EXPECT_NEAR((*a)[i], std::clamp((1.0 + s) / 2.0, 0.0, 1.0), 1e-12) << "point " << i;
   }
+}
+
+// Weighted attenuation (issue #15 item 4). A half-plane occluder whose edge projects onto the
+// light's middle from a point off to one side: half the light's area is hidden, but the hidden
+// half is the far one, so it covers less than half the solid angle.
+TEST(ExactWeightedTest, AHalfHiddenFromTheSideIsLessThanHalfWeighted) {
+  const Polygon light = Rect(-1, -1, 1, 1);
+  const glm::dvec3 p(1.5, 0.3, 2.0);
+  const glm::dvec3 normal = glm::normalize(glm::dvec3(0.1, 0.0, -1.0));
+  // The edge at height z_occ through the line that projects to x = 0: x = p.x (1 - h'/h).
+  const double z_occ = 1.0;
+  const double edge = p.x * (1.0 - (p.z - z_occ) / p.z);
+  Tris tris;
+  AddRectAtZ(-50, -50, edge, 50, z_occ, &tris);
+  EXPECT_NEAR(ExactHiddenFraction(light, tris, p), 0.5, 1e-12);
+  for (LightWeighting w : {LightWeighting::kEmitter, LightWeighting::kIrradiance}) {
+    const double exact = ExactHiddenFraction(light, tris, p, w, normal);
+    const WeightedEstimate mc = MonteCarloWeighted(light, tris, p, w, normal, 200000, 7);
+    EXPECT_NEAR(exact, mc.value, 4.0 * mc.standard_error) << LightWeightingName(w);
+    EXPECT_LT(exact, 0.45) << LightWeightingName(w);  // a definition that differs, measurably
+  }
+}
+
+TEST(ExactWeightedTest, MatchesWeightedMonteCarloForRandomTriangles) {
+  const glm::dvec3 normal = glm::normalize(glm::dvec3(-0.2, 0.1, -1.0));
+  for (uint64_t seed : {1, 2, 3}) {
+    const Polygon light = Rect(-1, -0.5, 1, 0.5);
+    const Tris tris = RandomTriangles(20, 0.8, seed);
+    const glm::dvec3 p(0.3 * seed - 0.6, 0.1, 2.0);
+    for (LightWeighting w : {LightWeighting::kEmitter, LightWeighting::kIrradiance}) {
+      const double exact = ExactHiddenFraction(light, tris, p, w, normal);
+      const WeightedEstimate mc = MonteCarloWeighted(light, tris, p, w, normal, 200000, 50 + seed);
+      EXPECT_NEAR(exact, mc.value, 4.0 * mc.standard_error)
+          << LightWeightingName(w) << " seed " << seed;
+      EXPECT_GT(mc.value, 0.02);
+      EXPECT_LT(mc.value, 0.98);
+    }
+  }
+}
+
+TEST(ExactWeightedTest, NoOccluderIsLitAndFullCoverIsUmbraInEveryMeasure) {
+  const Polygon light = Rect(-1, -1, 1, 1);
+  const glm::dvec3 p(0.4, -0.2, 3.0);
+  const glm::dvec3 normal(0.0, 0.0, -1.0);
+  Tris cover;
+  AddRectAtZ(-100, -100, 100, 100, 1.0, &cover);
+  for (LightWeighting w : {LightWeighting::kEmitter, LightWeighting::kIrradiance}) {
+    EXPECT_EQ(ExactHiddenFraction(light, {}, p, w, normal), 0.0);
+    EXPECT_NEAR(ExactHiddenFraction(light, cover, p, w, normal), 1.0, 1e-12);
+  }
+}
+
+// The receiver's cosine is integrated with its sign, so a light reaching behind the receiver's
+// plane is refused (NaN), not measured wrong.
+TEST(ExactWeightedTest, IrradianceIsNotMeasuredWhereTheLightReachesBehindTheReceiver) {
+  const Polygon light = Rect(-1, -1, 1, 1);
+  const glm::dvec3 p(0.0, 0.0, 0.5);
+  // A wall through p facing +x: the light's half x < 0 is behind it.
+  EXPECT_TRUE(std::isnan(
+      ExactHiddenFraction(light, {}, p, LightWeighting::kIrradiance, glm::dvec3(1, 0, 0))));
+  EXPECT_FALSE(
+      std::isnan(ExactHiddenFraction(light, {}, p, LightWeighting::kEmitter, glm::dvec3(1, 0, 0))));
+}
+
+TEST(ExactWeightedTest, ExactAttenuationTakesTheNormalInWorldSpace) {
+  // HalfPlaneScene's light looks down -y onto points at y = 0, whose floor faces +y. The scene
+  // path (world normal, turned into light space) equals ExactHiddenFraction in light space.
+  const Scene scene = HalfPlaneScene(LightShape::kRect);
+  const LightFrame& frame = scene.light.frame;
+  Tris tris;
+  const TriangleMesh& caster = scene.meshes[0];
+  for (uint32_t index : caster.indices) {
+    tris.push_back(frame.LightFromWorld(caster.positions_world[index]));
+  }
+  const std::vector<glm::dvec3> points = {{0.5, 0, 0.3}, {-0.3, 2, 0.1}};
+  const glm::dvec3 up(0, 1, 0);
+  WeightingSpec spec{LightWeighting::kIrradiance, up};
+  absl::StatusOr<std::vector<double>> world = ExactAttenuation(scene, points, spec);
+  ASSERT_TRUE(world.ok()) << world.status();
+  const glm::dvec3 normal_light = spec.NormalInLightSpace(frame);
+  EXPECT_NEAR(normal_light.z, -1.0, 1e-15);  // facing the light: towards light space's -z
+  for (size_t i = 0; i < points.size(); ++i) {
+    const double light_space =
+        ExactHiddenFraction(Rect(-1, -1, 1, 1), tris, frame.LightFromWorld(points[i]),
+                            LightWeighting::kIrradiance, normal_light);
+    EXPECT_GT(light_space, 0.0) << i;
+    EXPECT_LT(light_space, 1.0) << i;
+    EXPECT_NEAR((*world)[i], light_space, 1e-12) << i;
+  }
+  spec.normal_world = -up;  // facing away from the light: nothing measured
+  world = ExactAttenuation(scene, points, spec);
+  ASSERT_TRUE(world.ok()) << world.status();
+  EXPECT_TRUE(std::isnan((*world)[0]));
 }
 
 }  // namespace

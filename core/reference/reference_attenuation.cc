@@ -1,5 +1,7 @@
 #include "core/reference/reference_attenuation.h"
 
+#include <cmath>
+
 #include "absl/strings/str_format.h"
 #include "core/reference/exact_visibility.h"
 
@@ -43,6 +45,15 @@ const char* ReferenceMethodName(ReferenceMethod method) {
 absl::StatusOr<std::vector<double>> ReferenceAttenuation(const Scene& scene,
                                                          std::span<const glm::dvec3> points,
                                                          const ReferenceOptions& options) {
+  WeightingSpec weighting = options.weighting;
+  if (weighting.kind == LightWeighting::kIrradiance) {
+    const double length = glm::length(weighting.normal_world);
+    if (!std::isfinite(length) || !(length > 0.0)) {
+      return absl::InvalidArgumentError(
+          "irradiance weighting needs the receiver's normal (finite, not zero)");
+    }
+    weighting.normal_world /= length;
+  }
   if (ResolveReferenceMethod(options.method, scene) == ReferenceMethod::kExact) {
     if (scene.light.is_sphere_face()) {
       // The exact method projects a planar light; a sphere's outline moves with the point.
@@ -54,9 +65,9 @@ absl::StatusOr<std::vector<double>> ReferenceAttenuation(const Scene& scene,
       return absl::UnimplementedError(
           "the exact reference has no alpha-tested casters: use --method embree (or auto)");
     }
-    return ExactAttenuation(scene, points);
+    return ExactAttenuation(scene, points, weighting);
   }
-  return EmbreeAttenuation(scene, points, options.samples, options.seed);
+  return EmbreeAttenuation(scene, points, options.samples, options.seed, weighting);
 }
 
 }  // namespace pdsm

@@ -13,6 +13,7 @@
 
 #include "absl/status/statusor.h"
 #include "core/reference/embree_visibility.h"
+#include "core/reference/light_weighting.h"
 #include "core/scene/scene.h"
 
 namespace pdsm {
@@ -35,10 +36,12 @@ struct ReferenceOptions {
   ReferenceMethod method = ReferenceMethod::kAuto;
   int samples = kDefaultReferenceSamples;  // Embree only
   uint64_t seed = 1;                       // Embree only
+  WeightingSpec weighting = {};            // light_weighting.h; default unweighted (the bake's)
 };
 
 // Attenuation of world points, NaN behind the light. Errors: UNIMPLEMENTED for the exact method on
-// a sun light; see ExactAttenuation and EmbreeAttenuation for the rest.
+// a sun light; INVALID_ARGUMENT for irradiance weighting without a finite non-zero normal (it is
+// normalised here); see ExactAttenuation and EmbreeAttenuation for the rest.
 absl::StatusOr<std::vector<double>> ReferenceAttenuation(const Scene& scene,
                                                          std::span<const glm::dvec3> points,
                                                          const ReferenceOptions& options);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <span>
 
 #include "core/reference/polygon_clip.h"
 
@@ -81,10 +82,10 @@ class CompensatedSum {
   double sum_ = 0.0, compensation_ = 0.0;
 };
 
-// Twice the area that edge k of polygon i contributes to the union, by Green's theorem:
-// the cross products of the endpoints of the parts of the edge no other polygon covers.
+// What edge k of polygon i contributes to the union's measure, from its boundary (Green's
+// theorem for the area): the terms of the parts of the edge no other polygon covers.
 double EdgeTerm(const ConvexSet& set, const CellGrid& grid, size_t i, uint32_t k, uint64_t edge_id,
-                double tolerance, UnionScratch* ws) {
+                double tolerance, const BoundaryMeasure& measure, UnionScratch* ws) {
   const uint32_t first = set.start[i], last = set.start[i + 1];
   const glm::dvec2& a = set.vertex[k];
   const glm::dvec2& b = set.vertex[k + 1 < last ? k + 1 : first];
@@ -108,30 +109,39 @@ double EdgeTerm(const ConvexSet& set, const CellGrid& grid, size_t i, uint32_t k
   auto at = [&](double t) { return t <= 0.0 ? a : t >= 1.0 ? b : a + t * (b - a); };
   double term = 0.0, reached = 0.0;
   for (const auto& [t0, t1] : ws->intervals) {
-    if (t0 > reached) term += Cross(at(reached), at(t0));
+    if (t0 > reached) term += measure.Segment(at(reached), at(t0));
     reached = std::max(reached, t1);
   }
-  if (reached < 1.0) term += Cross(at(reached), b);
+  if (reached < 1.0) term += measure.Segment(at(reached), b);
   return term;
 }
 
 }  // namespace
 
-double UnionArea(const ConvexSet& set, const glm::dvec2& lo, const glm::dvec2& hi, double tolerance,
-                 UnionScratch* scratch) {
+double UnionMeasure(const ConvexSet& set, const glm::dvec2& lo, const glm::dvec2& hi,
+                    double tolerance, const BoundaryMeasure& measure, UnionScratch* scratch) {
   const size_t n = set.size();
   if (n == 0) return 0.0;
-  if (n == 1) return set.area[0];
+  if (n == 1) {
+    if (measure.is_area()) return set.area[0];
+    return measure.Polygon(
+        std::span<const glm::dvec2>(set.vertex.data() + set.start[0], set.start[1] - set.start[0]));
+  }
   scratch->grid.Build(set, lo, hi, tolerance);
   scratch->visited.assign(n, std::numeric_limits<uint64_t>::max());
   uint64_t edge_id = 0;
-  CompensatedSum twice_area;
+  CompensatedSum sum;
   for (size_t i = 0; i < n; ++i) {
     for (uint32_t k = set.start[i]; k < set.start[i + 1]; ++k, ++edge_id) {
-      twice_area.Add(EdgeTerm(set, scratch->grid, i, k, edge_id, tolerance, scratch));
+      sum.Add(EdgeTerm(set, scratch->grid, i, k, edge_id, tolerance, measure, scratch));
     }
   }
-  return 0.5 * twice_area.Value();
+  return sum.Value();
+}
+
+double UnionArea(const ConvexSet& set, const glm::dvec2& lo, const glm::dvec2& hi, double tolerance,
+                 UnionScratch* scratch) {
+  return UnionMeasure(set, lo, hi, tolerance, BoundaryMeasure::Area(), scratch);
 }
 
 }  // namespace pdsm::internal

@@ -20,6 +20,7 @@
 
 #include <glm/glm.hpp>
 
+#include "core/reference/boundary_measure.h"
 #include "core/reference/cell_grid.h"
 #include "core/reference/convex_set.h"
 
@@ -40,6 +41,12 @@ struct UnionScratch {
 // `scratch` holds no state between calls.
 double UnionArea(const ConvexSet& set, const glm::dvec2& lo, const glm::dvec2& hi, double tolerance,
                  UnionScratch* scratch);
+
+// The same union measured by `measure` (boundary_measure.h: area, solid angle or projected
+// solid angle from a point), from the same boundary segments: the coincidence decisions are
+// UnionArea's, so the union is the same one, whatever the measure.
+double UnionMeasure(const ConvexSet& set, const glm::dvec2& lo, const glm::dvec2& hi,
+                    double tolerance, const BoundaryMeasure& measure, UnionScratch* scratch);
 
 }  // namespace pdsm::internal
 
