@@ -6,6 +6,7 @@
 #include <limits>
 #include <optional>
 #include <system_error>
+#include <vector>
 
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -181,22 +182,62 @@ bool HoldsPolygons(const aiScene& scene, const aiNode& node) {
   return false;
 }
 
+// Visits `node` and its descendants.
+template <typename Visit>
+void ForEachNode(aiNode* node, const Visit& visit) {
+  visit(node);
+  for (unsigned c = 0; c < node->mNumChildren; ++c) ForEachNode(node->mChildren[c], visit);
+}
+
+// Deletes the meshes no node refers to and renumbers the nodes' references, keeping the order
+// of the rest. Why: PreTransformVertices hands every face's index array over to the meshes it
+// builds from the nodes' references and then frees the old meshes without them, so the index
+// arrays of a mesh no node refers to would leak (Assimp 5.2.5; LeakSanitizer found it).
+void DeleteUnreferencedMeshes(aiScene* scene) {
+  std::vector<unsigned> new_index(scene->mNumMeshes, 0);
+  std::vector<bool> referenced(scene->mNumMeshes, false);
+  ForEachNode(scene->mRootNode, [&](aiNode* node) {
+    for (unsigned k = 0; k < node->mNumMeshes; ++k) referenced[node->mMeshes[k]] = true;
+  });
+  unsigned kept = 0;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    if (!referenced[m]) {
+      delete scene->mMeshes[m];
+      continue;
+    }
+    new_index[m] = kept;
+    scene->mMeshes[kept++] = scene->mMeshes[m];
+  }
+  for (unsigned m = kept; m < scene->mNumMeshes; ++m) scene->mMeshes[m] = nullptr;
+  scene->mNumMeshes = kept;
+  ForEachNode(scene->mRootNode, [&](aiNode* node) {
+    for (unsigned k = 0; k < node->mNumMeshes; ++k) node->mMeshes[k] = new_index[node->mMeshes[k]];
+  });
+}
+
 // The meshes of the nodes whose role is `role`, flattened. `importer` holds the file read
-// without steps; the other nodes' mesh references are dropped (PreTransformVertices builds its
-// meshes from the nodes' references alone), then LoadMeshFile's steps run. Assimp documents
-// ReadFile(0) then ApplyPostProcessing(steps) as equal to ReadFile(steps), so a file without
-// roles gives LoadMeshFile's bytes. Consumes the importer's scene.
+// without steps; the other nodes' mesh references are dropped, and the meshes then unused
+// deleted (PreTransformVertices builds its meshes from the nodes' references alone), then
+// LoadMeshFile's steps run. Assimp documents ReadFile(0) then ApplyPostProcessing(steps) as
+// equal to ReadFile(steps), so a file without roles gives LoadMeshFile's bytes. Consumes the
+// importer's scene.
 absl::StatusOr<MeshFileData> FlattenNodesOfRole(Assimp::Importer& importer, const std::string& path,
                                                 const std::string& context,
                                                 std::optional<MeshRole> role) {
-  // The importer owns the scene; dropping references before the steps run is the use
-  // ApplyPostProcessing exists for. aiNode frees mMeshes whatever mNumMeshes says.
+  // The importer owns the scene; editing it before the steps run is the use
+  // ApplyPostProcessing exists for.
   aiScene* scene = const_cast<aiScene*>(importer.GetScene());
   absl::StatusOr<internal::NodeRoles> roles = internal::ReadNodeRoles(*scene, path, context);
   if (!roles.ok()) return roles.status();
   for (const auto& [node, node_role] : *roles) {
-    if (node_role != role) const_cast<aiNode*>(node)->mNumMeshes = 0;
+    if (node_role == role) continue;
+    aiNode* dropped = const_cast<aiNode*>(node);
+    delete[] dropped->mMeshes;
+    dropped->mMeshes = nullptr;
+    dropped->mNumMeshes = 0;
   }
+  DeleteUnreferencedMeshes(scene);
+  if (scene->mNumMeshes == 0) return CannotReadMesh(context, path, "no triangles");
   const aiScene* flat = importer.ApplyPostProcessing(kFlattenSteps);
   if (flat == nullptr) return CannotReadMesh(context, path, importer.GetErrorString());
   absl::StatusOr<MeshFileData> data = Convert(flat, path, context);
