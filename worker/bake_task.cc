@@ -28,6 +28,7 @@ constexpr int64_t kScanMapTexels = int64_t{1} << 22;
 struct ChunkMap {
   glm::dvec2 sample;
   std::vector<float> depth;
+  std::vector<uint32_t> occupancy;  // BuildOccupancySums(depth): skips rays that meet no caster
   ShadowMapWindow window;
 };
 
@@ -59,9 +60,10 @@ TileEvents ScanTile(const BakePlan& plan, const PreparedTile& tile,
   TileEvents out = NoShadowEvents(rect);
   std::vector<ShadowMapView> views;
   for (size_t m = 0; m < map_count; ++m) {
-    views.push_back(ShadowMapView{maps[m].depth.data(), plan.lattice, maps[m].window});
+    views.push_back(ShadowMapView{maps[m].depth.data(), plan.lattice, maps[m].window,
+                                  maps[m].occupancy.data()});
   }
-  int64_t walked = 0, segments = 0;
+  int64_t walked = 0, segments = 0, without_caster = 0;
   for (int y = rect.y0; y < rect.y0 + rect.height; ++y) {
     const double t = g.PixelCenterT(y);
     for (int x = rect.x0; x < rect.x0 + rect.width; ++x) {
@@ -73,8 +75,11 @@ TileEvents ScanTile(const BakePlan& plan, const PreparedTile& tile,
         for (size_t m = 0; m < map_count; ++m) {
           const glm::dvec2& sample = maps[m].sample;
           if (windows == nullptr) {
-            walked += ScanConvertRay(views[m], RayForSample(plan, s, t, sample, block.z_begin),
-                                     g.projection, &out.events);
+            const int64_t n =
+                ScanConvertRay(views[m], RayForSample(plan, s, t, sample, block.z_begin),
+                               g.projection, &out.events);
+            walked += n;
+            without_caster += n == 0 ? 1 : 0;
             ++segments;
             continue;
           }
@@ -83,8 +88,10 @@ TileEvents ScanTile(const BakePlan& plan, const PreparedTile& tile,
             const double lo = std::max(w.lo, block.z_begin);
             const double hi = std::min(w.hi, block.z_end);
             if (!(lo < hi)) continue;
-            walked += ScanConvertRay(views[m], RayForSample(plan, s, t, sample, lo, hi),
-                                     g.projection, &out.events, SegmentEnd::kClose);
+            const int64_t n = ScanConvertRay(views[m], RayForSample(plan, s, t, sample, lo, hi),
+                                             g.projection, &out.events, SegmentEnd::kClose);
+            walked += n;
+            without_caster += n == 0 ? 1 : 0;
             ++segments;
           }
         }
@@ -96,6 +103,7 @@ TileEvents ScanTile(const BakePlan& plan, const PreparedTile& tile,
   }
   stats->texels_walked += walked;
   stats->ray_segments += segments;
+  stats->segments_without_caster += without_caster;
   return out;
 }
 
@@ -126,6 +134,7 @@ void TaskStats::Add(const TaskStats& o) {
   events += o.events;
   texels_walked += o.texels_walked;
   ray_segments += o.ray_segments;
+  segments_without_caster += o.segments_without_caster;
   tiles_skipped += o.tiles_skipped;
 }
 
@@ -251,6 +260,7 @@ absl::StatusOr<std::vector<TileEvents>> TaskRunner::Run(const BakeTask& task, Ta
       auto render_start = std::chrono::steady_clock::now();
       if (absl::Status s = renderer_->Render(camera, visible, &map.depth); !s.ok()) return s;
       stats->shadow_map_seconds += SecondsSince(render_start);
+      BuildOccupancySums(map.depth.data(), window.width, window.height, &map.occupancy);
       stats->shadow_maps += 1;
       stats->shadow_map_texels += texels;
       for (const DrawRange& r : visible) stats->triangles_submitted += r.triangle_count;

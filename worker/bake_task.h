@@ -34,11 +34,12 @@ struct TaskStats {
   double scan_seconds = 0;        // scan conversion and per-pixel sorting
   int64_t shadow_maps = 0;
   int64_t shadow_map_texels = 0;
-  int64_t triangles_submitted = 0;  // summed over the shadow maps rendered
-  int64_t events = 0;               // before merging
-  int64_t texels_walked = 0;        // shadow-map texels visited by scan conversion
-  int64_t tiles_skipped = 0;        // tiles no caster reaches (no shadow map at all)
-  int64_t ray_segments = 0;         // ray pieces scan-converted (rays x samples, x windows)
+  int64_t triangles_submitted = 0;      // summed over the shadow maps rendered
+  int64_t events = 0;                   // before merging
+  int64_t texels_walked = 0;            // shadow-map texels visited by scan conversion
+  int64_t tiles_skipped = 0;            // tiles no caster reaches (no shadow map at all)
+  int64_t ray_segments = 0;             // ray pieces scan-converted (rays x samples, x windows)
+  int64_t segments_without_caster = 0;  // of those, pieces whose texels hold no caster: not walked
   void Add(const TaskStats& o);
 };
 

@@ -64,7 +64,37 @@ class EventEmitter {
   bool shadowed_ = false;
 };
 
+// Whether any texel of [x0, x1] x [y0, y1] (clamped to the window) holds a caster.
+bool AnyCasterIn(const ShadowMapView& sm, int x0, int y0, int x1, int y1) {
+  const int w = sm.window.width, h = sm.window.height;
+  x0 = std::clamp(x0, 0, w - 1);
+  x1 = std::clamp(x1, 0, w - 1);
+  y0 = std::clamp(y0, 0, h - 1);
+  y1 = std::clamp(y1, 0, h - 1);
+  const size_t row = static_cast<size_t>(w) + 1;
+  const uint32_t* s = sm.occupancy;
+  const uint32_t count =
+      s[(y1 + 1) * row + x1 + 1] - s[y0 * row + x1 + 1] - s[(y1 + 1) * row + x0] + s[y0 * row + x0];
+  return count != 0;
+}
+
 }  // namespace
+
+void BuildOccupancySums(const float* depth, int width, int height, std::vector<uint32_t>* sums) {
+  const size_t row = static_cast<size_t>(width) + 1;
+  sums->assign(row * (static_cast<size_t>(height) + 1), 0);
+  uint32_t* out = sums->data();
+  for (int y = 0; y < height; ++y) {
+    const float* in = depth + static_cast<size_t>(y) * width;
+    const uint32_t* above = out + static_cast<size_t>(y) * row;
+    uint32_t* here = out + static_cast<size_t>(y + 1) * row;
+    uint32_t run = 0;
+    for (int x = 0; x < width; ++x) {
+      run += in[x] != std::numeric_limits<float>::infinity() ? 1u : 0u;
+      here[x + 1] = above[x + 1] + run;
+    }
+  }
+}
 
 int64_t ScanConvertRay(const ShadowMapView& sm, const RayInShadowMap& ray, Projection projection,
                        std::vector<Event>* events, SegmentEnd end) {
@@ -76,6 +106,18 @@ int64_t ScanConvertRay(const ShadowMapView& sm, const RayInShadowMap& ray, Proje
   const glm::dvec2 p0 = (ray.st_near - origin) / pitch;
   const glm::dvec2 p1 = (ray.st_far - origin) / pitch;
   const glm::dvec2 d = p1 - p0;
+
+  // The walk below visits only texels between the ends' texels (one more on each side covers
+  // a step rounding takes past an end), so a box without a caster gives a walk without events:
+  // the ray starts lit and would stay lit, open or closed.
+  if (sm.occupancy != nullptr) {
+    const glm::dvec2 lo = glm::floor(glm::min(p0, p1)), hi = glm::floor(glm::max(p0, p1));
+    // Coordinates far outside the window (a clamped end) clamp to its edge.
+    auto to_int = [](double v) { return static_cast<int>(std::clamp(v, -2.0, 2.0e9)); };
+    if (!AnyCasterIn(sm, to_int(lo.x) - 1, to_int(lo.y) - 1, to_int(hi.x) + 1, to_int(hi.y) + 1)) {
+      return 0;
+    }
+  }
 
   // Amanatides–Woo traversal over f in [0, 1].
   int ix = std::clamp(static_cast<int>(std::floor(p0.x)), 0, win.width - 1);

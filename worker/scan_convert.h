@@ -25,12 +25,20 @@
 namespace pdsm {
 
 // A rendered shadow map: a window of the global lattice, row-major from the window's lowest
-// (s, t), holding biased light-space depths (+infinity where no caster).
+// (s, t), holding biased light-space depths (+infinity where no caster). `occupancy`, when
+// given, is BuildOccupancySums' table of the same map: a ray whose texels' box holds no caster
+// is then skipped without a walk (most rays of a bake cross no caster at all).
 struct ShadowMapView {
   const float* depth = nullptr;
   ShadowMapLattice lattice;
   ShadowMapWindow window;
+  const uint32_t* occupancy = nullptr;
 };
+
+// The summed-area table of the texels holding a caster (depth < +infinity): (width + 1) x
+// (height + 1) counts, row-major, sums[(y + 1) * (width + 1) + x + 1] = the count in
+// [0, x] x [0, y]. REQUIRES width * height < 2^32.
+void BuildOccupancySums(const float* depth, int width, int height, std::vector<uint32_t>* sums);
 
 // What a segment's end means: kOpen, the ray's state holds on (the ray's natural end);
 // kClose, the segment is one piece of the ray (a surfaces-only depth window): a shadowed ray
@@ -41,7 +49,8 @@ enum class SegmentEnd { kOpen, kClose };
 // depth, to `events`. Starting mid-ray is exact from the start on: a texel's state depends
 // only on its own depth (enter at z_near when the first texel is already behind a caster).
 // REQUIRES: the ray's segment lies inside the view's window (ShadowMapWindowFor).
-// Returns the number of texels walked.
+// Returns the number of texels walked (0 for a ray the occupancy table skips: it has no events,
+// as its walk would have found none).
 int64_t ScanConvertRay(const ShadowMapView& shadow_map, const RayInShadowMap& ray,
                        Projection projection, std::vector<Event>* events,
                        SegmentEnd end = SegmentEnd::kOpen);

@@ -84,7 +84,8 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags,
       "  time %.2fs; shadow maps %.2f thread-s (%lld maps, %.1f Mtexels), "
       "scan conversion %.2f thread-s, merge+compress %.3f thread-s\n"
       "  events %lld -> %lld merged -> %lld consolidated -> %lld vertices%s\n"
-      "  scan: %lld ray segments, %.1f Mtexels walked; %lld tiles skipped (no caster)\n",
+      "  scan: %lld ray segments (%lld meet no caster), %.1f Mtexels walked; "
+      "%lld tiles skipped (no caster)\n",
       scene.name.c_str(), what.c_str(), s.tiles, s.tiles_all_lit, static_cast<long long>(s.tasks),
       s.seconds, s.tasks_stats.shadow_map_seconds,
       static_cast<long long>(s.tasks_stats.shadow_maps), s.tasks_stats.shadow_map_texels / 1e6,
@@ -96,8 +97,9 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags,
                                          " of event lists went through a scratch file")
                                 .c_str()
                           : "",
-      static_cast<long long>(s.tasks_stats.ray_segments), s.tasks_stats.texels_walked / 1e6,
-      static_cast<long long>(s.tasks_stats.tiles_skipped));
+      static_cast<long long>(s.tasks_stats.ray_segments),
+      static_cast<long long>(s.tasks_stats.segments_without_caster),
+      s.tasks_stats.texels_walked / 1e6, static_cast<long long>(s.tasks_stats.tiles_skipped));
   // The limit of the design is one map per sample drawing every caster (bench/
   // pdsm-bench-limit): these two ratios say how far the bake is from it, in maps and triangles.
   // Several lights: the sum of each light's limit.
