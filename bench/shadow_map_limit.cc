@@ -11,7 +11,6 @@
 //
 // Usage: pdsm-bench-limit SCENE.json [--resolution N] [--samples N] [--sm-resolution N]
 //        [--threads N] [--repeat N] [--out DIR]
-#include <sys/resource.h>
 
 #include <algorithm>
 #include <chrono>
@@ -23,6 +22,7 @@
 
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
+#include "bench/bench_support.h"
 #include "core/bake/bake_plan.h"
 #include "core/scene/scene_loader.h"
 #include "core/util/malloc_arenas.h"
@@ -34,6 +34,10 @@
 
 namespace pdsm {
 namespace {
+
+using bench::CpuSeconds;
+using bench::FullWindow;
+using bench::Median;
 
 struct Options {
   std::string scene_path;
@@ -47,13 +51,6 @@ struct Cost {
   int64_t maps = 0, triangles = 0;
 };
 
-double CpuSeconds() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  const auto seconds = [](const timeval& t) { return t.tv_sec + t.tv_usec * 1e-6; };
-  return seconds(usage.ru_utime) + seconds(usage.ru_stime);
-}
-
 template <typename Work>
 absl::StatusOr<Cost> Measure(const Work& work) {
   const double cpu = CpuSeconds();
@@ -63,14 +60,6 @@ absl::StatusOr<Cost> Measure(const Work& work) {
   cost->cpu_s = CpuSeconds() - cpu;
   cost->wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return cost;
-}
-
-// The whole lattice: every texel of the PDSM window at the plan's shadow-map pitch.
-ShadowMapWindow FullWindow(const BakePlan& plan) {
-  const PdsmGeometry& g = plan.geometry();
-  const ShadowMapLattice& l = plan.lattice;
-  return ShadowMapWindow{0, 0, static_cast<int>(std::ceil((g.s_max - g.s_min) / l.pitch_s)),
-                         static_cast<int>(std::ceil((g.t_max - g.t_min) / l.pitch_t))};
 }
 
 // One full map per sample, samples dealt round-robin to `threads` renderers.
@@ -120,26 +109,15 @@ absl::StatusOr<Cost> Bake(const Scene& scene, const Options& o) {
   return cost;
 }
 
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
-
 bool ParseFlags(int argc, char** argv, Options* o) {
   if (argc < 2) return false;
   o->scene_path = argv[1];
   for (int i = 2; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
+    if (bench::ApplySceneFlag(flag, argv[i + 1], &o->overrides)) continue;
     int v = 0;
     if (!absl::SimpleAtoi(argv[i + 1], &v) && flag != "--out") return false;
-    if (flag == "--resolution") {
-      o->overrides.add_resolution(v);
-      o->overrides.add_resolution(v);
-    } else if (flag == "--samples") {
-      o->overrides.set_samples(v);
-    } else if (flag == "--sm-resolution") {
-      o->overrides.set_shadow_map_resolution(v);
-    } else if (flag == "--threads") {
+    if (flag == "--threads") {
       o->threads = v;
     } else if (flag == "--repeat") {
       o->repeat = std::max(1, v);

@@ -103,53 +103,6 @@ absl::Status ValidateCamera(const ShadowMapCamera& camera) {
   return absl::OkStatus();
 }
 
-// Column-major clip_from_light for the texels `piece` of `camera.lattice` (rows as in
-// DESIGN.md: NDC x, y span the piece's edges exactly; clip z / w is the reversed depth).
-// Computed in double, rounded once to float. `zero_to_one_clip`: glClipControl is in effect;
-// otherwise clip z is remapped to [-1, 1] (only the orthographic depth needs it: the
-// perspective near-plane test -w <= n <= w equals 0 <= n <= w for n > 0).
-std::array<float, 16> ClipFromLight(const ShadowMapCamera& camera, const ShadowMapWindow& piece,
-                                    bool zero_to_one_clip) {
-  const ShadowMapLattice& lattice = camera.lattice;
-  const double s_lo = lattice.EdgeS(piece.x0), s_hi = lattice.EdgeS(piece.x0 + piece.width);
-  const double t_lo = lattice.EdgeT(piece.y0), t_hi = lattice.EdgeT(piece.y0 + piece.height);
-  const double sc = 0.5 * (s_lo + s_hi), hs = 0.5 * (s_hi - s_lo);
-  const double tc = 0.5 * (t_lo + t_hi), ht = 0.5 * (t_hi - t_lo);
-  const double a = camera.sample.x, b = camera.sample.y;
-  double rows[4][4];
-  if (camera.projection == Projection::kPerspective) {
-    const double n = camera.z_clip_near;
-    // clang-format off
-    const double r[4][4] = {{1 / hs, 0, -sc / hs, -a / hs},
-                            {0, 1 / ht, -tc / ht, -b / ht},
-                            {0, 0, 0, n},
-                            {0, 0, 1, 0}};
-    // clang-format on
-    std::copy(&r[0][0], &r[0][0] + 16, &rows[0][0]);
-  } else {
-    const double range = camera.z_clip_far - camera.z_clip_near;
-    double z_row[4] = {0, 0, -1 / range, camera.z_clip_far / range};
-    if (!zero_to_one_clip) {
-      z_row[2] *= 2;
-      z_row[3] = 2 * z_row[3] - 1;
-    }
-    // clang-format off
-    const double r[4][4] = {{1 / hs, 0, -a / hs, -sc / hs},
-                            {0, 1 / ht, -b / ht, -tc / ht},
-                            {z_row[0], z_row[1], z_row[2], z_row[3]},
-                            {0, 0, 0, 1}};
-    // clang-format on
-    std::copy(&r[0][0], &r[0][0] + 16, &rows[0][0]);
-  }
-  std::array<float, 16> column_major;
-  for (int col = 0; col < 4; ++col) {
-    for (int row = 0; row < 4; ++row) {
-      column_major[col * 4 + row] = static_cast<float>(rows[row][col]);
-    }
-  }
-  return column_major;
-}
-
 class OsMesaShadowMapRenderer final : public ShadowMapRenderer {
  public:
   OsMesaShadowMapRenderer(gl::OsMesaContext context, const GlFunctions& gl)
@@ -478,7 +431,8 @@ absl::Status OsMesaShadowMapRenderer::RenderPiece(const ShadowMapCamera& camera,
   gl_.ClearBufferfv(GL_COLOR, 0, no_caster);
   gl_.ClearBufferfv(GL_DEPTH, 0, &beyond_everything);
   if (!draw_counts_.empty()) {
-    const std::array<float, 16> clip_from_light = ClipFromLight(camera, piece, has_clip_control_);
+    const std::array<float, 16> clip_from_light =
+        ShadowMapClipFromLight(camera, piece, has_clip_control_);
     const bool any_masked =
         std::any_of(draw_masks_.begin(), draw_masks_.end(), [](uint16_t k) { return k != 0; });
     if (any_masked) {
@@ -614,6 +568,48 @@ absl::Status OsMesaShadowMapRenderer::Render(const ShadowMapCamera& camera,
 }
 
 }  // namespace
+
+std::array<float, 16> ShadowMapClipFromLight(const ShadowMapCamera& camera,
+                                             const ShadowMapWindow& piece, bool zero_to_one_clip) {
+  const ShadowMapLattice& lattice = camera.lattice;
+  const double s_lo = lattice.EdgeS(piece.x0), s_hi = lattice.EdgeS(piece.x0 + piece.width);
+  const double t_lo = lattice.EdgeT(piece.y0), t_hi = lattice.EdgeT(piece.y0 + piece.height);
+  const double sc = 0.5 * (s_lo + s_hi), hs = 0.5 * (s_hi - s_lo);
+  const double tc = 0.5 * (t_lo + t_hi), ht = 0.5 * (t_hi - t_lo);
+  const double a = camera.sample.x, b = camera.sample.y;
+  double rows[4][4];
+  if (camera.projection == Projection::kPerspective) {
+    const double n = camera.z_clip_near;
+    // clang-format off
+    const double r[4][4] = {{1 / hs, 0, -sc / hs, -a / hs},
+                            {0, 1 / ht, -tc / ht, -b / ht},
+                            {0, 0, 0, n},
+                            {0, 0, 1, 0}};
+    // clang-format on
+    std::copy(&r[0][0], &r[0][0] + 16, &rows[0][0]);
+  } else {
+    const double range = camera.z_clip_far - camera.z_clip_near;
+    double z_row[4] = {0, 0, -1 / range, camera.z_clip_far / range};
+    if (!zero_to_one_clip) {
+      z_row[2] *= 2;
+      z_row[3] = 2 * z_row[3] - 1;
+    }
+    // clang-format off
+    const double r[4][4] = {{1 / hs, 0, -a / hs, -sc / hs},
+                            {0, 1 / ht, -b / ht, -tc / ht},
+                            {z_row[0], z_row[1], z_row[2], z_row[3]},
+                            {0, 0, 0, 1}};
+    // clang-format on
+    std::copy(&r[0][0], &r[0][0] + 16, &rows[0][0]);
+  }
+  std::array<float, 16> column_major;
+  for (int col = 0; col < 4; ++col) {
+    for (int row = 0; row < 4; ++row) {
+      column_major[col * 4 + row] = static_cast<float>(rows[row][col]);
+    }
+  }
+  return column_major;
+}
 
 absl::StatusOr<std::unique_ptr<ShadowMapRenderer>> ShadowMapRenderer::Create() {
   return Create(Options{});

@@ -7,6 +7,7 @@
 #ifndef PDSM_WORKER_SHADOW_MAP_RENDERER_H_
 #define PDSM_WORKER_SHADOW_MAP_RENDERER_H_
 
+#include <array>
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <memory>
@@ -42,6 +43,15 @@ struct ShadowMapCamera {
   double slope_bias = 0;
   double footprint_scale = 1;
 };
+
+// The shadow-map program's clip_from_light (column-major) for the texels `piece` of
+// `camera.lattice`: NDC x, y span the piece's edges exactly; clip z / w is the reversed depth
+// (DESIGN.md). Computed in double, rounded once to float. `zero_to_one_clip`: glClipControl
+// (GL_ZERO_TO_ONE) is in effect; otherwise clip z is remapped to [-1, 1] (only the
+// orthographic depth needs it: the perspective near-plane test -w <= n <= w equals
+// 0 <= n <= w for n > 0). Public so that bench/layered_maps.cc draws the same maps another way.
+std::array<float, 16> ShadowMapClipFromLight(const ShadowMapCamera& camera,
+                                             const ShadowMapWindow& piece, bool zero_to_one_clip);
 
 // Owns an OSMesa core-profile context and the GL objects made in it. Not thread-safe: one
 // thread at a time. Each call makes the context current on its thread, so a renderer may pass
