@@ -196,9 +196,17 @@ void ForEachNode(aiNode* node, const Visit& visit) {
 void DeleteUnreferencedMeshes(aiScene* scene) {
   std::vector<unsigned> new_index(scene->mNumMeshes, 0);
   std::vector<bool> referenced(scene->mNumMeshes, false);
+  bool in_range = true;  // an importer that wrote a bad reference: leave the scene as it is
   ForEachNode(scene->mRootNode, [&](aiNode* node) {
-    for (unsigned k = 0; k < node->mNumMeshes; ++k) referenced[node->mMeshes[k]] = true;
+    for (unsigned k = 0; k < node->mNumMeshes; ++k) {
+      if (node->mMeshes[k] < scene->mNumMeshes) {
+        referenced[node->mMeshes[k]] = true;
+      } else {
+        in_range = false;
+      }
+    }
   });
+  if (!in_range) return;
   unsigned kept = 0;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     if (!referenced[m]) {
