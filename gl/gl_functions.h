@@ -39,6 +39,9 @@ using GetProcAddressFn = GlProc (*)(const char* name);
   X(PFNGLDELETEBUFFERSPROC, DeleteBuffers)                       \
   X(PFNGLBINDBUFFERPROC, BindBuffer)                             \
   X(PFNGLBUFFERDATAPROC, BufferData)                             \
+  X(PFNGLBUFFERSUBDATAPROC, BufferSubData)                       \
+  X(PFNGLCOPYBUFFERSUBDATAPROC, CopyBufferSubData)               \
+  X(PFNGLGETBUFFERSUBDATAPROC, GetBufferSubData)                 \
   X(PFNGLGENVERTEXARRAYSPROC, GenVertexArrays)                   \
   X(PFNGLDELETEVERTEXARRAYSPROC, DeleteVertexArrays)             \
   X(PFNGLBINDVERTEXARRAYPROC, BindVertexArray)                   \

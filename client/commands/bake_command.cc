@@ -15,6 +15,7 @@
 #include "client/measure/target_error.h"
 #include "client/progress_reporter.h"
 #include "client/view/camera_view.h"
+#include "client/view/pdsm_tile_pool.h"
 #include "core/bake/receiver_coverage.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/scene/scene_loader.h"
@@ -172,37 +173,37 @@ void WarnAboutUncoveredReceivers(const Scene& scene, const PdsmHeader& header) {
                100 * outside, light.c_str());
 }
 
-// The largest map the bake's camera view shows (4096^2: 128 MiB of index on the GPU).
-constexpr int kMaxCameraViewPixels = 4096 * 4096;
-
 // The camera view of light `part` of the PDSM just written, read back (`reader`: the file, or
 // why it could not be opened) so that the picture shows what the file holds; `*written` says
-// whether it was. A PDSM larger than this GL's buffers (a 2048^2 plates
-// bake has 29 M vertices, 234 MB; llvmpipe takes 128 MB) is complete all the same: a warning,
-// not an error. Other failures are errors saying the PDSM was written.
+// whether it was. Its tiles stream as in pdsm-view: a map of any size is drawn within the
+// viewer's default GPU budget, the tiles past it hatched (a warning counts them). A GL that
+// cannot hold even the page table leaves the PDSM complete all the same: a warning, not an
+// error. Other failures are errors saying the PDSM was written.
 absl::Status WriteBakeCameraView(const Scene& scene, const BakeFlags& flags,
                                  const PreviewPaths& previews, absl::StatusOr<PdsmReader>& reader,
                                  int part, bool* written) {
   *written = false;
   if (previews.camera.empty()) return absl::OkStatus();
-  // The camera view uploads the whole map (8 bytes a pixel of index, then the vertices): past
-  // kMaxCameraViewPixels it would hold gigabytes for a picture (a 16384^2 map: 4.5 GB, then
-  // GL_OUT_OF_MEMORY), so the bake says so instead, before reading anything.
-  if (reader.ok()) {
-    const PdsmGeometry& g = reader->headers().at(part).geometry;
-    if (static_cast<int64_t>(g.width) * g.height > kMaxCameraViewPixels) {
-      std::fprintf(stderr,
-                   "pdsm: warning: no camera view %s: a %dx%d map is over the %d pixels the "
-                   "camera view uploads whole (the light view is written); the PDSM is "
-                   "complete\n",
-                   previews.camera.c_str(), g.width, g.height, kMaxCameraViewPixels);
-      return absl::OkStatus();
-    }
+  // A reader of its own: the tiles' cache keeps it while the other lights use `reader`. One
+  // frame reads each tile once into the GPU's pool: a small cache is enough.
+  constexpr int64_t kCameraViewCacheBytes = int64_t{32} << 20;
+  absl::StatusOr<PdsmReader> own =
+      reader.ok() ? PdsmReader::Open(reader->path()) : absl::StatusOr<PdsmReader>(reader.status());
+  absl::Status s = own.status();
+  view::TilePoolStats pool;
+  if (s.ok()) {
+    s = view::WriteCameraView(
+        scene, view::PdsmTiles::FromReader(*std::move(own), part, kCameraViewCacheBytes),
+        previews.camera, {}, nullptr, &pool);
   }
-  absl::StatusOr<PdsmImage> pdsm =
-      reader.ok() ? reader->ReadLight(part) : absl::StatusOr<PdsmImage>(reader.status());
-  absl::Status s = pdsm.status();
-  if (s.ok()) s = view::WriteCameraView(scene, *std::move(pdsm), previews.camera);
+  if (s.ok() && pool.missing_tiles > 0) {
+    std::fprintf(stderr,
+                 "pdsm: warning: camera view %s: %d of the %d tiles it reads did not fit the "
+                 "GPU's %.0f MiB for them (drawn hatched; a closer camera in pdsm-view reads "
+                 "fewer)\n",
+                 previews.camera.c_str(), pool.missing_tiles, pool.requested_tiles,
+                 pool.budget_bytes / 1048576.0);
+  }
   if (absl::IsResourceExhausted(s)) {
     std::fprintf(stderr, "pdsm: warning: no camera view %s: %s; the PDSM is complete\n",
                  previews.camera.c_str(), std::string(s.message()).c_str());

@@ -23,7 +23,7 @@ double SceneRadius(const ViewScene& scene) {
 
 void DefaultFraming(const ViewScene& scene, glm::dvec3* min_world, glm::dvec3* max_world) {
   glm::dvec3 lo = scene.casters_min_world, hi = scene.casters_max_world;
-  if (!scene.pdsm.vertices.empty()) {
+  if (scene.pdsm) {
     // Receiver points, area-weighted: a fixed count spread over the triangles by error
     // diffusion (small triangles may get none), placed by the R2 sequence (Roberts 2018).
     constexpr int kPoints = 16384;
@@ -41,6 +41,8 @@ void DefaultFraming(const ViewScene& scene, glm::dvec3* min_world, glm::dvec3* m
     }
     double carry = 0;
     int64_t k = 0;
+    std::vector<glm::dvec3> points;
+    points.reserve(kPoints);
     for (const TriangleMesh& mesh : scene.scene.meshes) {
       if (!Receives(mesh.role) || !(total > 0)) continue;
       for (size_t i = 0; i + 2 < mesh.indices.size(); i += 3) {
@@ -51,12 +53,16 @@ void DefaultFraming(const ViewScene& scene, glm::dvec3* min_world, glm::dvec3* m
         for (; carry >= 1.0; carry -= 1.0, ++k) {
           double u = std::fmod(0.5 + a1 * k, 1.0), v = std::fmod(0.5 + a2 * k, 1.0);
           if (u + v > 1) u = 1 - u, v = 1 - v;
-          const glm::dvec3 p = p0 + u * e1 + v * e2;
-          if (QueryAttenuation(scene.pdsm, p) >= kShadow) {  // false for NaN
-            lo = glm::min(lo, p);
-            hi = glm::max(hi, p);
-          }
+          points.push_back(p0 + u * e1 + v * e2);
         }
+      }
+    }
+    // A tile that cannot be read frames nothing here; the frame reports the error.
+    const absl::StatusOr<std::vector<std::optional<double>>> a = scene.pdsm->AttenuationAt(points);
+    for (size_t i = 0; a.ok() && i < points.size(); ++i) {
+      if ((*a)[i].has_value() && *(*a)[i] >= kShadow) {  // false for NaN
+        lo = glm::min(lo, points[i]);
+        hi = glm::max(hi, points[i]);
       }
     }
   }

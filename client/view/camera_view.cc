@@ -12,8 +12,9 @@
 
 namespace pdsm::view {
 
-absl::Status WriteCameraView(const Scene& scene, PdsmImage pdsm, const std::string& png_path,
-                             const CameraViewOptions& options, FileSystem* fs) {
+absl::Status WriteCameraView(const Scene& scene, std::shared_ptr<PdsmTiles> pdsm,
+                             const std::string& png_path, const CameraViewOptions& options,
+                             FileSystem* fs, TilePoolStats* pool_stats) {
   ViewScene view;
   view.scene = scene;
   view.pdsm = std::move(pdsm);
@@ -35,6 +36,7 @@ absl::Status WriteCameraView(const Scene& scene, PdsmImage pdsm, const std::stri
       return s;
     }
     frame = (*renderer)->ReadFrame();
+    if (pool_stats) *pool_stats = (*renderer)->pdsm_pool_stats();
   }
   if (!frame.ok()) return frame.status();
   return WritePng(png_path, {frame->width, frame->height, std::move(frame->rgb)}, fs);

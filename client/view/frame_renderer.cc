@@ -9,6 +9,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "client/view/cpu_attenuation.h"
+#include "client/view/tile_requests.h"
 #include "client/view/view_shaders.h"  // generated: the embedded GLSL sources
 #include "core/sampling/light_samples.h"
 #include "gl/gl_program.h"
@@ -24,9 +25,11 @@ double SecondsSince(Clock::time_point start) {
 }
 
 // Texture units of shade.frag's samplers, and its SSBO bindings.
-constexpr int kUnitPdsmIndex = 0, kUnitCpuAttenuation = 1, kUnitShadowMap = 2, kUnitShadowMaps = 3,
+constexpr int kUnitPdsmPages = 0, kUnitCpuAttenuation = 1, kUnitShadowMap = 2, kUnitShadowMaps = 3,
               kUnitDynamicMaps = 4, kUnitShadowmask = 5;
-constexpr int kBindingPdsmVertices = 0, kBindingLightSamples = 1, kBindingDynamicSamples = 2;
+constexpr int kBindingLightSamples = 1, kBindingDynamicSamples = 2;
+// The tile pool's buffers (shade.frag's PdsmPool0..3).
+constexpr int kBindingPdsmPools[kMaxPoolBuffers] = {0, 3, 4, 5};
 constexpr float kBackgroundColour[4] = {0.11f, 0.12f, 0.14f, 1.0f};
 
 struct MeshGpu {
@@ -130,7 +133,7 @@ gl::Buffer UploadSamples(const gl::GlFunctions& gl, const std::vector<glm::dvec2
 struct FrameRenderer::Impl {
   explicit Impl(const gl::GlFunctions& gl) : shadow_maps(gl), dynamic_maps(gl) {}
   gl::Program shade, gbuffer, depth;
-  PdsmGpu pdsm;
+  std::unique_ptr<PdsmTilePool> pdsm;
   std::vector<MeshGpu> baked;
   std::vector<MeshGpu> dynamic;       // parallel to ViewScene::dynamic_objects
   std::vector<MeshGpu> shadowmasked;  // parallel to ViewScene::shadowmasked
@@ -165,7 +168,7 @@ absl::StatusOr<std::unique_ptr<FrameRenderer>> FrameRenderer::Create(
   if (absl::Status s = renderer->Init(); !s.ok()) return s;
   GLint max_block = 0;
   gl.GetIntegerv(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
-  spdlog::debug("GL {}.{} ({}), largest PDSM vertex buffer {} bytes", major, minor,
+  spdlog::debug("GL {}.{} ({}), largest PDSM tile pool {} bytes", major, minor,
                 reinterpret_cast<const char*>(gl.GetString(GL_RENDERER)), max_block);
   return renderer;
 }
@@ -204,7 +207,7 @@ absl::Status FrameRenderer::Init() {
     }
   }
 
-  const PdsmHeader& header = scene_->pdsm.header;
+  const PdsmHeader& header = scene_->pdsm->header();
   const int sm_size = settings_.sm_size > 0 ? settings_.sm_size : header.shadow_map_resolution;
   const int multi_size = settings_.multi_sm_size > 0 ? settings_.multi_sm_size
                                                      : std::min(header.shadow_map_resolution, 1024);
@@ -232,7 +235,7 @@ absl::Status FrameRenderer::Init() {
 
   gl_.UseProgram(im.shade.name());
   const gl::UniformSetter u(gl_, im.shade.name());
-  u.Int("pdsm_index", kUnitPdsmIndex);
+  u.Int("pdsm_pages", kUnitPdsmPages);
   u.Int("cpu_attenuation", kUnitCpuAttenuation);
   u.Int("shadow_map", kUnitShadowMap);
   u.Int("shadow_maps", kUnitShadowMaps);
@@ -242,12 +245,34 @@ absl::Status FrameRenderer::Init() {
   return gl::CheckGlError(gl_, "uploading the scene");
 }
 
-const PdsmGpu& FrameRenderer::pdsm_gpu() const { return impl_->pdsm; }
+const TilePoolStats& FrameRenderer::pdsm_pool_stats() const { return impl_->pdsm->stats(); }
 
 absl::Status FrameRenderer::ReplacePdsm() {
-  absl::StatusOr<PdsmGpu> pdsm = UploadPdsm(gl_, scene_->pdsm, scene_->pending);
-  if (!pdsm.ok()) return pdsm.status();
-  impl_->pdsm = *std::move(pdsm);
+  absl::StatusOr<std::unique_ptr<PdsmTilePool>> pool = PdsmTilePool::Create(
+      gl_, scene_->pdsm, settings_.gpu_budget_bytes, settings_.max_pool_buffer_bytes);
+  if (!pool.ok()) return pool.status();
+  impl_->pdsm = *std::move(pool);
+  streamed_valid_ = false;
+  return absl::OkStatus();
+}
+
+absl::Status FrameRenderer::StreamTiles(const glm::mat4& clip_from_light) {
+  Impl& im = *impl_;
+  if (streamed_valid_ && clip_from_light == streamed_clip_ && im.width == streamed_width_ &&
+      im.height == streamed_height_) {
+    return absl::OkStatus();  // the same view of the same scene reads the same tiles
+  }
+  const auto start = Clock::now();
+  std::vector<float> gbuffer;
+  if (absl::Status s = RenderGbuffer(clip_from_light, &gbuffer); !s.ok()) return s;
+  if (absl::Status s = im.pdsm->Request(TilesSeen(scene_->pdsm->header(), gbuffer)); !s.ok()) {
+    return s;
+  }
+  streamed_valid_ = true;
+  streamed_clip_ = clip_from_light;
+  streamed_width_ = im.width;
+  streamed_height_ = im.height;
+  timings_.stream_seconds = SecondsSince(start);
   return absl::OkStatus();
 }
 uint64_t FrameRenderer::shadow_map_bytes() const {
@@ -346,7 +371,7 @@ void FrameRenderer::DrawShadowmasked(const gl::UniformSetter& u) const {
 }
 
 void FrameRenderer::SetDepthUniforms(const gl::UniformSetter& u) const {
-  const PdsmHeader& header = scene_->pdsm.header;
+  const PdsmHeader& header = scene_->pdsm->header();
   u.Float("depth_bias", static_cast<float>(header.depth_bias));
   u.Float("slope_bias", static_cast<float>(header.slope_bias));
   // The bake widens the slope bias to a PDSM pixel (footprint_scale = PDSM pixel / texel)
@@ -364,7 +389,7 @@ void FrameRenderer::SetDepthUniforms(const gl::UniformSetter& u) const {
 }
 
 void FrameRenderer::UpdateDynamicReach() {
-  const PdsmGeometry& g = scene_->pdsm.header.geometry;
+  const PdsmGeometry& g = scene_->pdsm->header().geometry;
   const bool orthographic = g.projection == Projection::kOrthographic;
   const glm::dmat4 light_from_world = scene_->LightFromWorld();
   glm::dvec2 lo(std::numeric_limits<double>::infinity()), hi(-lo);
@@ -412,7 +437,7 @@ absl::Status FrameRenderer::EnsureDynamicShadowMaps(ViewMode mode) {
   const gl::UniformSetter u(gl_, im.depth.name());
   SetDepthUniforms(u);
   absl::Status s =
-      im.dynamic_maps.RenderLayers(scene_->pdsm.header, im.dynamic_layout, dynamic_samples_,
+      im.dynamic_maps.RenderLayers(scene_->pdsm->header(), im.dynamic_layout, dynamic_samples_,
                                    [&](const glm::mat4& clip_from_light) {
                                      u.Mat4("clip_from_light", clip_from_light);
                                      DrawScene(u, DrawSet::kDynamic);
@@ -430,7 +455,7 @@ absl::Status FrameRenderer::EnsureShadowMaps(ViewMode mode) {
   const bool layers = mode == ViewMode::kMultiSm && !layers_valid_;
   if (!single && !layers) return EnsureDynamicShadowMaps(mode);
   const auto start = Clock::now();
-  const PdsmHeader& header = scene_->pdsm.header;
+  const PdsmHeader& header = scene_->pdsm->header();
   gl_.UseProgram(im.depth.name());
   const gl::UniformSetter u(gl_, im.depth.name());
   SetDepthUniforms(u);
@@ -502,12 +527,13 @@ absl::Status FrameRenderer::RenderCpuAttenuation(const glm::mat4& clip_from_ligh
   const auto start = Clock::now();
   std::vector<float> gbuffer;
   if (absl::Status s = RenderGbuffer(clip_from_light, &gbuffer); !s.ok()) return s;
-  const std::vector<float> attenuation = EvaluateAttenuationImage(
-      scene_->pdsm, gbuffer, im.width, im.height, scene_->pending, kPending);
+  const absl::StatusOr<std::vector<float>> attenuation =
+      EvaluateAttenuationImage(*scene_->pdsm, gbuffer, im.width, im.height, kPending);
+  if (!attenuation.ok()) return attenuation.status();
   gl_.BindTexture(GL_TEXTURE_2D, im.cpu_attenuation.name());
   gl_.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
   gl_.TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, im.width, im.height, GL_RED, GL_FLOAT,
-                    attenuation.data());
+                    attenuation->data());
   timings_.cpu_seconds = SecondsSince(start);
   return gl::CheckGlError(gl_, "evaluating the PDSM on the CPU");
 }
@@ -515,7 +541,7 @@ absl::Status FrameRenderer::RenderCpuAttenuation(const glm::mat4& clip_from_ligh
 void FrameRenderer::SetShadeUniforms(ViewMode mode, const Camera& camera,
                                      const gl::UniformSetter& u) const {
   const Impl& im = *impl_;
-  const PdsmHeader& header = scene_->pdsm.header;
+  const PdsmHeader& header = scene_->pdsm->header();
   const PdsmGeometry& g = header.geometry;
   u.Int("mode", static_cast<int>(mode));
   u.Vec3("eye_light", glm::vec3(g.frame.LightFromWorld(camera.eye_world)));
@@ -526,6 +552,7 @@ void FrameRenderer::SetShadeUniforms(ViewMode mode, const Camera& camera,
   u.Float("z_valid_min", static_cast<float>(g.z_valid_min));
   u.Int2("pdsm_size", glm::ivec2(g.width, g.height));
   u.Int("bilinear", settings_.bilinear ? 1 : 0);
+  u.Int("pdsm_tile_size", im.pdsm->tile_size());
   const ShadowMapLayout& layout = mode == ViewMode::kMultiSm ? im.multi_layout : im.single_layout;
   u.Vec2("sm_window_min", glm::vec2(layout.window_min));
   u.Vec2("sm_window_size", glm::vec2(layout.window_size));
@@ -564,6 +591,9 @@ absl::Status FrameRenderer::Render(ViewMode mode, const Camera& camera, int widt
   if (mode == ViewMode::kCpu) {
     if (absl::Status s = RenderCpuAttenuation(clip_from_light); !s.ok()) return s;
   }
+  if (mode == ViewMode::kPdsm || mode == ViewMode::kShadowmask) {
+    if (absl::Status s = StreamTiles(clip_from_light); !s.ok()) return s;
+  }
   const auto start = Clock::now();
   gl_.BindFramebuffer(GL_FRAMEBUFFER, im.target.name());
   const float no_attenuation[4] = {kBackground, 0, 0, 0};
@@ -575,8 +605,8 @@ absl::Status FrameRenderer::Render(ViewMode mode, const Camera& camera, int widt
   const gl::UniformSetter u(gl_, im.shade.name());
   u.Mat4("clip_from_light", clip_from_light);
   SetShadeUniforms(mode, camera, u);
-  gl_.ActiveTexture(GL_TEXTURE0 + kUnitPdsmIndex);
-  gl_.BindTexture(GL_TEXTURE_2D, im.pdsm.index.name());
+  gl_.ActiveTexture(GL_TEXTURE0 + kUnitPdsmPages);
+  gl_.BindTexture(GL_TEXTURE_2D, im.pdsm->page_table());
   gl_.ActiveTexture(GL_TEXTURE0 + kUnitCpuAttenuation);
   gl_.BindTexture(GL_TEXTURE_2D, im.cpu_attenuation.name());
   gl_.ActiveTexture(GL_TEXTURE0 + kUnitShadowMap);
@@ -586,7 +616,11 @@ absl::Status FrameRenderer::Render(ViewMode mode, const Camera& camera, int widt
   gl_.ActiveTexture(GL_TEXTURE0 + kUnitDynamicMaps);
   gl_.BindTexture(GL_TEXTURE_2D_ARRAY, im.dynamic_maps.layers());
   gl_.ActiveTexture(GL_TEXTURE0);
-  gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, kBindingPdsmVertices, im.pdsm.vertices.name());
+  for (int i = 0; i < kMaxPoolBuffers; ++i) {
+    // A binding no page entry points at still needs a buffer: the first one stands in.
+    const GLuint pool = im.pdsm->pool(i) != 0 ? im.pdsm->pool(i) : im.pdsm->pool(0);
+    gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, kBindingPdsmPools[i], pool);
+  }
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, kBindingLightSamples, im.samples.name());
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, kBindingDynamicSamples, im.dynamic_samples.name());
   u.Int("shadowmask_textured", 0);

@@ -12,7 +12,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "client/view/camera.h"
-#include "client/view/pdsm_gpu.h"
+#include "client/view/pdsm_tile_pool.h"
 #include "client/view/shadow_maps.h"
 #include "client/view/view_mode.h"
 #include "client/view/view_scene.h"
@@ -43,12 +43,17 @@ struct RenderSettings {
   int dynamic_sm_count = 32;
   int dynamic_sm_size = 512;
   DynamicCombine dynamic_combine = DynamicCombine::kProduct;  // measured best (docs/viewer.md)
+  // pdsm and shadowmask modes: the GPU memory the PDSM's resident tiles may take (the tile
+  // pool, client/view/pdsm_tile_pool.h); tiles a frame reads past it are drawn not resident.
+  int64_t gpu_budget_bytes = kDefaultGpuBudgetBytes;
+  int64_t max_pool_buffer_bytes = 0;  // > 0: one pool buffer's cap below the GL's (tests)
 };
 
 // Attenuation read back per pixel: the value shaded with, or one of these.
 inline constexpr float kOutsidePdsm = -1.0f;  // pdsm/cpu: outside the PDSM frustum (lit)
 inline constexpr float kBackground = -2.0f;   // no surface
 inline constexpr float kPending = -3.0f;      // pdsm: its PDSM pixels are not baked yet
+inline constexpr float kNotResident = -4.0f;  // pdsm: its tiles are over --gpu-budget-mib
 
 struct Frame {
   int width = 0, height = 0;
@@ -60,6 +65,8 @@ struct FrameTimings {
   double shadow_map_seconds = 0;  // shadow maps rendered for this frame (0 when cached)
   double shade_seconds = 0;       // camera passes, with glFinish
   double cpu_seconds = 0;         // cpu mode: read-back + QueryAttenuation + upload
+  double stream_seconds = 0;      // pdsm modes: feedback pass + tiles read and uploaded (0
+                                  // when the view did not change)
 };
 
 class FrameRenderer {
@@ -81,11 +88,12 @@ class FrameRenderer {
   // Copies the last frame's colour to the default framebuffer (window mode).
   void BlitToScreen(int screen_width, int screen_height);
 
-  // The scene's PDSM (or its pending pixels) changed: uploads it again.
+  // The scene's PDSM (or its pending tiles) changed: a new tile pool, empty.
   absl::Status ReplacePdsm();
 
   // The dynamic objects moved: shadow maps are re-rendered on the next frame that needs them.
   void InvalidateShadowMaps() {
+    streamed_valid_ = false;  // a moved object may show other tiles
     layers_valid_ = false;
     single_valid_ = false;
     dynamic_valid_ = false;
@@ -96,7 +104,7 @@ class FrameRenderer {
   // measurements against a reference at the very points a frame shaded.
   absl::StatusOr<std::vector<float>> ReadPositions(const Camera& camera, int width, int height);
   RenderSettings& settings() { return settings_; }
-  const PdsmGpu& pdsm_gpu() const;
+  const TilePoolStats& pdsm_pool_stats() const;
   uint64_t shadow_map_bytes() const;
   const FrameTimings& last_timings() const { return timings_; }
   const std::vector<glm::dvec2>& multi_sm_samples() const { return samples_; }
@@ -113,6 +121,9 @@ class FrameRenderer {
   bool CastsDynamicShadows(ViewMode mode) const;
   absl::Status RenderGbuffer(const glm::mat4& clip_from_light, std::vector<float>* gbuffer);
   absl::Status RenderCpuAttenuation(const glm::mat4& clip_from_light);
+  // pdsm modes: the feedback pass (the G-buffer's positions) and the tiles it asks for made
+  // resident; skipped while the view and the scene are unchanged.
+  absl::Status StreamTiles(const glm::mat4& clip_from_light);
   // What a pass draws: everything, what casts into the comparison modes' maps (baked casters
   // and the dynamic objects), or the dynamic objects alone.
   enum class DrawSet { kAll, kCasters, kDynamic };
@@ -126,9 +137,12 @@ class FrameRenderer {
   const ViewScene* scene_;
   RenderSettings settings_;
   std::unique_ptr<Impl> impl_;
-  bool single_valid_ = false;   // the centre shadow map (hard, pcf, pcss, vsm)
-  bool layers_valid_ = false;   // the multi-sm maps
-  bool dynamic_valid_ = false;  // the dynamic objects' maps
+  bool single_valid_ = false;    // the centre shadow map (hard, pcf, pcss, vsm)
+  bool layers_valid_ = false;    // the multi-sm maps
+  bool dynamic_valid_ = false;   // the dynamic objects' maps
+  bool streamed_valid_ = false;  // the tiles of the view below are resident (as far as fit)
+  glm::mat4 streamed_clip_{0.0f};
+  int streamed_width_ = 0, streamed_height_ = 0;
   std::vector<glm::dvec2> samples_;
   std::vector<glm::dvec2> dynamic_samples_;
   // Window coordinates where the dynamic maps hold an object, over every sample (grown by a

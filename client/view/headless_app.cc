@@ -1,12 +1,15 @@
 // Headless runs: OSMesa (llvmpipe) context, one screenshot or a benchmark table.
 #include <algorithm>
 #include <cstdio>
+#include <string>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "client/view/view_app.h"
 #include "gl/gl_functions.h"
 #include "gl/platform/osmesa_context.h"
+#include "spdlog/spdlog.h"
 
 namespace pdsm::view {
 namespace {
@@ -16,6 +19,17 @@ double Median(std::vector<double> values) {
   return values.empty() ? 0 : values[values.size() / 2];
 }
 
+// The PDSM tile pool: what streaming cost and held.
+std::string TilePoolLine(const TilePoolStats& s) {
+  return absl::StrFormat(
+      "PDSM tiles on the GPU: %d resident (%.2f MiB of a %.2f MiB pool, limit %.2f MiB), %d "
+      "empty, page table %.2f MiB; %d uploaded, %d evicted, %d compactions, %.1f ms; the last "
+      "view read %d tiles, %d over the budget",
+      s.resident_tiles, s.used_bytes / 1048576.0, s.capacity_bytes / 1048576.0,
+      s.budget_bytes / 1048576.0, s.empty_tiles, s.page_table_bytes / 1048576.0, s.tiles_uploaded,
+      s.tiles_evicted, s.compactions, 1e3 * s.upload_seconds, s.requested_tiles, s.missing_tiles);
+}
+
 // Times each mode: `frames` renders after one warm-up, shadow maps re-rendered every frame
 // (what a moving object costs them) and timed apart from the camera pass.
 absl::Status RunBenchmark(FrameRenderer& renderer, const ViewOptions& options,
@@ -23,11 +37,8 @@ absl::Status RunBenchmark(FrameRenderer& renderer, const ViewOptions& options,
   const std::vector<ViewMode> modes =
       options.compare.empty() ? std::vector<ViewMode>(std::begin(kAllModes), std::end(kAllModes))
                               : options.compare;
-  const PdsmGpu& gpu = renderer.pdsm_gpu();
   std::printf("size %dx%d, %d frames per mode (median ms)\n", options.width, options.height,
               options.bench_frames);
-  std::printf("PDSM upload: %.1f ms, GPU bytes: index %.2f MiB + vertices %.2f MiB\n",
-              1e3 * gpu.upload_seconds, gpu.index_bytes / 1048576.0, gpu.vertex_bytes / 1048576.0);
   std::printf("| mode | frame ms (static light) | shadow maps ms (per update) | cpu eval ms |\n");
   std::printf("|---|---:|---:|---:|\n");
   for (ViewMode mode : modes) {
@@ -50,6 +61,7 @@ absl::Status RunBenchmark(FrameRenderer& renderer, const ViewOptions& options,
   }
   std::printf("shadow-map memory: %.2f MiB (multi-sm: %zu maps)\n",
               renderer.shadow_map_bytes() / 1048576.0, renderer.multi_sm_samples().size());
+  std::printf("%s\n", TilePoolLine(renderer.pdsm_pool_stats()).c_str());
   return absl::OkStatus();
 }
 
@@ -69,8 +81,17 @@ absl::Status RunHeadless(const ViewOptions& options, const ViewScene& scene) {
     const Camera camera =
         options.camera ? *options.camera
                        : DefaultCamera(scene, static_cast<double>(options.width) / options.height);
-    if (!options.screenshot_path.empty())
+    if (!options.screenshot_path.empty()) {
       status = RenderScreenshot(**renderer, options, scene, camera);
+      const TilePoolStats& pool = (*renderer)->pdsm_pool_stats();
+      spdlog::debug("{}", TilePoolLine(pool));
+      if (status.ok() && pool.missing_tiles > 0) {
+        spdlog::warn(
+            "{} of the {} PDSM tiles this view reads did not fit --gpu-budget-mib {} "
+            "(drawn hatched, attenuation -4)",
+            pool.missing_tiles, pool.requested_tiles, options.render.gpu_budget_bytes >> 20);
+      }
+    }
     if (status.ok() && options.bench_frames > 0) {
       status = RunBenchmark(**renderer, options, camera);
     }

@@ -54,15 +54,20 @@ absl::StatusOr<PdsmImage> LoadPdsmFile(const std::string& path, const std::strin
   return pdsm;
 }
 
-absl::StatusOr<PdsmImage> FetchJobPdsm(const ServiceFlags& service, const std::string& job_id,
-                                       const std::string& light) {
+absl::StatusOr<std::shared_ptr<PdsmTiles>> FetchJobPdsm(const ServiceFlags& service,
+                                                        const std::string& job_id,
+                                                        const std::string& light,
+                                                        int64_t cache_bytes) {
   absl::StatusOr<ServiceConnection> c = Connect(service);
   if (!c.ok()) return c.status();
   if (absl::Status s = WaitForJob(*c, service, job_id); !s.ok()) return s;
   const std::filesystem::path temp = std::filesystem::temp_directory_path() /
                                      absl::StrCat("pdsm-view-", job_id, "-", ::getpid(), ".exr");
   absl::Status s = DownloadPdsm(*c, service, job_id, temp.string()).status();
-  absl::StatusOr<PdsmImage> pdsm = s.ok() ? LoadPdsmFile(temp.string(), light) : s;
+  // An open file outlives its name (POSIX): the tiles are read from it as frames need them.
+  absl::StatusOr<std::shared_ptr<PdsmTiles>> pdsm =
+      s.ok() ? PdsmTiles::OpenFile(temp.string(), light, cache_bytes)
+             : absl::StatusOr<std::shared_ptr<PdsmTiles>>(s);
   std::error_code ec;
   std::filesystem::remove(temp, ec);
   return pdsm;

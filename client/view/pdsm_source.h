@@ -3,10 +3,13 @@
 #ifndef PDSM_CLIENT_VIEW_PDSM_SOURCE_H_
 #define PDSM_CLIENT_VIEW_PDSM_SOURCE_H_
 
+#include <cstdint>
+#include <memory>
 #include <string>
 
 #include "absl/status/statusor.h"
 #include "client/service/service_connection.h"
+#include "client/view/pdsm_tiles.h"
 #include "core/pdsm/pdsm_image.h"
 
 namespace pdsm::view {
@@ -17,11 +20,14 @@ namespace pdsm::view {
 absl::StatusOr<PdsmImage> LoadPdsmFile(const std::string& path, const std::string& light = "");
 
 // Waits for `job_id` with WatchJob, printing a progress line on stderr, then downloads its
-// PDSM (FetchPdsm) into a temporary file and reads its light `light` (as LoadPdsmFile).
+// PDSM (FetchPdsm) into a temporary file and opens its light `light` for streaming (as
+// PdsmTiles::OpenFile; the file is unlinked once open, so nothing is left behind).
 // FAILED_PRECONDITION when the job failed or was cancelled; the coordinator's errors as
 // `pdsm fetch` reports them.
-absl::StatusOr<PdsmImage> FetchJobPdsm(const ServiceFlags& service, const std::string& job_id,
-                                       const std::string& light = "");
+absl::StatusOr<std::shared_ptr<PdsmTiles>> FetchJobPdsm(const ServiceFlags& service,
+                                                        const std::string& job_id,
+                                                        const std::string& light,
+                                                        int64_t cache_bytes);
 
 }  // namespace pdsm::view
 

@@ -62,8 +62,7 @@ absl::Status StartFromPlan(const ViewOptions& options, const pdsm::v1::Job& job,
                  pdsm::v1::JobState_Name(snapshot->job.state()).c_str(), snapshot->job.tiles_done(),
                  snapshot->job.tiles_total());
   }
-  view->pdsm = std::move(partial.image);
-  view->pending = std::move(partial.pending);
+  view->pdsm = PdsmTiles::FromImage(std::move(partial.image), std::move(partial.pending));
   return absl::OkStatus();
 }
 
@@ -91,15 +90,16 @@ absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
     // Shown while it runs: the geometry from the local plan, tiles as they finish.
     if (absl::Status s = StartFromPlan(options, job, &view); !s.ok()) return s;
   } else {
-    absl::StatusOr<PdsmImage> pdsm = options.job_id.empty()
-                                         ? LoadPdsmFile(options.pdsm_path, light)
-                                         : FetchJobPdsm(options.service, options.job_id, light);
+    absl::StatusOr<std::shared_ptr<PdsmTiles>> pdsm =
+        options.job_id.empty()
+            ? PdsmTiles::OpenFile(options.pdsm_path, light, options.cache_bytes)
+            : FetchJobPdsm(options.service, options.job_id, light, options.cache_bytes);
     if (!pdsm.ok()) return pdsm.status();
     view.pdsm = *std::move(pdsm);
   }
   const std::string pdsm_name =
       options.job_id.empty() ? options.pdsm_path : absl::StrCat("job ", options.job_id);
-  if (absl::Status s = CheckPdsmMatchesScene(view.scene, view.pdsm.header, pdsm_name); !s.ok()) {
+  if (absl::Status s = CheckPdsmMatchesScene(view.scene, view.pdsm->header(), pdsm_name); !s.ok()) {
     if (!options.allow_mismatch) return s;
     spdlog::warn("{}", std::string(s.message()));
   }
@@ -126,7 +126,7 @@ absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
 namespace {
 
 std::vector<std::string> LegendLines(const ViewScene& scene, const FrameRenderer& renderer) {
-  const PdsmHeader& h = scene.pdsm.header;
+  const PdsmHeader& h = scene.pdsm->header();
   std::vector<std::string> lines = {
       absl::StrCat("SCENE ", scene.scene.name),
       absl::StrFormat("PDSM %dX%d, %d SAMPLES", h.geometry.width, h.geometry.height, h.samples)};

@@ -122,6 +122,13 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
                  "--screenshot, exit");
   app.add_option("--bench", o.bench_frames,
                  "Headless: time N frames of each mode (--compare or all)");
+  int64_t gpu_budget_mib = o.render.gpu_budget_bytes >> 20, cache_mib = o.cache_bytes >> 20;
+  app.add_option("--gpu-budget-mib", gpu_budget_mib,
+                 "pdsm/shadowmask: GPU memory for the PDSM's resident tiles (tiles past it are "
+                 "drawn hatched)")
+      ->default_val(gpu_budget_mib);
+  app.add_option("--cache-mib", cache_mib, "The PDSM's tiles kept in memory once read")
+      ->default_val(cache_mib);
   app.add_flag("--partial", o.partial,
                "--job, headless: render the tiles finished so far instead of waiting");
   app.add_option("--light", o.light,
@@ -140,6 +147,12 @@ absl::StatusOr<ViewOptions> ParseViewOptions(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return absl::InvalidArgumentError(e.what());
   }
+  if (gpu_budget_mib < 1 || gpu_budget_mib > (int64_t{1} << 20) || cache_mib < 1 ||
+      cache_mib > (int64_t{1} << 20)) {
+    return absl::InvalidArgumentError("--gpu-budget-mib and --cache-mib in 1..1048576");
+  }
+  o.render.gpu_budget_bytes = gpu_budget_mib << 20;
+  o.cache_bytes = cache_mib << 20;
   o.render.bilinear = !no_bilinear;
   o.render.dynamic_shadows = !no_dynamic_shadows;
   if (combine == "max") {

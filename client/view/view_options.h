@@ -2,6 +2,7 @@
 #ifndef PDSM_CLIENT_VIEW_VIEW_OPTIONS_H_
 #define PDSM_CLIENT_VIEW_VIEW_OPTIONS_H_
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -43,6 +44,10 @@ struct ViewOptions {
   std::string light;           // --light: of a scene and PDSM of several lights
   std::string shadowmask_dir;  // --shadowmask: the folder `pdsm shadowmask` wrote
   bool partial = false;        // --server, headless: the tiles finished now, no waiting
+  // --cache-mib: the PDSM's tiles kept in memory once read. Less than `pdsm query`'s default:
+  // the tiles on screen are on the GPU already, the cache only spares re-reads of tiles a
+  // turn of the camera evicted.
+  int64_t cache_bytes = int64_t{64} << 20;
   bool verbose = false;
 };
 

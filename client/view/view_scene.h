@@ -15,6 +15,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "client/view/pdsm_tiles.h"
 #include "core/bake/bake_plan.h"
 #include "core/pdsm/pdsm_image.h"
 #include "core/scene/scene.h"
@@ -48,8 +49,9 @@ struct ShadowmaskedMesh {
 
 struct ViewScene {
   Scene scene;
-  PdsmImage pdsm;
-  std::vector<uint8_t> pending;          // per PDSM pixel: not baked yet (--server, job running)
+  // The PDSM's tiles, read as frames need them (a file of any size), or a whole map in memory
+  // with its pending tiles (--server, a job running).
+  std::shared_ptr<PdsmTiles> pdsm;
   std::shared_ptr<const BakePlan> plan;  // the scene's plan, when following a running job
   std::vector<DrawMesh> baked;           // light space: the scene file's meshes
   std::vector<DynamicObject> dynamic_objects;
@@ -59,7 +61,7 @@ struct ViewScene {
   glm::dvec3 casters_min_world{0.0};  // of the casting meshes: what the default camera frames
   glm::dvec3 casters_max_world{0.0};
 
-  const LightFrame& frame() const { return pdsm.header.geometry.frame; }
+  const LightFrame& frame() const { return pdsm->header().geometry.frame; }
   // light_from_world as a matrix, and light_from_object for a dynamic object (double).
   glm::dmat4 LightFromWorld() const;
 };

@@ -156,8 +156,7 @@ absl::Status AdoptPdsm(const ViewOptions& options, PartialPdsm pdsm, ViewScene& 
     absl::Status s = CheckPdsmMatchesScene(scene.scene, pdsm.image.header, "job " + options.job_id);
     if (!s.ok() && !options.allow_mismatch) return s;
   }
-  scene.pdsm = std::move(pdsm.image);
-  scene.pending = std::move(pdsm.pending);
+  scene.pdsm = PdsmTiles::FromImage(std::move(pdsm.image), std::move(pdsm.pending));
   return renderer.ReplacePdsm();
 }
 

@@ -606,12 +606,16 @@ absl::StatusOr<PdsmTile> PdsmReader::ReadTile(int part, int tile_x, int tile_y) 
                           "a tile holds (%d)",
                           path_, tile_x, tile_y, tile.offsets.back(), kMaxVerticesPerTile));
     }
-    tile.vertices.resize(tile.offsets.back());
-    for (size_t p = 0; p < pixels; ++p) {
-      buffers.Set(p, tile.vertices.data(), tile.offsets[p], tile.offsets[p + 1]);
+    // A tile without any vertex (all lit: most of a sparse world's map) has nothing more to
+    // read; OpenEXR would still walk and copy every pixel of it.
+    if (tile.offsets.back() > 0) {
+      tile.vertices.resize(tile.offsets.back());
+      for (size_t p = 0; p < pixels; ++p) {
+        buffers.Set(p, tile.vertices.data(), tile.offsets[p], tile.offsets[p + 1]);
+      }
+      exr_part.setFrameBuffer(buffers.FrameBuffer(tile.width));
+      exr_part.readTile(tile_x, tile_y);
     }
-    exr_part.setFrameBuffer(buffers.FrameBuffer(tile.width));
-    exr_part.readTile(tile_x, tile_y);
   } catch (...) {
     return StatusFromCurrentException(path_, "cannot read");
   }

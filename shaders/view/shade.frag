@@ -17,7 +17,8 @@ in vec3 normal_light;
 in vec2 texture_uv;
 
 layout(location = 0) out vec4 colour;
-layout(location = 1) out float attenuation_out;  // A; -1 outside the PDSM frustum, -3 pending
+layout(location = 1) out float attenuation_out;  // A; -1 outside the PDSM frustum, -3 pending,
+                                                 // -4 not resident
 
 uniform int mode;
 uniform vec3 albedo;
@@ -25,16 +26,26 @@ uniform vec3 eye_light;
 uniform int orthographic;   // the PDSM's (and every shadow map's) projection: 1 for the sun
 uniform float ambient;
 
-// ---- PDSM, two levels (thesis 4.2.4): per pixel (offset, count) into one vertex buffer.
-uniform usampler2D pdsm_index;  // RG32UI
-layout(std430, binding = 0) readonly buffer PdsmVertices { vec2 pdsm_vertices[]; };  // (z, A)
+// ---- PDSM as a virtual texture (client/view/pdsm_tile_pool.h): a page table entry per tile,
+// the resident tiles in up to 4 pool buffers (one binding holds at most
+// GL_MAX_SHADER_STORAGE_BLOCK_SIZE). A tile's block: per pixel (offset from the block, count),
+// then its vertices (z, A) as float bits -- the thesis' two levels (4.2.4), per tile.
+uniform usampler2D pdsm_pages;  // R32UI, one texel per tile: (buffer << 28) | offset
+layout(std430, binding = 0) readonly buffer PdsmPool0 { uvec2 pdsm_pool0[]; };
+layout(std430, binding = 3) readonly buffer PdsmPool1 { uvec2 pdsm_pool1[]; };
+layout(std430, binding = 4) readonly buffer PdsmPool2 { uvec2 pdsm_pool2[]; };
+layout(std430, binding = 5) readonly buffer PdsmPool3 { uvec2 pdsm_pool3[]; };
+uniform int pdsm_tile_size;     // PDSM pixels per tile side
 uniform vec2 window_min;        // (s_min, t_min)
 uniform vec2 inv_pitch;         // pixels per window unit
 uniform ivec2 pdsm_size;
 uniform int bilinear;           // 1: blend the 4 nearest pixels' results; 0: nearest pixel
 uniform float z_valid_min;      // nearer than this the PDSM knows nothing (pdsmZValidMin); 0 none
-const uint kPendingPixel = 0xFFFFFFFFu;  // count of a pixel not baked yet (job still running)
+const uint kTileNotResident = 0xFFFFFFFDu;  // over the GPU budget (--gpu-budget-mib)
+const uint kTileEmpty = 0xFFFFFFFEu;        // no vertex: A = 0 everywhere in it
+const uint kTilePending = 0xFFFFFFFFu;      // not baked yet (a job still running)
 const float kPending = -3.0;
+const float kNotResident = -4.0;
 
 // ---- cpu mode: A per screen pixel, computed by the CPU.
 uniform sampler2D cpu_attenuation;  // R32F, NaN outside the PDSM frustum
@@ -73,27 +84,49 @@ uniform vec2 dynamic_reach_max;
 uniform vec2 dynamic_sample_min;
 uniform vec2 dynamic_sample_max;
 
-// A(z) of one PDSM pixel: the last vertex with depth <= z and the next one, by binary search;
-// linear between them, 0 before the first, the last value after the last (right-continuous at
-// jumps) -- EvaluateAttenuation in core/pdsm/attenuation_function.cc.
-bool PendingPixel(ivec2 pixel) { return texelFetch(pdsm_index, pixel, 0).g == kPendingPixel; }
+uint PageOf(ivec2 pixel) { return texelFetch(pdsm_pages, pixel / pdsm_tile_size, 0).r; }
 
+// Word i of pool buffer b (buffer blocks are named one by one: an array of them could only be
+// indexed uniformly across the draw).
+uvec2 PoolWord(uint b, uint i) {
+  if (b == 0u) return pdsm_pool0[i];
+  if (b == 1u) return pdsm_pool1[i];
+  if (b == 2u) return pdsm_pool2[i];
+  return pdsm_pool3[i];
+}
+
+// A(z) of one PDSM pixel of a resident (or empty) tile: the last vertex with depth <= z and
+// the next one, by binary search; linear between them, 0 before the first, the last value
+// after the last (right-continuous at jumps) -- EvaluateAttenuation in
+// core/pdsm/attenuation_function.cc.
 float EvaluatePixel(ivec2 pixel, float z) {
-  uvec2 entry = texelFetch(pdsm_index, pixel, 0).rg;
-  uint offset = entry.x, count = entry.y;
-  if (count == 0u || z < pdsm_vertices[offset].x) return 0.0;
+  ivec2 tile = pixel / pdsm_tile_size;
+  uint page = texelFetch(pdsm_pages, tile, 0).r;
+  if (page >= kTileNotResident) return 0.0;  // empty (callers turned the others away)
+  uint b = page >> 28, block = page & 0x0FFFFFFFu;
+  ivec2 local = pixel - tile * pdsm_tile_size;
+  int tile_width = min(pdsm_tile_size, pdsm_size.x - tile.x * pdsm_tile_size);
+  uvec2 entry = PoolWord(b, block + uint(local.y * tile_width + local.x));
+  uint offset = block + entry.x, count = entry.y;
+  if (count == 0u || z < uintBitsToFloat(PoolWord(b, offset).x)) return 0.0;
   uint lo = 1u, hi = count;  // first index in [lo, hi) with depth > z; index 0 is <= z
   while (lo < hi) {
     uint mid = (lo + hi) >> 1;
-    if (pdsm_vertices[offset + mid].x <= z) lo = mid + 1u; else hi = mid;
+    if (uintBitsToFloat(PoolWord(b, offset + mid).x) <= z) lo = mid + 1u; else hi = mid;
   }
-  vec2 a = pdsm_vertices[offset + lo - 1u];
+  vec2 a = uintBitsToFloat(PoolWord(b, offset + lo - 1u));
   // NaN (off a surfaces-only file's windows) is kept: clamp() of NaN is undefined in GLSL.
   if (lo == count) return isnan(a.y) ? a.y : clamp(a.y, 0.0, 1.0);
-  vec2 b = pdsm_vertices[offset + lo];
-  float f = (z - a.x) / (b.x - a.x);
-  float value = a.y + f * (b.y - a.y);
+  vec2 c = uintBitsToFloat(PoolWord(b, offset + lo));
+  float f = (z - a.x) / (c.x - a.x);
+  float value = a.y + f * (c.y - a.y);
   return isnan(value) ? value : clamp(value, 0.0, 1.0);
+}
+
+// kPending or kNotResident when a page the lookup reads is so (pending first), else 0.
+float MissingPage(uint page) {
+  if (page == kTilePending) return kPending;
+  return page == kTileNotResident ? kNotResident : 0.0;
 }
 
 vec2 WindowFromLight(vec3 p, vec2 sample_offset) {
@@ -112,7 +145,8 @@ float PdsmAttenuation(vec3 p) {
   ivec2 last = pdsm_size - 1;
   if (bilinear == 0) {
     ivec2 nearest = clamp(ivec2(floor(pixel)), ivec2(0), last);
-    if (PendingPixel(nearest)) return kPending;
+    float missing = MissingPage(PageOf(nearest));
+    if (missing != 0.0) return missing;
     float a = EvaluatePixel(nearest, p.z);
     return isnan(a) ? -1.0 : a;
   }
@@ -121,10 +155,10 @@ float PdsmAttenuation(vec3 p) {
   vec2 w = f - base;
   ivec2 p0 = clamp(ivec2(base), ivec2(0), last);
   ivec2 p1 = clamp(ivec2(base) + 1, ivec2(0), last);
-  if (PendingPixel(p0) || PendingPixel(p1) || PendingPixel(ivec2(p0.x, p1.y)) ||
-      PendingPixel(ivec2(p1.x, p0.y))) {
-    return kPending;
-  }
+  float m00 = MissingPage(PageOf(p0)), m11 = MissingPage(PageOf(p1));
+  float m01 = MissingPage(PageOf(ivec2(p0.x, p1.y))), m10 = MissingPage(PageOf(ivec2(p1.x, p0.y)));
+  if (m00 == kPending || m11 == kPending || m01 == kPending || m10 == kPending) return kPending;
+  if (min(min(m00, m11), min(m01, m10)) == kNotResident) return kNotResident;
   float a00 = EvaluatePixel(ivec2(p0.x, p0.y), p.z);
   float a10 = EvaluatePixel(ivec2(p1.x, p0.y), p.z);
   float a01 = EvaluatePixel(ivec2(p0.x, p1.y), p.z);
@@ -265,7 +299,7 @@ float DynamicAttenuation(vec3 p) {
 
 // The baked attenuation (or -1 outside the PDSM, -3 pending) with the dynamic objects' shadow.
 float WithDynamicShadow(float baked, vec3 p) {
-  if (dynamic_count == 0 || baked == kPending) return baked;
+  if (dynamic_count == 0 || baked == kPending || baked == kNotResident) return baked;
   float d = DynamicAttenuation(p);
   if (baked < 0.0) return d > 0.0 ? d : baked;  // outside the PDSM: only the dynamic shadow
   return dynamic_combine == 0 ? max(baked, d) : 1.0 - (1.0 - baked) * (1.0 - d);
@@ -308,6 +342,11 @@ void main() {
   if (a == kPending) {
     float hatch = step(0.5, fract((gl_FragCoord.x + gl_FragCoord.y) / 16.0));
     linear = mix(linear, vec3(0.25, 0.45, 0.9), 0.25 + 0.2 * hatch);
+  }
+  // Baked, but its tile did not fit the GPU budget: lit, under an amber hatch the other way.
+  if (a == kNotResident) {
+    float hatch = step(0.5, fract((gl_FragCoord.x - gl_FragCoord.y) / 16.0));
+    linear = mix(linear, vec3(0.9, 0.6, 0.2), 0.25 + 0.2 * hatch);
   }
   colour = vec4(pow(clamp(linear, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
 }

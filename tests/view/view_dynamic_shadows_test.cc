@@ -82,7 +82,7 @@ Measurement Measure(view::DynamicObject object) {
   EXPECT_TRUE(scene.ok() && pdsm.ok());
   if (!scene.ok() || !pdsm.ok()) return {};
   view.scene = *scene;
-  view.pdsm = *std::move(pdsm);
+  view.pdsm = view::PdsmTiles::FromImage(*std::move(pdsm));
   view::PrepareViewScene(&view);
   view.dynamic_objects.push_back(object);
 

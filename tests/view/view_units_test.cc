@@ -71,7 +71,7 @@ TEST(ViewUnits, DefaultCameraFramesTheShadowsToo) {
   absl::StatusOr<PdsmImage> pdsm = ReadPdsm(SmallBake("plates"));
   ASSERT_TRUE(plates.ok() && pdsm.ok());
   scene.scene = *plates;
-  scene.pdsm = *pdsm;
+  scene.pdsm = view::PdsmTiles::FromImage(*pdsm);
   view::PrepareViewScene(&scene);
   glm::dvec3 lo, hi;
   view::DefaultFraming(scene, &lo, &hi);
