@@ -25,9 +25,10 @@ double SecondsSince(Clock::time_point start) {
 }
 
 // Texture units of shade.frag's samplers, and its SSBO bindings.
-constexpr int kUnitPdsmPages = 0, kUnitCpuAttenuation = 1, kUnitShadowMap = 2, kUnitShadowMaps = 3,
+constexpr int kUnitCpuAttenuation = 1, kUnitShadowMap = 2, kUnitShadowMaps = 3,
               kUnitDynamicMaps = 4, kUnitShadowmask = 5;
-constexpr int kBindingLightSamples = 1, kBindingDynamicSamples = 2;
+constexpr int kBindingLightSamples = 1, kBindingDynamicSamples = 2, kBindingPdsmParts = 6,
+              kBindingPdsmPages = 7;
 // The tile pool's buffers (shade.frag's PdsmPool0..3).
 constexpr int kBindingPdsmPools[kMaxPoolBuffers] = {0, 3, 4, 5};
 constexpr float kBackgroundColour[4] = {0.11f, 0.12f, 0.14f, 1.0f};
@@ -117,6 +118,42 @@ LightSpec LightFromHeader(const PdsmHeader& h) {
   return light;
 }
 
+// shade.frag's PdsmPart, std430: a mat4 and four 16-byte vectors.
+struct PdsmPartGpu {
+  glm::mat4 light_from_view;
+  glm::vec4 window;
+  glm::ivec4 size;
+  glm::ivec4 info;
+  glm::vec4 extra;
+};
+static_assert(sizeof(PdsmPartGpu) == 128, "std430 layout of shade.frag's PdsmPart");
+
+// The parts a frame shades, as shade.frag reads them: part i's light space from the view's
+// (part 0's), computed in double and rounded once; part 0's is the identity itself, so that
+// one light is shaded exactly as before there were several.
+std::vector<PdsmPartGpu> PartsForShader(const std::vector<ViewPdsmPart>& parts,
+                                        const PdsmTilePool& pool) {
+  std::vector<PdsmPartGpu> out;
+  const glm::dmat4 world_from_view =
+      glm::inverse(LightFromWorldMatrix(parts.front().tiles->header().geometry.frame));
+  for (size_t i = 0; i < parts.size(); ++i) {
+    const PdsmHeader& h = parts[i].tiles->header();
+    const PdsmGeometry& g = h.geometry;
+    PdsmPartGpu part;
+    part.light_from_view =
+        i == 0 ? glm::mat4(1.0f) : glm::mat4(LightFromWorldMatrix(g.frame) * world_from_view);
+    part.window = glm::vec4(glm::vec2(g.s_min, g.t_min),
+                            glm::vec2(1.0 / g.PixelPitchS(), 1.0 / g.PixelPitchT()));
+    part.size = glm::ivec4(g.width, g.height, h.tile_size,
+                           static_cast<int>(pool.page_base(static_cast<int>(i))));
+    part.info = glm::ivec4(parts[i].tiles->tiles_x(), g.projection == Projection::kOrthographic,
+                           parts[i].group_end, h.face_tangent > 0 ? 1 : 0);
+    part.extra = glm::vec4(static_cast<float>(g.z_valid_min), 0.0f, 0.0f, 0.0f);
+    out.push_back(part);
+  }
+  return out;
+}
+
 gl::Buffer UploadSamples(const gl::GlFunctions& gl, const std::vector<glm::dvec2>& samples) {
   std::vector<glm::vec2> samples_f(samples.begin(), samples.end());
   if (samples_f.empty()) samples_f.emplace_back(0.0f);
@@ -134,6 +171,7 @@ struct FrameRenderer::Impl {
   explicit Impl(const gl::GlFunctions& gl) : shadow_maps(gl), dynamic_maps(gl) {}
   gl::Program shade, gbuffer, depth;
   std::unique_ptr<PdsmTilePool> pdsm;
+  gl::Buffer pdsm_parts;  // SSBO of PdsmPartGpu
   std::vector<MeshGpu> baked;
   std::vector<MeshGpu> dynamic;       // parallel to ViewScene::dynamic_objects
   std::vector<MeshGpu> shadowmasked;  // parallel to ViewScene::shadowmasked
@@ -235,7 +273,6 @@ absl::Status FrameRenderer::Init() {
 
   gl_.UseProgram(im.shade.name());
   const gl::UniformSetter u(gl_, im.shade.name());
-  u.Int("pdsm_pages", kUnitPdsmPages);
   u.Int("cpu_attenuation", kUnitCpuAttenuation);
   u.Int("shadow_map", kUnitShadowMap);
   u.Int("shadow_maps", kUnitShadowMaps);
@@ -248,12 +285,23 @@ absl::Status FrameRenderer::Init() {
 const TilePoolStats& FrameRenderer::pdsm_pool_stats() const { return impl_->pdsm->stats(); }
 
 absl::Status FrameRenderer::ReplacePdsm() {
+  const std::vector<ViewPdsmPart> parts = scene_->Parts();
+  std::vector<std::shared_ptr<PdsmTiles>> sources;
+  for (const ViewPdsmPart& part : parts) sources.push_back(part.tiles);
   absl::StatusOr<std::unique_ptr<PdsmTilePool>> pool = PdsmTilePool::Create(
-      gl_, scene_->pdsm, settings_.gpu_budget_bytes, settings_.max_pool_buffer_bytes);
+      gl_, std::move(sources), settings_.gpu_budget_bytes, settings_.max_pool_buffer_bytes);
   if (!pool.ok()) return pool.status();
-  impl_->pdsm = *std::move(pool);
+  Impl& im = *impl_;
+  im.pdsm = *std::move(pool);
+  const std::vector<PdsmPartGpu> for_shader = PartsForShader(parts, *im.pdsm);
+  im.pdsm_parts = gl::MakeBuffer(gl_);
+  gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, im.pdsm_parts.name());
+  gl_.BufferData(GL_SHADER_STORAGE_BUFFER,
+                 static_cast<GLsizeiptr>(for_shader.size() * sizeof(PdsmPartGpu)),
+                 for_shader.data(), GL_STATIC_DRAW);
+  gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
   streamed_valid_ = false;
-  return absl::OkStatus();
+  return gl::CheckGlError(gl_, "uploading the PDSM's parts");
 }
 
 absl::Status FrameRenderer::StreamTiles(const glm::mat4& clip_from_light) {
@@ -265,9 +313,18 @@ absl::Status FrameRenderer::StreamTiles(const glm::mat4& clip_from_light) {
   const auto start = Clock::now();
   std::vector<float> gbuffer;
   if (absl::Status s = RenderGbuffer(clip_from_light, &gbuffer); !s.ok()) return s;
-  if (absl::Status s = im.pdsm->Request(TilesSeen(scene_->pdsm->header(), gbuffer)); !s.ok()) {
-    return s;
+  const std::vector<ViewPdsmPart> parts = scene_->Parts();
+  std::vector<TileRequest> requests = TilesSeen(parts[0].tiles->header(), gbuffer);
+  if (parts.size() > 1) {
+    const glm::dmat4 world_from_view = glm::inverse(scene_->LightFromWorld());
+    for (size_t i = 1; i < parts.size(); ++i) {
+      const PdsmHeader& h = parts[i].tiles->header();
+      const glm::dmat4 light_from_view = LightFromWorldMatrix(h.geometry.frame) * world_from_view;
+      std::vector<TileRequest> more = TilesSeen(h, gbuffer, static_cast<int>(i), &light_from_view);
+      requests.insert(requests.end(), more.begin(), more.end());
+    }
   }
+  if (absl::Status s = im.pdsm->Request(std::move(requests)); !s.ok()) return s;
   streamed_valid_ = true;
   streamed_clip_ = clip_from_light;
   streamed_width_ = im.width;
@@ -547,12 +604,10 @@ void FrameRenderer::SetShadeUniforms(ViewMode mode, const Camera& camera,
   u.Vec3("eye_light", glm::vec3(g.frame.LightFromWorld(camera.eye_world)));
   u.Int("orthographic", g.projection == Projection::kOrthographic);
   u.Float("ambient", settings_.ambient);
-  u.Vec2("window_min", glm::vec2(g.s_min, g.t_min));
-  u.Vec2("inv_pitch", glm::vec2(1.0 / g.PixelPitchS(), 1.0 / g.PixelPitchT()));
-  u.Float("z_valid_min", static_cast<float>(g.z_valid_min));
-  u.Int2("pdsm_size", glm::ivec2(g.width, g.height));
   u.Int("bilinear", settings_.bilinear ? 1 : 0);
-  u.Int("pdsm_tile_size", im.pdsm->tile_size());
+  u.Int("pdsm_part_count", mode == ViewMode::kPdsm && !scene_->every_light.empty()
+                               ? static_cast<int>(scene_->every_light.size())
+                               : 1);
   const ShadowMapLayout& layout = mode == ViewMode::kMultiSm ? im.multi_layout : im.single_layout;
   u.Vec2("sm_window_min", glm::vec2(layout.window_min));
   u.Vec2("sm_window_size", glm::vec2(layout.window_size));
@@ -605,8 +660,6 @@ absl::Status FrameRenderer::Render(ViewMode mode, const Camera& camera, int widt
   const gl::UniformSetter u(gl_, im.shade.name());
   u.Mat4("clip_from_light", clip_from_light);
   SetShadeUniforms(mode, camera, u);
-  gl_.ActiveTexture(GL_TEXTURE0 + kUnitPdsmPages);
-  gl_.BindTexture(GL_TEXTURE_2D, im.pdsm->page_table());
   gl_.ActiveTexture(GL_TEXTURE0 + kUnitCpuAttenuation);
   gl_.BindTexture(GL_TEXTURE_2D, im.cpu_attenuation.name());
   gl_.ActiveTexture(GL_TEXTURE0 + kUnitShadowMap);
@@ -616,6 +669,8 @@ absl::Status FrameRenderer::Render(ViewMode mode, const Camera& camera, int widt
   gl_.ActiveTexture(GL_TEXTURE0 + kUnitDynamicMaps);
   gl_.BindTexture(GL_TEXTURE_2D_ARRAY, im.dynamic_maps.layers());
   gl_.ActiveTexture(GL_TEXTURE0);
+  gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, kBindingPdsmParts, im.pdsm_parts.name());
+  gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, kBindingPdsmPages, im.pdsm->page_table());
   for (int i = 0; i < kMaxPoolBuffers; ++i) {
     // A binding no page entry points at still needs a buffer: the first one stands in.
     const GLuint pool = im.pdsm->pool(i) != 0 ? im.pdsm->pool(i) : im.pdsm->pool(0);

@@ -23,22 +23,26 @@ uint32_t PageEntry(int buffer, uint64_t offset) {
 
 }  // namespace
 
-PdsmTilePool::PdsmTilePool(const gl::GlFunctions& gl, std::shared_ptr<PdsmTiles> tiles)
-    : gl_(gl), tiles_(std::move(tiles)) {}
+PdsmTilePool::PdsmTilePool(const gl::GlFunctions& gl) : gl_(gl) {}
 
-absl::StatusOr<std::unique_ptr<PdsmTilePool>> PdsmTilePool::Create(const gl::GlFunctions& gl,
-                                                                   std::shared_ptr<PdsmTiles> tiles,
-                                                                   int64_t budget_bytes,
-                                                                   int64_t max_buffer_bytes) {
-  std::unique_ptr<PdsmTilePool> pool(new PdsmTilePool(gl, std::move(tiles)));
-  const int tiles_x = pool->tiles_->tiles_x(), tiles_y = pool->tiles_->tiles_y();
-  GLint max_texture = 0, max_block = 0;
-  gl.GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture);
+absl::StatusOr<std::unique_ptr<PdsmTilePool>> PdsmTilePool::Create(
+    const gl::GlFunctions& gl, std::vector<std::shared_ptr<PdsmTiles>> parts, int64_t budget_bytes,
+    int64_t max_buffer_bytes) {
+  std::unique_ptr<PdsmTilePool> pool(new PdsmTilePool(gl));
+  pool->parts_ = std::move(parts);
+  GLint max_block = 0;
   gl.GetIntegerv(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
-  if (tiles_x > max_texture || tiles_y > max_texture) {
-    return absl::ResourceExhaustedError(absl::StrCat("a PDSM of ", tiles_x, "x", tiles_y,
-                                                     " tiles has a page table larger than ",
-                                                     "GL_MAX_TEXTURE_SIZE ", max_texture));
+  uint64_t entries = 0;
+  for (const std::shared_ptr<PdsmTiles>& part : pool->parts_) {
+    pool->page_bases_.push_back(static_cast<uint32_t>(entries));
+    entries += static_cast<uint64_t>(part->tiles_x()) * part->tiles_y();
+  }
+  if (entries * sizeof(uint32_t) > static_cast<uint64_t>(static_cast<uint32_t>(max_block))) {
+    return absl::ResourceExhaustedError(
+        absl::StrCat("the PDSM's ", entries,
+                     " tiles need a page table larger than one storage "
+                     "buffer holds here (",
+                     max_block, " bytes)"));
   }
   // One SSBO binding addresses at most GL_MAX_SHADER_STORAGE_BLOCK_SIZE bytes (llvmpipe: 128
   // MiB), and a page entry's offset has kPoolOffsetBits: past that, more buffers.
@@ -53,22 +57,25 @@ absl::StatusOr<std::unique_ptr<PdsmTilePool>> PdsmTilePool::Create(const gl::GlF
       kMaxPoolBuffers * pool->buffer_max_units_);
   pool->stats_.budget_bytes = pool->budget_units_ * kUnitBytes;
 
-  pool->pages_.assign(static_cast<size_t>(tiles_x) * tiles_y, kTileNotResident);
-  for (int y = 0; y < tiles_y; ++y) {
-    for (int x = 0; x < tiles_x; ++x) {
-      if (pool->tiles_->TilePending(x, y)) {
-        pool->pages_[static_cast<size_t>(y) * tiles_x + x] = kTilePending;
+  pool->pages_.assign(entries, kTileNotResident);
+  for (size_t i = 0; i < pool->parts_.size(); ++i) {
+    const PdsmTiles& part = *pool->parts_[i];
+    for (int y = 0; y < part.tiles_y(); ++y) {
+      for (int x = 0; x < part.tiles_x(); ++x) {
+        if (part.TilePending(x, y)) {
+          pool->pages_[pool->page_bases_[i] + static_cast<size_t>(y) * part.tiles_x() + x] =
+              kTilePending;
+        }
       }
     }
   }
-  pool->page_table_ = gl::MakeTexture(gl);
-  gl.BindTexture(GL_TEXTURE_2D, pool->page_table_.name());
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  gl.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
-  gl.TexImage2D(GL_TEXTURE_2D, 0, GL_R32UI, tiles_x, tiles_y, 0, GL_RED_INTEGER, GL_UNSIGNED_INT,
-                pool->pages_.data());
-  gl.BindTexture(GL_TEXTURE_2D, 0);
+  pool->page_table_ = gl::MakeBuffer(gl);
+  gl.BindBuffer(GL_SHADER_STORAGE_BUFFER, pool->page_table_.name());
+  gl.BufferData(
+      GL_SHADER_STORAGE_BUFFER,
+      static_cast<GLsizeiptr>(std::max<size_t>(pool->pages_.size(), 1) * sizeof(uint32_t)),
+      pool->pages_.data(), GL_DYNAMIC_DRAW);
+  gl.BindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
   pool->stats_.page_table_bytes = pool->pages_.size() * sizeof(uint32_t);
 
   if (absl::Status s = pool->AddBuffer(); !s.ok()) return s;
@@ -230,15 +237,19 @@ absl::Status PdsmTilePool::Upload(size_t index, const PdsmTile& tile, Placement 
 absl::Status PdsmTilePool::Request(std::vector<TileRequest> requests) {
   const auto start = Clock::now();
   ++request_count_;
-  const int tiles_x = tiles_->tiles_x();
   std::sort(requests.begin(), requests.end(), [](const TileRequest& a, const TileRequest& b) {
     if (a.pixels != b.pixels) return a.pixels > b.pixels;
+    if (a.part != b.part) return a.part < b.part;
     return a.tile_y != b.tile_y ? a.tile_y < b.tile_y : a.tile_x < b.tile_x;
   });
+  const auto index_of = [this](const TileRequest& r) {
+    return page_bases_[r.part] + static_cast<size_t>(r.tile_y) * parts_[r.part]->tiles_x() +
+           r.tile_x;
+  };
   // First mark every requested resident tile as in use, so that none of them is evicted for
   // another.
   for (const TileRequest& r : requests) {
-    auto it = resident_.find(static_cast<size_t>(r.tile_y) * tiles_x + r.tile_x);
+    auto it = resident_.find(index_of(r));
     if (it != resident_.end()) it->second.last_request = request_count_;
   }
   stats_.requested_tiles = static_cast<int>(requests.size());
@@ -247,9 +258,9 @@ absl::Status PdsmTilePool::Request(std::vector<TileRequest> requests) {
   bool changed = false;
   absl::Status status;
   for (const TileRequest& r : requests) {
-    const size_t index = static_cast<size_t>(r.tile_y) * tiles_x + r.tile_x;
+    const size_t index = index_of(r);
     if (pages_[index] != kTileNotResident) continue;  // resident, empty or pending
-    absl::StatusOr<std::shared_ptr<const PdsmTile>> tile = tiles_->Tile(r.tile_x, r.tile_y);
+    absl::StatusOr<std::shared_ptr<const PdsmTile>> tile = parts_[r.part]->Tile(r.tile_x, r.tile_y);
     if (!tile.ok()) {
       status = tile.status();
       break;
@@ -276,11 +287,10 @@ absl::Status PdsmTilePool::Request(std::vector<TileRequest> requests) {
     resident_[index] = Resident{*at, units, request_count_};
   }
   if (changed) {
-    gl_.BindTexture(GL_TEXTURE_2D, page_table_.name());
-    gl_.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
-    gl_.TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, tiles_x, tiles_->tiles_y(), GL_RED_INTEGER,
-                      GL_UNSIGNED_INT, pages_.data());
-    gl_.BindTexture(GL_TEXTURE_2D, 0);
+    gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, page_table_.name());
+    gl_.BufferSubData(GL_SHADER_STORAGE_BUFFER, 0,
+                      static_cast<GLsizeiptr>(pages_.size() * sizeof(uint32_t)), pages_.data());
+    gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
   }
   UpdateStats();
   stats_.upload_seconds += std::chrono::duration<double>(Clock::now() - start).count();

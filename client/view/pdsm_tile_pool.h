@@ -1,14 +1,16 @@
 // The PDSM on the GPU as a virtual texture (issue #12): a page table with one entry per PDSM
-// tile, and pool buffers holding the tiles that are resident, under a GPU memory budget
+// tile of every part shown (one light, or every light of a file and a sphere's faces), and
+// pool buffers holding the tiles that are resident, under a GPU memory budget
 // (`pdsm-view --gpu-budget-mib`). The frame renderer asks for the tiles a frame reads; they
 // are read from the PdsmTiles source and uploaded, evicting least recently used tiles no
 // longer needed when the pool is full. A map of any size is drawn with the GPU memory of what
 // is on screen, not of the map.
 //
 // Layout (read by shaders/view/shade.frag):
-//   page table  R32UI texture, tiles_x x tiles_y, row 0 at t_min: the tile's block as
-//               (pool buffer << kPoolOffsetBits) | offset in that buffer (8-byte units), or
-//               kTileEmpty / kTilePending / kTileNotResident.
+//   page table  SSBO of uint: each part's tiles_x x tiles_y entries, row-major from t_min,
+//               from page_base(part): the tile's block as (pool buffer << kPoolOffsetBits) |
+//               offset in that buffer (8-byte units), or kTileEmpty / kTilePending /
+//               kTileNotResident.
 //   pool        up to kMaxPoolBuffers SSBOs of uvec2: one binding addresses at most
 //               GL_MAX_SHADER_STORAGE_BLOCK_SIZE (llvmpipe: 128 MiB), more buffers let the
 //               budget pass that. A tile's block: width * height entries (offset of the
@@ -49,6 +51,7 @@ inline constexpr int kMaxPoolBuffers = 4;
 inline constexpr int64_t kDefaultGpuBudgetBytes = int64_t{256} << 20;
 
 struct TileRequest {
+  int part = 0;  // index into the pool's parts
   int tile_x = 0, tile_y = 0;
   int64_t pixels = 0;  // screen pixels that read the tile: the most read are made resident first
 };
@@ -73,29 +76,31 @@ struct TilePoolStats {
 class PdsmTilePool {
  public:
   // REQUIRES: a current GL 4.3+ context made by the driver `gl` was loaded from; `gl` outlives
-  // the pool. `max_buffer_bytes` (> 0) caps one pool buffer below what the GL allows (tests
-  // of several buffers). RESOURCE_EXHAUSTED when the page table exceeds GL_MAX_TEXTURE_SIZE;
-  // INTERNAL when GL fails.
-  static absl::StatusOr<std::unique_ptr<PdsmTilePool>> Create(const gl::GlFunctions& gl,
-                                                              std::shared_ptr<PdsmTiles> tiles,
-                                                              int64_t budget_bytes,
-                                                              int64_t max_buffer_bytes = 0);
+  // the pool; `parts` not empty. `max_buffer_bytes` (> 0) caps one pool buffer below what the
+  // GL allows (tests of several buffers). RESOURCE_EXHAUSTED when the page table exceeds one
+  // storage buffer; INTERNAL when GL fails.
+  static absl::StatusOr<std::unique_ptr<PdsmTilePool>> Create(
+      const gl::GlFunctions& gl, std::vector<std::shared_ptr<PdsmTiles>> parts,
+      int64_t budget_bytes, int64_t max_buffer_bytes = 0);
   PdsmTilePool(const PdsmTilePool&) = delete;
   PdsmTilePool& operator=(const PdsmTilePool&) = delete;
 
   // Makes the requested tiles resident, the most read first (ties: row-major order), as far as
   // the budget goes: tiles not requested are evicted least recently requested first, and the
   // pool is compacted when its free space is fragmented. Requested tiles that do not fit stay
-  // kTileNotResident (counted in stats()). Errors: reading a tile (naming the file), GL.
+  // kTileNotResident (counted in stats()). REQUIRES: each request names a tile of one of the
+  // parts. Errors: reading a tile (naming the file), GL.
   absl::Status Request(std::vector<TileRequest> requests);
 
   GLuint page_table() const { return page_table_.name(); }
+  // Where part `part`'s entries start in the page table.
+  uint32_t page_base(int part) const { return page_bases_.at(part); }
   // Pool buffer `i`, or 0 past the buffers made so far (a binding the shader never reads).
   GLuint pool(int i) const {
     return i < static_cast<int>(buffers_.size()) ? buffers_[i].buffer.name() : 0;
   }
   uint64_t pool_capacity_bytes(int i) const { return buffers_.at(i).allocator.capacity() * 8; }
-  int tile_size() const { return tiles_->header().tile_size; }
+  int tile_size(int part = 0) const { return parts_.at(part)->header().tile_size; }
   const TilePoolStats& stats() const { return stats_; }
 
  private:
@@ -113,7 +118,7 @@ class PdsmTilePool {
     RangeAllocator allocator;
     uint64_t limit_units = 0;
   };
-  PdsmTilePool(const gl::GlFunctions& gl, std::shared_ptr<PdsmTiles> tiles);
+  explicit PdsmTilePool(const gl::GlFunctions& gl);
   // A free block of `units`: in a buffer as it is, grown, or a new one; then compacting a
   // buffer whose free space is fragmented; then evicting. nullopt if none.
   std::optional<Placement> Place(uint64_t units);
@@ -125,13 +130,14 @@ class PdsmTilePool {
   void UpdateStats();
 
   const gl::GlFunctions& gl_;
-  std::shared_ptr<PdsmTiles> tiles_;
-  gl::Texture page_table_;
+  std::vector<std::shared_ptr<PdsmTiles>> parts_;
+  std::vector<uint32_t> page_bases_;  // per part
+  gl::Buffer page_table_;
   std::vector<PoolBuffer> buffers_;
   uint64_t budget_units_ = 0;                      // over every buffer
   uint64_t buffer_max_units_ = 0;                  // what one buffer may hold
-  std::vector<uint32_t> pages_;                    // the page table, row-major
-  std::unordered_map<size_t, Resident> resident_;  // by tile index
+  std::vector<uint32_t> pages_;                    // the page table
+  std::unordered_map<size_t, Resident> resident_;  // by page table index
   uint64_t request_count_ = 0;
   TilePoolStats stats_;
 };

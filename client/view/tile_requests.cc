@@ -6,8 +6,8 @@
 
 namespace pdsm::view {
 
-std::vector<TileRequest> TilesSeen(const PdsmHeader& header,
-                                   std::span<const float> positions_light) {
+std::vector<TileRequest> TilesSeen(const PdsmHeader& header, std::span<const float> positions_light,
+                                   int part, const glm::dmat4* light_from_view) {
   const PdsmGeometry& g = header.geometry;
   const int size = header.tile_size;
   const int tiles_x = (g.width + size - 1) / size;
@@ -26,7 +26,8 @@ std::vector<TileRequest> TilesSeen(const PdsmHeader& header,
   };
   for (size_t i = 0; i + 3 < positions_light.size(); i += 4) {
     if (positions_light[i + 3] == 0.0f) continue;  // background
-    const glm::dvec3 p(positions_light[i], positions_light[i + 1], positions_light[i + 2]);
+    glm::dvec3 p(positions_light[i], positions_light[i + 1], positions_light[i + 2]);
+    if (light_from_view) p = glm::dvec3(*light_from_view * glm::dvec4(p, 1.0));
     const std::optional<glm::dvec2> st = g.WindowFromLight(p);
     if (!st || !(p.z >= g.z_valid_min)) continue;
     const double px = (st->x - g.s_min) * inv_pitch_s, py = (st->y - g.t_min) * inv_pitch_t;
@@ -44,7 +45,8 @@ std::vector<TileRequest> TilesSeen(const PdsmHeader& header,
   std::vector<TileRequest> requests;
   requests.reserve(pixels.size());
   for (const auto& [key, count] : pixels) {
-    requests.push_back({static_cast<int>(key % tiles_x), static_cast<int>(key / tiles_x), count});
+    requests.push_back(
+        {part, static_cast<int>(key % tiles_x), static_cast<int>(key / tiles_x), count});
   }
   return requests;
 }

@@ -17,6 +17,8 @@
 #include "client/view/shadowmask_textures.h"
 #include "client/view/text_overlay.h"
 #include "core/bake/bake_plan.h"
+#include "core/pdsm/pdsm_file.h"
+#include "core/pdsm/pdsm_lights.h"
 #include "core/scene/scene_loader.h"
 #include "spdlog/spdlog.h"
 
@@ -66,6 +68,56 @@ absl::Status StartFromPlan(const ViewOptions& options, const pdsm::v1::Job& job,
   return absl::OkStatus();
 }
 
+// Prepares the scene's meshes, the shadowmask textures and the dynamic objects.
+absl::StatusOr<ViewScene> FinishViewScene(const ViewOptions& options, ViewScene view);
+
+// Without --light, a scene and file of several lights are shaded with every light at once (pdsm
+// mode only: the comparison modes render one light's shadow maps). Each part of the file gets
+// its own reader and a share of --cache-mib; each is checked against its light in the scene.
+absl::Status LoadEveryLight(const ViewOptions& options, const Scene& scene, ViewScene* view) {
+  const bool pdsm_only =
+      options.mode == ViewMode::kPdsm &&
+      std::all_of(options.compare.begin(), options.compare.end(),
+                  [](ViewMode m) { return m == ViewMode::kPdsm; }) &&
+      (options.bench_frames == 0 || !options.compare.empty());  // --bench: every mode, else
+  if (!pdsm_only) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "--mode, --compare, --bench: the modes but pdsm shade one light; name it with --light (",
+        options.scene_path, " has ", scene.LightCount(),
+        " lights; without --light pdsm mode shades with all of them)"));
+  }
+  absl::StatusOr<PdsmReader> reader = PdsmReader::Open(options.pdsm_path);
+  if (!reader.ok()) return reader.status();
+  const std::vector<PdsmHeader> headers = reader->headers();
+  const std::vector<PdsmLightParts> lights = LightsOfParts(headers);
+  // The scene counts a sphere's faces as the file does: one part each.
+  if (headers.size() != scene.LightCount()) {
+    return absl::InvalidArgumentError(absl::StrCat("--pdsm ", options.pdsm_path, ": holds ",
+                                                   headers.size(), " lights and faces, ",
+                                                   options.scene_path, " ", scene.LightCount()));
+  }
+  const int64_t cache_share = std::max<int64_t>(
+      options.cache_bytes / static_cast<int64_t>(headers.size()), int64_t{1} << 20);
+  for (const PdsmLightParts& light : lights) {
+    for (const int part : light.parts) {
+      absl::StatusOr<Scene> one = OneLight(scene, headers[part].light_name, "pdsm-view", "--light");
+      if (!one.ok()) return one.status();
+      if (absl::Status s = CheckPdsmMatchesScene(*one, headers[part], options.pdsm_path); !s.ok()) {
+        if (!options.allow_mismatch) return s;
+        spdlog::warn("{}", std::string(s.message()));
+      }
+      if (view->every_light.empty()) view->scene = *std::move(one);
+      absl::StatusOr<PdsmReader> own =
+          view->every_light.empty() ? std::move(reader) : PdsmReader::Open(options.pdsm_path);
+      if (!own.ok()) return own.status();
+      view->every_light.push_back(
+          {PdsmTiles::FromReader(*std::move(own), part, cache_share), light.parts.back() + 1});
+    }
+  }
+  view->pdsm = view->every_light.front().tiles;
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
@@ -80,7 +132,12 @@ absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
   absl::StatusOr<Scene> scene = options.job_id.empty()
                                     ? LoadSceneFile(options.scene_path)
                                     : LoadJobScene(options.scene_path, job, options.light);
-  if (scene.ok()) scene = OneLight(*std::move(scene), options.light, "pdsm-view", "--light");
+  if (!scene.ok()) return scene.status();
+  if (options.job_id.empty() && options.light.empty() && scene->LightCount() > 1) {
+    if (absl::Status s = LoadEveryLight(options, *scene, &view); !s.ok()) return s;
+    return FinishViewScene(options, std::move(view));
+  }
+  scene = OneLight(*std::move(scene), options.light, "pdsm-view", "--light");
   if (!scene.ok()) return scene.status();
   view.scene = *std::move(scene);
   // A sphere light, named or a scene's only light, is shaded with one face (OneLight): its part.
@@ -103,6 +160,12 @@ absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
     if (!options.allow_mismatch) return s;
     spdlog::warn("{}", std::string(s.message()));
   }
+  return FinishViewScene(options, std::move(view));
+}
+
+namespace {
+
+absl::StatusOr<ViewScene> FinishViewScene(const ViewOptions& options, ViewScene view) {
   PrepareViewScene(&view);
   if (!options.shadowmask_dir.empty()) {
     std::vector<std::string> missing;
@@ -122,6 +185,8 @@ absl::StatusOr<ViewScene> LoadViewScene(const ViewOptions& options) {
   }
   return view;
 }
+
+}  // namespace
 
 namespace {
 

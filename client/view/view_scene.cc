@@ -42,8 +42,7 @@ void AppendTriangle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& 
 
 }  // namespace
 
-glm::dmat4 ViewScene::LightFromWorld() const {
-  const LightFrame& f = frame();
+glm::dmat4 LightFromWorldMatrix(const LightFrame& f) {
   // Rows u, v, n; translation -R c. glm is column-major: m[col][row].
   glm::dmat4 m(1.0);
   for (int col = 0; col < 3; ++col) {
@@ -55,6 +54,13 @@ glm::dmat4 ViewScene::LightFromWorld() const {
   m[3][1] = -glm::dot(f.v, f.center);
   m[3][2] = -glm::dot(f.n, f.center);
   return m;
+}
+
+glm::dmat4 ViewScene::LightFromWorld() const { return LightFromWorldMatrix(frame()); }
+
+std::vector<ViewPdsmPart> ViewScene::Parts() const {
+  if (!every_light.empty()) return every_light;
+  return {ViewPdsmPart{pdsm, 1}};
 }
 
 absl::Status CheckPdsmMatchesScene(const Scene& scene, const PdsmHeader& header,

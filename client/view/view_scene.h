@@ -47,11 +47,22 @@ struct ShadowmaskedMesh {
   std::vector<float> attenuation;
 };
 
+// One part of a PDSM file shaded together with the others: a light, or one face of a sphere
+// light (core/pdsm/pdsm_lights.h).
+struct ViewPdsmPart {
+  std::shared_ptr<PdsmTiles> tiles;
+  int group_end = 0;  // the first part past its light's (a sphere's faces are one light)
+};
+
 struct ViewScene {
   Scene scene;
   // The PDSM's tiles, read as frames need them (a file of any size), or a whole map in memory
   // with its pending tiles (--server, a job running).
   std::shared_ptr<PdsmTiles> pdsm;
+  // pdsm-view without --light on a scene and file of several lights: every part of the file in
+  // file order, shaded together in pdsm mode (every_light[0].tiles is `pdsm`, whose light
+  // space is the view's). Empty: `pdsm` alone.
+  std::vector<ViewPdsmPart> every_light;
   std::shared_ptr<const BakePlan> plan;  // the scene's plan, when following a running job
   std::vector<DrawMesh> baked;           // light space: the scene file's meshes
   std::vector<DynamicObject> dynamic_objects;
@@ -64,6 +75,8 @@ struct ViewScene {
   const LightFrame& frame() const { return pdsm->header().geometry.frame; }
   // light_from_world as a matrix, and light_from_object for a dynamic object (double).
   glm::dmat4 LightFromWorld() const;
+  // The parts a frame shades: every_light, or `pdsm` alone.
+  std::vector<ViewPdsmPart> Parts() const;
 };
 
 // Checks that `header` was baked from `scene`: the same scene name, light shape, light
@@ -72,6 +85,9 @@ struct ViewScene {
 // --allow-mismatch in the viewer turns it into a warning.)
 absl::Status CheckPdsmMatchesScene(const Scene& scene, const PdsmHeader& header,
                                    const std::string& pdsm_path);
+
+// light_from_world of a light frame as a matrix (double).
+glm::dmat4 LightFromWorldMatrix(const LightFrame& frame);
 
 // The scene's meshes in the PDSM's light space, flat-shaded, one colour each.
 std::vector<DrawMesh> BuildBakedMeshes(const Scene& scene, const LightFrame& frame);

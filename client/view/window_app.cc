@@ -72,7 +72,10 @@ void OnKey(GLFWwindow* window, int key, int, int action, int) {
   forward.y = 0;
   forward = glm::length(forward) > 0 ? glm::normalize(forward) : glm::dvec3(0, 0, -1);
   const glm::dvec3 right = glm::cross(forward, glm::dvec3(0, 1, 0));
-  if (key >= GLFW_KEY_1 && key <= GLFW_KEY_7) s.mode = kAllModes[key - GLFW_KEY_1];
+  // Every light at once is pdsm mode's alone: the other modes render one light's maps.
+  if (key >= GLFW_KEY_1 && key <= GLFW_KEY_7 && s.scene->every_light.empty()) {
+    s.mode = kAllModes[key - GLFW_KEY_1];
+  }
   if (key == GLFW_KEY_8 && !s.scene->shadowmasked.empty()) s.mode = ViewMode::kShadowmask;
   switch (key) {
     case GLFW_KEY_ESCAPE:

@@ -30,17 +30,23 @@ uniform float ambient;
 // the resident tiles in up to 4 pool buffers (one binding holds at most
 // GL_MAX_SHADER_STORAGE_BLOCK_SIZE). A tile's block: per pixel (offset from the block, count),
 // then its vertices (z, A) as float bits -- the thesis' two levels (4.2.4), per tile.
-uniform usampler2D pdsm_pages;  // R32UI, one texel per tile: (buffer << 28) | offset
+// The parts shown: the light shaded (part 0, whose light space is the view's), or every light
+// of the file, a sphere's faces one part each (client/view/frame_renderer.cc, PartsOf).
+struct PdsmPart {
+  mat4 light_from_view;  // this part's light space from the view's (identity for part 0)
+  vec4 window;           // (s_min, t_min, pixels per window unit along s, along t)
+  ivec4 size;            // (width, height, pixels per tile side, first page table entry)
+  ivec4 info;            // (tiles a row, orthographic, first part past its light, sphere face)
+  vec4 extra;            // (z_valid_min: nearer, the PDSM knows nothing; 0 none, -, -, -)
+};
+layout(std430, binding = 6) readonly buffer PdsmParts { PdsmPart pdsm_parts[]; };
+layout(std430, binding = 7) readonly buffer PdsmPages { uint pdsm_pages[]; };  // (buffer << 28) | offset
 layout(std430, binding = 0) readonly buffer PdsmPool0 { uvec2 pdsm_pool0[]; };
 layout(std430, binding = 3) readonly buffer PdsmPool1 { uvec2 pdsm_pool1[]; };
 layout(std430, binding = 4) readonly buffer PdsmPool2 { uvec2 pdsm_pool2[]; };
 layout(std430, binding = 5) readonly buffer PdsmPool3 { uvec2 pdsm_pool3[]; };
-uniform int pdsm_tile_size;     // PDSM pixels per tile side
-uniform vec2 window_min;        // (s_min, t_min)
-uniform vec2 inv_pitch;         // pixels per window unit
-uniform ivec2 pdsm_size;
-uniform int bilinear;           // 1: blend the 4 nearest pixels' results; 0: nearest pixel
-uniform float z_valid_min;      // nearer than this the PDSM knows nothing (pdsmZValidMin); 0 none
+uniform int pdsm_part_count;  // 1: shade with part 0 alone; more: every light, pdsm mode
+uniform int bilinear;         // 1: blend the 4 nearest pixels' results; 0: nearest pixel
 const uint kTileNotResident = 0xFFFFFFFDu;  // over the GPU budget (--gpu-budget-mib)
 const uint kTileEmpty = 0xFFFFFFFEu;        // no vertex: A = 0 everywhere in it
 const uint kTilePending = 0xFFFFFFFFu;      // not baked yet (a job still running)
@@ -84,7 +90,10 @@ uniform vec2 dynamic_reach_max;
 uniform vec2 dynamic_sample_min;
 uniform vec2 dynamic_sample_max;
 
-uint PageOf(ivec2 pixel) { return texelFetch(pdsm_pages, pixel / pdsm_tile_size, 0).r; }
+uint PageOf(int part, ivec2 pixel) {
+  ivec2 tile = pixel / pdsm_parts[part].size.z;
+  return pdsm_pages[pdsm_parts[part].size.w + tile.y * pdsm_parts[part].info.x + tile.x];
+}
 
 // Word i of pool buffer b (buffer blocks are named one by one: an array of them could only be
 // indexed uniformly across the draw).
@@ -99,13 +108,14 @@ uvec2 PoolWord(uint b, uint i) {
 // the next one, by binary search; linear between them, 0 before the first, the last value
 // after the last (right-continuous at jumps) -- EvaluateAttenuation in
 // core/pdsm/attenuation_function.cc.
-float EvaluatePixel(ivec2 pixel, float z) {
-  ivec2 tile = pixel / pdsm_tile_size;
-  uint page = texelFetch(pdsm_pages, tile, 0).r;
+float EvaluatePixel(int part, ivec2 pixel, float z) {
+  int tile_size = pdsm_parts[part].size.z;
+  ivec2 tile = pixel / tile_size;
+  uint page = PageOf(part, pixel);
   if (page >= kTileNotResident) return 0.0;  // empty (callers turned the others away)
   uint b = page >> 28, block = page & 0x0FFFFFFFu;
-  ivec2 local = pixel - tile * pdsm_tile_size;
-  int tile_width = min(pdsm_tile_size, pdsm_size.x - tile.x * pdsm_tile_size);
+  ivec2 local = pixel - tile * tile_size;
+  int tile_width = min(tile_size, pdsm_parts[part].size.x - tile.x * tile_size);
   uvec2 entry = PoolWord(b, block + uint(local.y * tile_width + local.x));
   uint offset = block + entry.x, count = entry.y;
   if (count == 0u || z < uintBitsToFloat(PoolWord(b, offset).x)) return 0.0;
@@ -134,20 +144,22 @@ vec2 WindowFromLight(vec3 p, vec2 sample_offset) {
   return (p.xy - sample_offset) / p.z;
 }
 
-// Thesis ch. 4: project, evaluate the 4 neighbours at z, blend the results (never depths).
-// -1 outside the frustum (QueryAttenuation's NaN).
-float PdsmAttenuation(vec3 p) {
-  if (orthographic == 0 && !(p.z > 0.0)) return -1.0;
-  if (p.z < z_valid_min) return -1.0;
-  vec2 st = WindowFromLight(p, vec2(0.0));
-  vec2 pixel = (st - window_min) * inv_pitch;
-  if (any(lessThan(pixel, vec2(0.0))) || any(greaterThan(pixel, vec2(pdsm_size)))) return -1.0;
-  ivec2 last = pdsm_size - 1;
+// Thesis ch. 4: project `q` (part `part`'s light space), evaluate the 4 neighbours at z, blend
+// the results (never depths). -1 outside the frustum (QueryAttenuation's NaN).
+float PdsmAttenuationOf(int part, vec3 q) {
+  bool ortho = pdsm_parts[part].info.y != 0;
+  if (!ortho && !(q.z > 0.0)) return -1.0;
+  if (q.z < pdsm_parts[part].extra.x) return -1.0;
+  vec2 st = ortho ? q.xy : q.xy / q.z;
+  vec2 pixel = (st - pdsm_parts[part].window.xy) * pdsm_parts[part].window.zw;
+  ivec2 size = pdsm_parts[part].size.xy;
+  if (any(lessThan(pixel, vec2(0.0))) || any(greaterThan(pixel, vec2(size)))) return -1.0;
+  ivec2 last = size - 1;
   if (bilinear == 0) {
     ivec2 nearest = clamp(ivec2(floor(pixel)), ivec2(0), last);
-    float missing = MissingPage(PageOf(nearest));
+    float missing = MissingPage(PageOf(part, nearest));
     if (missing != 0.0) return missing;
-    float a = EvaluatePixel(nearest, p.z);
+    float a = EvaluatePixel(part, nearest, q.z);
     return isnan(a) ? -1.0 : a;
   }
   vec2 f = pixel - 0.5;
@@ -155,17 +167,21 @@ float PdsmAttenuation(vec3 p) {
   vec2 w = f - base;
   ivec2 p0 = clamp(ivec2(base), ivec2(0), last);
   ivec2 p1 = clamp(ivec2(base) + 1, ivec2(0), last);
-  float m00 = MissingPage(PageOf(p0)), m11 = MissingPage(PageOf(p1));
-  float m01 = MissingPage(PageOf(ivec2(p0.x, p1.y))), m10 = MissingPage(PageOf(ivec2(p1.x, p0.y)));
+  float m00 = MissingPage(PageOf(part, p0)), m11 = MissingPage(PageOf(part, p1));
+  float m01 = MissingPage(PageOf(part, ivec2(p0.x, p1.y)));
+  float m10 = MissingPage(PageOf(part, ivec2(p1.x, p0.y)));
   if (m00 == kPending || m11 == kPending || m01 == kPending || m10 == kPending) return kPending;
   if (min(min(m00, m11), min(m01, m10)) == kNotResident) return kNotResident;
-  float a00 = EvaluatePixel(ivec2(p0.x, p0.y), p.z);
-  float a10 = EvaluatePixel(ivec2(p1.x, p0.y), p.z);
-  float a01 = EvaluatePixel(ivec2(p0.x, p1.y), p.z);
-  float a11 = EvaluatePixel(ivec2(p1.x, p1.y), p.z);
+  float a00 = EvaluatePixel(part, ivec2(p0.x, p0.y), q.z);
+  float a10 = EvaluatePixel(part, ivec2(p1.x, p0.y), q.z);
+  float a01 = EvaluatePixel(part, ivec2(p0.x, p1.y), q.z);
+  float a11 = EvaluatePixel(part, ivec2(p1.x, p1.y), q.z);
   float a = (1.0 - w.y) * ((1.0 - w.x) * a00 + w.x * a10) + w.y * ((1.0 - w.x) * a01 + w.x * a11);
   return isnan(a) ? -1.0 : a;  // a NaN neighbour: unknown, as QueryAttenuation says
 }
+
+// The light shaded (part 0, in the view's own light space).
+float PdsmAttenuation(vec3 p) { return PdsmAttenuationOf(0, p); }
 
 // Texel coordinates (continuous) of p in the shadow map of the sample at sample_offset.
 vec2 ShadowMapTexel(vec3 p, vec2 sample_offset) {
@@ -325,19 +341,65 @@ float Attenuation(vec3 p) {
   return MultiShadowMap(p);
 }
 
+// Every light of the file (pdsm mode without --light): each light's direct term d_i, from its
+// own centre as in the one-light case (a sphere's from its centre, without an emitter
+// cosine), and its A_i; a sphere's A from the face whose axis is nearest the point's direction
+// from its centre (PartAt in core/pdsm/pdsm_lights.h). `hidden` is the fraction of the direct
+// light the lights hide, 1 - sum d_i (1 - A_i) / sum d_i (0 where none reaches), or kPending /
+// kNotResident where a light's tiles are so. Returns the direct term shaded: min(sum d_i, 1)
+// (1 - hidden), so that one light shades as in the one-light case and several do not wash
+// each other's shadows out.
+float EveryLight(vec3 p, vec3 n, out float hidden) {
+  float arrives = 0.0, total = 0.0;
+  bool pending = false, not_resident = false;
+  for (int i = 0; i < pdsm_part_count; i = pdsm_parts[i].info.z) {
+    int chosen = i;
+    vec3 q = (pdsm_parts[i].light_from_view * vec4(p, 1.0)).xyz;
+    float best = q.z / length(q);
+    for (int f = i + 1; f < pdsm_parts[i].info.z; ++f) {
+      vec3 qf = (pdsm_parts[f].light_from_view * vec4(p, 1.0)).xyz;
+      float score = qf.z / length(qf);
+      if (score > best) {
+        best = score;
+        chosen = f;
+        q = qf;
+      }
+    }
+    bool ortho = pdsm_parts[chosen].info.y != 0;
+    vec3 m = mat3(pdsm_parts[chosen].light_from_view) * n;
+    vec3 to_light = ortho ? vec3(0.0, 0.0, -1.0) : normalize(-q);
+    bool planar = !ortho && pdsm_parts[chosen].info.w == 0;
+    float direct = max(dot(m, to_light), 0.0) * (planar ? max(-to_light.z, 0.0) : 1.0);
+    float a = PdsmAttenuationOf(chosen, q);
+    pending = pending || a == kPending;
+    not_resident = not_resident || a == kNotResident;
+    arrives += direct * (1.0 - max(a, 0.0));  // outside its frustum: lit
+    total += direct;
+  }
+  float fraction = total > 0.0 ? arrives / total : 1.0;
+  hidden = pending ? kPending : not_resident ? kNotResident : 1.0 - fraction;
+  return min(total, 1.0) * fraction;
+}
+
 void main() {
   vec3 p = position_light;
   vec3 n = normalize(normal_light);
   if (dot(n, eye_light - p) < 0.0) n = -n;  // two-sided: thin plates are seen from both sides
-  // Direct light from the light centre: Lambert at the receiver, and the emitter's cosine
-  // for a planar light (1 for the sun).
-  vec3 to_light = orthographic != 0 ? vec3(0.0, 0.0, -1.0) : normalize(-p);
-  float emitter_cos = orthographic != 0 ? 1.0 : max(-to_light.z, 0.0);
-  float direct = max(dot(n, to_light), 0.0) * emitter_cos;
-  float a = Attenuation(p);
+  float a;
+  vec3 linear;
+  if (pdsm_part_count > 1) {
+    linear = albedo * (ambient + (1.0 - ambient) * EveryLight(p, n, a));
+  } else {
+    // Direct light from the light centre: Lambert at the receiver, and the emitter's cosine
+    // for a planar light (1 for the sun).
+    vec3 to_light = orthographic != 0 ? vec3(0.0, 0.0, -1.0) : normalize(-p);
+    float emitter_cos = orthographic != 0 ? 1.0 : max(-to_light.z, 0.0);
+    float direct = max(dot(n, to_light), 0.0) * emitter_cos;
+    a = Attenuation(p);
+    float visible = 1.0 - max(a, 0.0);  // outside the frustum: no information, lit
+    linear = albedo * (ambient + (1.0 - ambient) * direct * visible);
+  }
   attenuation_out = a;
-  float visible = 1.0 - max(a, 0.0);  // outside the frustum: no information, lit
-  vec3 linear = albedo * (ambient + (1.0 - ambient) * direct * visible);
   // Not baked yet: lit, under a blue hatch that moves with the surface.
   if (a == kPending) {
     float hatch = step(0.5, fract((gl_FragCoord.x + gl_FragCoord.y) / 16.0));

@@ -141,17 +141,9 @@ PdsmImage OnePixelTiles(const std::vector<int>& counts) {
 void ExpectBlocksHoldTheirTiles(const gl::GlFunctions& gl, const view::PdsmTilePool& pool,
                                 view::PdsmTiles& source) {
   std::vector<uint32_t> pages(static_cast<size_t>(source.tiles_x()) * source.tiles_y());
-  gl.BindTexture(GL_TEXTURE_2D, pool.page_table());
-  // No glGetTexImage in the loaded table: read the page table through a framebuffer.
-  gl::Framebuffer fb = gl::MakeFramebuffer(gl);
-  gl.BindFramebuffer(GL_FRAMEBUFFER, fb.name());
-  gl.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, pool.page_table(),
-                          0);
-  gl.ReadBuffer(GL_COLOR_ATTACHMENT0);
-  gl.PixelStorei(GL_PACK_ALIGNMENT, 4);
-  gl.ReadPixels(0, 0, source.tiles_x(), source.tiles_y(), GL_RED_INTEGER, GL_UNSIGNED_INT,
-                pages.data());
-  gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  gl.BindBuffer(GL_SHADER_STORAGE_BUFFER, pool.page_table());
+  gl.GetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, static_cast<GLsizeiptr>(pages.size() * 4),
+                      pages.data());
   std::vector<std::vector<uint32_t>> buffers(pool.stats().buffers);
   for (int b = 0; b < pool.stats().buffers; ++b) {
     buffers[b].resize(pool.pool_capacity_bytes(b) / 4);
@@ -200,6 +192,16 @@ void ExpectBlocksHoldTheirTiles(const gl::GlFunctions& gl, const view::PdsmTileP
   }
 }
 
+// Asks for the one-pixel tiles `tiles` of part 0 (one screen pixel each), then reads the pool
+// back.
+void RequestAndCheck(const gl::GlFunctions& gl, view::PdsmTilePool& pool, view::PdsmTiles& source,
+                     const std::vector<int>& tiles) {
+  std::vector<view::TileRequest> requests;
+  for (int t : tiles) requests.push_back({0, t, 0, 1});
+  ASSERT_TRUE(pool.Request(requests).ok());
+  ExpectBlocksHoldTheirTiles(gl, pool, source);
+}
+
 struct GlContext {
   std::optional<gl::OsMesaContext> context;
   std::optional<gl::GlFunctions> gl;
@@ -228,15 +230,10 @@ TEST(PdsmTilePool, EvictsWhatIsNotAskedForCompactsAndKeepsEveryBlockExact) {
   std::shared_ptr<view::PdsmTiles> source =
       view::PdsmTiles::FromImage(OnePixelTiles({29, 29, 29, 19, 19, 0, 120}));
   absl::StatusOr<std::unique_ptr<view::PdsmTilePool>> created =
-      view::PdsmTilePool::Create(gl, source, 100 * 8);
+      view::PdsmTilePool::Create(gl, {source}, 100 * 8);
   ASSERT_TRUE(created.ok()) << created.status();
   view::PdsmTilePool& pool = **created;
-  const auto request = [&](std::vector<int> tiles) {
-    std::vector<view::TileRequest> requests;
-    for (int t : tiles) requests.push_back({t, 0, 1});
-    ASSERT_TRUE(pool.Request(requests).ok());
-    ExpectBlocksHoldTheirTiles(gl, pool, *source);
-  };
+  const auto request = [&](std::vector<int> tiles) { RequestAndCheck(gl, pool, *source, tiles); };
   request({0, 1, 2});
   EXPECT_EQ(pool.stats().resident_tiles, 3);
   EXPECT_EQ(pool.stats().used_bytes, 90u * 8);
@@ -265,15 +262,10 @@ TEST(PdsmTilePool, SpreadsTilesOverSeveralBuffersWhenOneBindingHoldsLess) {
   std::shared_ptr<view::PdsmTiles> source =
       view::PdsmTiles::FromImage(OnePixelTiles({29, 29, 29, 19}));
   absl::StatusOr<std::unique_ptr<view::PdsmTilePool>> created =
-      view::PdsmTilePool::Create(gl, source, 100 * 8, 40 * 8);
+      view::PdsmTilePool::Create(gl, {source}, 100 * 8, 40 * 8);
   ASSERT_TRUE(created.ok()) << created.status();
   view::PdsmTilePool& pool = **created;
-  const auto request = [&](std::vector<int> tiles) {
-    std::vector<view::TileRequest> requests;
-    for (int t : tiles) requests.push_back({t, 0, 1});
-    ASSERT_TRUE(pool.Request(requests).ok());
-    ExpectBlocksHoldTheirTiles(gl, pool, *source);
-  };
+  const auto request = [&](std::vector<int> tiles) { RequestAndCheck(gl, pool, *source, tiles); };
   request({0, 1});
   EXPECT_EQ(pool.stats().buffers, 2);
   EXPECT_EQ(pool.stats().resident_tiles, 2);
