@@ -55,7 +55,7 @@ std::shared_ptr<PdsmTiles> PdsmTiles::FromImage(PdsmImage image, std::vector<uin
   const int size = tiles->header_.tile_size;
   tiles->tiles_x_ = TileCount(g.width, size);
   tiles->tiles_y_ = TileCount(g.height, size);
-  if (std::find(pending.begin(), pending.end(), uint8_t{1}) != pending.end()) {
+  if (std::any_of(pending.begin(), pending.end(), [](uint8_t flag) { return flag != 0; })) {
     tiles->pending_tiles_.assign(static_cast<size_t>(tiles->tiles_x_) * tiles->tiles_y_, 0);
     for (int y = 0; y < g.height; ++y) {
       for (int x = 0; x < g.width; ++x) {

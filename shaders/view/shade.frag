@@ -45,7 +45,7 @@ layout(std430, binding = 0) readonly buffer PdsmPool0 { uvec2 pdsm_pool0[]; };
 layout(std430, binding = 3) readonly buffer PdsmPool1 { uvec2 pdsm_pool1[]; };
 layout(std430, binding = 4) readonly buffer PdsmPool2 { uvec2 pdsm_pool2[]; };
 layout(std430, binding = 5) readonly buffer PdsmPool3 { uvec2 pdsm_pool3[]; };
-uniform int pdsm_part_count;  // 1: shade with part 0 alone; more: every light, pdsm mode
+uniform int pdsm_part_count;  // parts: 1 but in the every-light variant (PDSM_EVERY_LIGHT)
 uniform int bilinear;         // 1: blend the 4 nearest pixels' results; 0: nearest pixel
 const uint kTileNotResident = 0xFFFFFFFDu;  // over the GPU budget (--gpu-budget-mib)
 const uint kTileEmpty = 0xFFFFFFFEu;        // no vertex: A = 0 everywhere in it
@@ -341,6 +341,7 @@ float Attenuation(vec3 p) {
   return MultiShadowMap(p);
 }
 
+#ifdef PDSM_EVERY_LIGHT  // the variant client/view/frame_renderer.cc builds for it
 // Every light of the file (pdsm mode without --light): each light's direct term d_i, from its
 // own centre as in the one-light case (a sphere's from its centre, without an emitter
 // cosine), and its A_i; a sphere's A from the face whose axis is nearest the point's direction
@@ -380,6 +381,7 @@ float EveryLight(vec3 p, vec3 n, out float hidden) {
   hidden = pending ? kPending : not_resident ? kNotResident : 1.0 - fraction;
   return min(total, 1.0) * fraction;
 }
+#endif
 
 void main() {
   vec3 p = position_light;
@@ -387,9 +389,10 @@ void main() {
   if (dot(n, eye_light - p) < 0.0) n = -n;  // two-sided: thin plates are seen from both sides
   float a;
   vec3 linear;
-  if (pdsm_part_count > 1) {
-    linear = albedo * (ambient + (1.0 - ambient) * EveryLight(p, n, a));
-  } else {
+#ifdef PDSM_EVERY_LIGHT
+  linear = albedo * (ambient + (1.0 - ambient) * EveryLight(p, n, a));
+#else
+  {
     // Direct light from the light centre: Lambert at the receiver, and the emitter's cosine
     // for a planar light (1 for the sun).
     vec3 to_light = orthographic != 0 ? vec3(0.0, 0.0, -1.0) : normalize(-p);
@@ -399,6 +402,7 @@ void main() {
     float visible = 1.0 - max(a, 0.0);  // outside the frustum: no information, lit
     linear = albedo * (ambient + (1.0 - ambient) * direct * visible);
   }
+#endif
   attenuation_out = a;
   // Not baked yet: lit, under a blue hatch that moves with the surface.
   if (a == kPending) {
