@@ -128,20 +128,28 @@ struct PdsmPartGpu {
 };
 static_assert(sizeof(PdsmPartGpu) == 128, "std430 layout of shade.frag's PdsmPart");
 
-// The parts a frame shades, as shade.frag reads them: part i's light space from the view's
-// (part 0's), computed in double and rounded once; part 0's is the identity itself, so that
-// one light is shaded exactly as before there were several.
-std::vector<PdsmPartGpu> PartsForShader(const std::vector<ViewPdsmPart>& parts,
-                                        const PdsmTilePool& pool) {
-  std::vector<PdsmPartGpu> out;
+// Part i's light space from the view's (part 0's), in double; part 0's is the identity itself,
+// so that one light is shaded exactly as before there were several.
+std::vector<glm::dmat4> LightFromView(const std::vector<ViewPdsmPart>& parts) {
   const glm::dmat4 world_from_view =
       glm::inverse(LightFromWorldMatrix(parts.front().tiles->header().geometry.frame));
+  std::vector<glm::dmat4> out = {glm::dmat4(1.0)};
+  for (size_t i = 1; i < parts.size(); ++i) {
+    out.push_back(LightFromWorldMatrix(parts[i].tiles->header().geometry.frame) * world_from_view);
+  }
+  return out;
+}
+
+// The parts a frame shades, as shade.frag reads them (the matrices rounded once to float).
+std::vector<PdsmPartGpu> PartsForShader(const std::vector<ViewPdsmPart>& parts,
+                                        const std::vector<glm::dmat4>& light_from_view,
+                                        const PdsmTilePool& pool) {
+  std::vector<PdsmPartGpu> out;
   for (size_t i = 0; i < parts.size(); ++i) {
     const PdsmHeader& h = parts[i].tiles->header();
     const PdsmGeometry& g = h.geometry;
     PdsmPartGpu part;
-    part.light_from_view =
-        i == 0 ? glm::mat4(1.0f) : glm::mat4(LightFromWorldMatrix(g.frame) * world_from_view);
+    part.light_from_view = glm::mat4(light_from_view[i]);
     part.window = glm::vec4(glm::vec2(g.s_min, g.t_min),
                             glm::vec2(1.0 / g.PixelPitchS(), 1.0 / g.PixelPitchT()));
     part.size = glm::ivec4(g.width, g.height, h.tile_size,
@@ -171,7 +179,9 @@ struct FrameRenderer::Impl {
   explicit Impl(const gl::GlFunctions& gl) : shadow_maps(gl), dynamic_maps(gl) {}
   gl::Program shade, shade_every_light, gbuffer, depth;
   std::unique_ptr<PdsmTilePool> pdsm;
-  gl::Buffer pdsm_parts;  // SSBO of PdsmPartGpu
+  gl::Buffer pdsm_parts;                    // SSBO of PdsmPartGpu
+  std::vector<ViewPdsmPart> parts;          // the scene's, as the pool was made
+  std::vector<glm::dmat4> light_from_view;  // per part
   std::vector<MeshGpu> baked;
   std::vector<MeshGpu> dynamic;       // parallel to ViewScene::dynamic_objects
   std::vector<MeshGpu> shadowmasked;  // parallel to ViewScene::shadowmasked
@@ -295,15 +305,17 @@ absl::Status FrameRenderer::Init() {
 const TilePoolStats& FrameRenderer::pdsm_pool_stats() const { return impl_->pdsm->stats(); }
 
 absl::Status FrameRenderer::ReplacePdsm() {
-  const std::vector<ViewPdsmPart> parts = scene_->Parts();
+  Impl& im = *impl_;
+  im.parts = scene_->Parts();
+  im.light_from_view = LightFromView(im.parts);
   std::vector<std::shared_ptr<PdsmTiles>> sources;
-  for (const ViewPdsmPart& part : parts) sources.push_back(part.tiles);
+  for (const ViewPdsmPart& part : im.parts) sources.push_back(part.tiles);
   absl::StatusOr<std::unique_ptr<PdsmTilePool>> pool = PdsmTilePool::Create(
       gl_, std::move(sources), settings_.gpu_budget_bytes, settings_.max_pool_buffer_bytes);
   if (!pool.ok()) return pool.status();
-  Impl& im = *impl_;
   im.pdsm = *std::move(pool);
-  const std::vector<PdsmPartGpu> for_shader = PartsForShader(parts, *im.pdsm);
+  const std::vector<PdsmPartGpu> for_shader =
+      PartsForShader(im.parts, im.light_from_view, *im.pdsm);
   im.pdsm_parts = gl::MakeBuffer(gl_);
   gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, im.pdsm_parts.name());
   gl_.BufferData(GL_SHADER_STORAGE_BUFFER,
@@ -323,16 +335,11 @@ absl::Status FrameRenderer::StreamTiles(const glm::mat4& clip_from_light) {
   const auto start = Clock::now();
   std::vector<float> gbuffer;
   if (absl::Status s = RenderGbuffer(clip_from_light, &gbuffer); !s.ok()) return s;
-  const std::vector<ViewPdsmPart> parts = scene_->Parts();
-  std::vector<TileRequest> requests = TilesSeen(parts[0].tiles->header(), gbuffer);
-  if (parts.size() > 1) {
-    const glm::dmat4 world_from_view = glm::inverse(scene_->LightFromWorld());
-    for (size_t i = 1; i < parts.size(); ++i) {
-      const PdsmHeader& h = parts[i].tiles->header();
-      const glm::dmat4 light_from_view = LightFromWorldMatrix(h.geometry.frame) * world_from_view;
-      std::vector<TileRequest> more = TilesSeen(h, gbuffer, static_cast<int>(i), &light_from_view);
-      requests.insert(requests.end(), more.begin(), more.end());
-    }
+  std::vector<TileRequest> requests = TilesSeen(im.parts[0].tiles->header(), gbuffer);
+  for (size_t i = 1; i < im.parts.size(); ++i) {
+    std::vector<TileRequest> more = TilesSeen(im.parts[i].tiles->header(), gbuffer,
+                                              static_cast<int>(i), &im.light_from_view[i]);
+    requests.insert(requests.end(), more.begin(), more.end());
   }
   if (absl::Status s = im.pdsm->Request(std::move(requests)); !s.ok()) return s;
   streamed_valid_ = true;

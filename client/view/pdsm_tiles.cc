@@ -121,17 +121,11 @@ absl::StatusOr<std::optional<double>> PdsmTiles::Attenuation(const glm::dvec3& p
 
 absl::StatusOr<std::vector<std::optional<double>>> PdsmTiles::AttenuationAt(
     std::span<const glm::dvec3> points_world) {
-  const PdsmGeometry& g = header_.geometry;
-  const int size = header_.tile_size;
-  std::vector<int64_t> keys(points_world.size(), -1);
+  std::vector<int64_t> keys(points_world.size());
   std::vector<size_t> order(points_world.size());
   for (size_t k = 0; k < points_world.size(); ++k) {
     order[k] = k;
-    if (const std::optional<PdsmPoint> point = g.Locate(points_world[k])) {
-      const int x = std::clamp(static_cast<int>(point->px), 0, g.width - 1);
-      const int y = std::clamp(static_cast<int>(point->py), 0, g.height - 1);
-      keys[k] = int64_t{y / size} * tiles_x_ + x / size;
-    }
+    keys[k] = TileIndexAt(header_, points_world[k]);
   }
   std::stable_sort(order.begin(), order.end(),
                    [&keys](size_t a, size_t b) { return keys[a] < keys[b]; });

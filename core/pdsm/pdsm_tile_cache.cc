@@ -91,8 +91,7 @@ absl::StatusOr<double> PdsmTileCache::Attenuation(int part, const glm::dvec3& p_
   return a;
 }
 
-int64_t PdsmTileCache::TileKey(int part, const glm::dvec3& p_world) const {
-  const PdsmHeader& header = reader_.headers().at(part);
+int64_t TileIndexAt(const PdsmHeader& header, const glm::dvec3& p_world) {
   const std::optional<PdsmPoint> point = header.geometry.Locate(p_world);
   if (!point) return -1;
   const PdsmGeometry& g = header.geometry;
@@ -100,6 +99,10 @@ int64_t PdsmTileCache::TileKey(int part, const glm::dvec3& p_world) const {
   const int y = std::clamp(static_cast<int>(point->py), 0, g.height - 1);
   const int64_t tiles_x = (g.width + header.tile_size - 1) / header.tile_size;
   return int64_t{y / header.tile_size} * tiles_x + x / header.tile_size;
+}
+
+int64_t PdsmTileCache::TileKey(int part, const glm::dvec3& p_world) const {
+  return TileIndexAt(reader_.headers().at(part), p_world);
 }
 
 absl::StatusOr<std::vector<double>> AttenuationAt(PdsmTileCache& cache,

@@ -71,6 +71,10 @@ class PdsmTileCache {
   int64_t tiles_read_ ABSL_GUARDED_BY(mu_) = 0;
 };
 
+// The row-major index of the tile of `header`'s map whose pixel holds `p_world`; -1 outside
+// the frustum. Ordering points by it makes neighbours in the map share a tile read.
+int64_t TileIndexAt(const PdsmHeader& header, const glm::dvec3& p_world);
+
 // The attenuation at each of `points_world` for each of `lights` (core/pdsm/pdsm_lights.h: a
 // sphere's value from the face that holds the point), point-major (point k's value for
 // lights[l] at k * lights.size() + l). The points are answered in the order of their tiles (of

@@ -286,22 +286,14 @@ TEST(PdsmTilePool, SpreadsTilesOverSeveralBuffersWhenOneBindingHoldsLess) {
 // and is gone once the view fits; orbiting under a small budget evicts and reloads tiles and
 // still draws the first view exactly.
 TEST(ViewTileStreaming, UnderAnyBudgetAPixelIsExactOrMarkedNotResident) {
-  pdsm::v1::BakeParams overrides;
-  overrides.add_resolution(256);
-  overrides.add_resolution(256);
-  overrides.set_samples(16);
-  overrides.set_shadow_map_resolution(256);
-  overrides.set_tile_size(32);
-  absl::StatusOr<Scene> scene = LoadSceneFile(ExamplePath("plates"), overrides);
+  const std::string pdsm_path = BakeExample("plates", "plates_streaming.exr", 256, 16, 256);
+  absl::StatusOr<Scene> scene = LoadSceneFile(ExamplePath("plates"));  // its meshes
   ASSERT_TRUE(scene.ok()) << scene.status();
-  LocalBakeOptions options;
-  options.output_path = ViewBakeDir().File("plates_streaming.exr");
-  ASSERT_TRUE(RunLocalBake(*scene, options).ok());
 
   view::ViewScene view;
   view.scene = *scene;
   absl::StatusOr<std::shared_ptr<view::PdsmTiles>> tiles =
-      view::PdsmTiles::OpenFile(options.output_path, "", int64_t{1} << 20);
+      view::PdsmTiles::OpenFile(pdsm_path, "", int64_t{1} << 20);
   ASSERT_TRUE(tiles.ok()) << tiles.status();
   view.pdsm = *tiles;
   view::PrepareViewScene(&view);

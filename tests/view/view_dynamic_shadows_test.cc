@@ -28,20 +28,8 @@ const view::Camera kCamera{{4, 7, 6}, {0, 1, 0}, 40};
 
 // plates baked finer than SmallBake, so that the bake's own error stays below what is measured.
 std::string PlatesBake() {
-  static const std::string* path = [] {
-    pdsm::v1::BakeParams overrides;
-    overrides.add_resolution(128);
-    overrides.add_resolution(128);
-    overrides.set_samples(64);
-    overrides.set_shadow_map_resolution(512);
-    overrides.set_tile_size(32);
-    absl::StatusOr<Scene> scene = LoadSceneFile(ExamplePath("plates"), overrides);
-    EXPECT_TRUE(scene.ok()) << scene.status();
-    LocalBakeOptions options;
-    options.output_path = ViewBakeDir().File("plates_dynamic.exr");
-    EXPECT_TRUE(RunLocalBake(*scene, options).ok());
-    return new std::string(options.output_path);
-  }();
+  static const std::string* path =
+      new std::string(BakeExample("plates", "plates_dynamic.exr", 128, 64, 512));
   return *path;
 }
 

@@ -18,6 +18,27 @@ inline const TempDir& ViewBakeDir() {
   return *dir;
 }
 
+// `example` baked at resolution^2 PDSM pixels in 32-pixel tiles into the bakes' folder as
+// `file_name`; returns its path. Same bytes every time (determinism).
+inline std::string BakeExample(const std::string& example, const std::string& file_name,
+                               int resolution, int samples, int shadow_map_resolution,
+                               bool surfaces_only = false) {
+  pdsm::v1::BakeParams overrides;
+  overrides.set_surfaces_only(surfaces_only);
+  overrides.add_resolution(resolution);
+  overrides.add_resolution(resolution);
+  overrides.set_samples(samples);
+  overrides.set_shadow_map_resolution(shadow_map_resolution);
+  overrides.set_tile_size(32);
+  absl::StatusOr<Scene> scene = LoadSceneFile(ExamplePath(example), overrides);
+  EXPECT_TRUE(scene.ok()) << scene.status();
+  LocalBakeOptions options;
+  options.output_path = ViewBakeDir().File(file_name);
+  absl::StatusOr<BakeSummary> summary = RunLocalBake(*scene, options);
+  EXPECT_TRUE(summary.ok()) << summary.status();
+  return options.output_path;
+}
+
 // `example` baked at 64x64 PDSM pixels, 16 samples, 256-texel shadow maps: a few tenths of a
 // second, and enough penumbra to compare modes on. Same bytes every time (determinism).
 // `surfaces_only`: the same bake keeping A(z) only near the receivers (NaN elsewhere).
@@ -25,21 +46,8 @@ inline std::string SmallBake(const std::string& example, bool surfaces_only = fa
   static std::map<std::string, std::string>* baked = new std::map<std::string, std::string>();
   const std::string name = example + (surfaces_only ? "_surfaces_only" : "");
   if (auto it = baked->find(name); it != baked->end()) return it->second;
-  pdsm::v1::BakeParams overrides;
-  overrides.set_surfaces_only(surfaces_only);
-  overrides.add_resolution(64);
-  overrides.add_resolution(64);
-  overrides.set_samples(16);
-  overrides.set_shadow_map_resolution(256);
-  overrides.set_tile_size(32);
-  absl::StatusOr<Scene> scene = LoadSceneFile(ExamplePath(example), overrides);
-  EXPECT_TRUE(scene.ok()) << scene.status();
-  LocalBakeOptions options;
-  options.output_path = ViewBakeDir().File(name + ".exr");
-  absl::StatusOr<BakeSummary> summary = RunLocalBake(*scene, options);
-  EXPECT_TRUE(summary.ok()) << summary.status();
-  (*baked)[name] = options.output_path;
-  return options.output_path;
+  (*baked)[name] = BakeExample(example, name + ".exr", 64, 16, 256, surfaces_only);
+  return (*baked)[name];
 }
 
 // pdsm-view with `args` appended after the scene of `example`.
