@@ -231,7 +231,8 @@ absl::StatusOr<BakeSummary> BakePlanned(std::shared_ptr<const BakePlan> plan, Pd
   summary.tiles = progress.tiles_total;
   summary.tiles_all_lit = progress.tiles_all_lit;
   summary.groups = plan->group_count();
-  summary.casters = static_cast<int64_t>(plan->casters.TriangleCount());
+  summary.casters_left_out = static_cast<int64_t>(plan->casters_left_out);
+  summary.casters = static_cast<int64_t>(plan->casters.TriangleCount()) + summary.casters_left_out;
   summary.tasks = progress.tasks_done;
   summary.tile_samples_total = progress.tile_samples_total;
   summary.assembly = progress.assembly;
@@ -251,6 +252,7 @@ void AddLight(const BakeSummary& light, BakeSummary* total) {
   total->tiles_all_lit += light.tiles_all_lit;
   total->groups += light.groups;
   total->casters += light.casters;
+  total->casters_left_out += light.casters_left_out;
   total->tasks += light.tasks;
   total->tile_samples_total += light.tile_samples_total;
   total->tasks_stats.Add(light.tasks_stats);

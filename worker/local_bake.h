@@ -47,9 +47,10 @@ struct BakeSummary {
   std::string light_name;
   int width = 0, height = 0, samples = 0;
   int tiles = 0;
-  int tiles_all_lit = 0;  // tiles with no vertex at all (no caster can reach their rays)
-  int groups = 0;         // tile groups (the unit of rendering)
-  int64_t casters = 0;    // caster triangles of the scene
+  int tiles_all_lit = 0;         // tiles with no vertex at all (no caster can reach their rays)
+  int groups = 0;                // tile groups (the unit of rendering)
+  int64_t casters = 0;           // caster triangles of the scene
+  int64_t casters_left_out = 0;  // of them, out of every tile's reach (BakePlan::casters_left_out)
   int64_t tasks = 0;
   int64_t tile_samples_total = 0;  // light samples summed over tiles (adaptive bakes: < max)
   TaskStats tasks_stats;           // summed over threads (thread-seconds)

@@ -114,14 +114,19 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags,
       samples += light.samples;
     }
   }
-  std::fprintf(stderr,
-               "  shadow maps: %lld for %d samples in %d tile groups (%.2f per sample); "
-               "%lld triangles submitted, %.2fx the %lld casters x samples\n",
-               static_cast<long long>(s.tasks_stats.shadow_maps), samples, s.groups,
-               static_cast<double>(s.tasks_stats.shadow_maps) / std::max(1, samples),
-               static_cast<long long>(s.tasks_stats.triangles_submitted),
-               limit_triangles > 0 ? s.tasks_stats.triangles_submitted / limit_triangles : 0.0,
-               static_cast<long long>(s.casters));
+  std::fprintf(
+      stderr,
+      "  shadow maps: %lld for %d samples in %d tile groups (%.2f per sample); "
+      "%lld triangles submitted, %.2fx the %lld casters x samples%s\n",
+      static_cast<long long>(s.tasks_stats.shadow_maps), samples, s.groups,
+      static_cast<double>(s.tasks_stats.shadow_maps) / std::max(1, samples),
+      static_cast<long long>(s.tasks_stats.triangles_submitted),
+      limit_triangles > 0 ? s.tasks_stats.triangles_submitted / limit_triangles : 0.0,
+      static_cast<long long>(s.casters),
+      s.casters_left_out > 0
+          ? absl::StrFormat(" (%d of them out of every tile's reach, left out)", s.casters_left_out)
+                .c_str()
+          : "");
   if (s.lights.empty() && scene.bake.adaptive() && s.tiles > 0) {
     std::fprintf(stderr,
                  "  adaptive sampling: tolerance %g, %.1f samples per tile on average "

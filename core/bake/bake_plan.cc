@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "absl/strings/str_format.h"
+#include "core/bake/caster_culling.h"
 #include "core/bake/face_samples.h"
 #include "core/bake/tile_reach.h"
 #include "core/sampling/light_samples.h"
@@ -326,7 +327,7 @@ double MaxWindowTangent(const LightSpec& light) {
   return std::min(kMaxWindowTangent, std::tan(light.cone_half_angle_deg * std::numbers::pi / 180));
 }
 
-absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
+absl::StatusOr<BakePlan> PlanBake(const Scene& scene, PlanCasters casters) {
   BakePlan plan;
   FillHeader(scene, &plan);
   PdsmGeometry& g = plan.header.geometry;
@@ -410,6 +411,13 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene) {
   plan.tile_group_size = scene.bake.tile_group_size;
   plan.group_side = GroupSideInTiles(plan);
   plan.tile_has_casters = TilesCastersMayReach(plan);
+  // After the spatial sort, which spans what it is given (the kept triangles keep the order
+  // they have among every caster: draw order settles depth ties), and after the tiles are
+  // marked: a tile's task, even one whose reach only holds triangles that cannot shadow, widens
+  // its group's shadow-map windows, and so moves the maps' projections (caster_culling.h).
+  if (casters == PlanCasters::kReachable) {
+    plan.casters_left_out = LeaveOutUnreachableCasters(&plan);
+  }
   return plan;
 }
 

@@ -60,8 +60,11 @@ struct BakePlan {
   // no task at all.
   std::vector<bool> tile_has_casters;
   int tile_group_size = 0;  // the scene's bake.tileGroupSize (0: chosen by GroupSideInTiles)
-  LightSpaceMesh casters;   // triangles in spatial order, cut into caster_clusters
+  // The casters some tile can reach (core/bake/caster_culling.h), in spatial order, cut into
+  // caster_clusters; casters_left_out more of the scene's are out of every tile's reach.
+  LightSpaceMesh casters;
   std::vector<CasterCluster> caster_clusters;
+  size_t casters_left_out = 0;
   // The masks casters.triangle_masks index (1-based), shared with the scene: empty when every
   // caster is opaque.
   std::vector<std::shared_ptr<const AlphaMask>> masks;
@@ -143,7 +146,11 @@ int64_t TileCountOf(const BakeSettings& bake);
 // A scene with nothing in front of the light gets a default frustum (window [-1, 1]^2,
 // depths [1, 2]) and bakes to an all-lit PDSM. Errors: INVALID_ARGUMENT for a frustum
 // override the projection cannot use.
-absl::StatusOr<BakePlan> PlanBake(const Scene& scene);
+// Which of the scene's casters a plan keeps: those some tile can reach (the default: the
+// bake is byte for byte the same), or every one (to compare against).
+enum class PlanCasters { kReachable, kEvery };
+absl::StatusOr<BakePlan> PlanBake(const Scene& scene,
+                                  PlanCasters casters = PlanCasters::kReachable);
 
 // Frees what only a shadow-map renderer uses: the casters and their clusters, and the
 // receivers unless the plan is surfaces-only (the tile assembly places its depth windows with

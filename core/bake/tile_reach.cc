@@ -227,7 +227,70 @@ KeptTriangles KeepInside(const BakePlan& plan, const std::vector<HalfSpace>& reg
   return out;
 }
 
+// A half-space bounded below over several: at a point p, each coefficient is the least of
+// theirs where p's coordinate is >= 0 and the greatest elsewhere, and the constant the least.
+// The bound is the least of the linear functions over that box of coefficients, concave in p:
+// over a box of points it is least at a corner.
+struct HalfSpaceLowerBound {
+  glm::dvec3 coef_lo{kInf}, coef_hi{-kInf};
+  double constant_lo = kInf;
+
+  void Add(const HalfSpace& h) {
+    coef_lo = glm::min(coef_lo, h.coef);
+    coef_hi = glm::max(coef_hi, h.coef);
+    constant_lo = std::min(constant_lo, h.constant);
+  }
+  // Evaluated as HalfSpace::operator() is (the same dot product, then the constant), so that
+  // each rounded step is no greater than the same step of any half-space bounded.
+  double operator()(const glm::dvec3& p) const {
+    const glm::dvec3 coef(p.x >= 0 ? coef_lo.x : coef_hi.x, p.y >= 0 ? coef_lo.y : coef_hi.y,
+                          p.z >= 0 ? coef_lo.z : coef_hi.z);
+    return glm::dot(coef, p) + constant_lo;
+  }
+  // Whether the bound is above a margin far over rounding at p: 1e-12 of the size of its terms
+  // at any point within `extent` of the origin on each axis.
+  bool Above(const glm::dvec3& p, const glm::dvec3& extent) const {
+    const glm::dvec3 coef_size = glm::max(glm::abs(coef_lo), glm::abs(coef_hi));
+    return (*this)(p) > 1e-12 * (glm::dot(coef_size, extent) + std::abs(constant_lo));
+  }
+  // Whether every point of the box [lo, hi] is above the bound, by that margin: the bound's
+  // least over the box is at a corner, and the margin holds for the whole box.
+  bool BoxAbove(const glm::dvec3& lo, const glm::dvec3& hi) const {
+    const glm::dvec3 extent = glm::max(glm::abs(lo), glm::abs(hi));
+    const std::array<glm::dvec3, 8> corners = Corners(lo, hi);
+    return std::all_of(corners.begin(), corners.end(),
+                       [&](const glm::dvec3& p) { return Above(p, extent); });
+  }
+};
+
 }  // namespace
+
+std::vector<bool> CastersSomeTileMayReach(const BakePlan& plan) {
+  const LightSpaceMesh& mesh = plan.casters;
+  std::vector<bool> reachable(mesh.TriangleCount(), false);
+  if (plan.tile_count() == 0) return reachable;
+  std::vector<HalfSpaceLowerBound> bounds;
+  for (int i = 0; i < plan.tile_count(); ++i) {
+    const std::vector<HalfSpace> region =
+        ShadowingRegion(plan, SpanOf(plan.geometry(), plan.tile(i)));
+    bounds.resize(region.size());
+    for (size_t k = 0; k < region.size(); ++k) bounds[k].Add(region[k]);
+  }
+  for (const CasterCluster& c : plan.caster_clusters) {
+    if (std::any_of(bounds.begin(), bounds.end(),
+                    [&](const HalfSpaceLowerBound& b) { return b.BoxAbove(c.lo, c.hi); })) {
+      continue;
+    }
+    for (uint32_t k = c.first_triangle; k < c.first_triangle + c.triangle_count; ++k) {
+      const std::array<glm::dvec3, 3> p = CasterTriangle(mesh, k);
+      reachable[k] = std::none_of(bounds.begin(), bounds.end(), [&](const HalfSpaceLowerBound& b) {
+        return b.Above(p[0], glm::abs(p[0])) && b.Above(p[1], glm::abs(p[1])) &&
+               b.Above(p[2], glm::abs(p[2]));
+      });
+    }
+  }
+  return reachable;
+}
 
 bool TileHasCasters(const BakePlan& plan, const TileRect& tile) {
   const std::vector<HalfSpace> region = ShadowingRegion(plan, SpanOf(plan.geometry(), tile));

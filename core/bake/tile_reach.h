@@ -46,6 +46,18 @@ TileReach ComputeTileReach(const BakePlan& plan, const TileRect& tile);
 // stopping at the first triangle kept. False: the tile is all lit and needs no shadow map.
 bool TileHasCasters(const BakePlan& plan, const TileRect& tile);
 
+// Per caster triangle of the plan: false only where ComputeTileReach and TileHasCasters drop
+// it for every tile of the plan, so that leaving the false ones out of the plan changes no
+// tile's reach (the same triangles in the same order, the same blocks and depths) and so no
+// byte of the bake (core/bake/caster_culling.h). Each half-space of a tile's shadowing region is
+// bounded below over all the plan's tiles: at a point, each coefficient is the tiles' least or
+// greatest, whichever gives the smaller product with the point's coordinate (the rounded dot
+// product is monotone in each), and the constant the least. A triangle is false when its three
+// vertices are outside one such bound by a relative margin far above rounding. The bound is
+// loose only where tiles disagree: for a local light in a world, it keeps what lies between
+// the light and its window, and leaves out the world. Time linear in tiles and triangles.
+std::vector<bool> CastersSomeTileMayReach(const BakePlan& plan);
+
 // The part [*z_lo, *z_hi] of the depths [box_lo_z, box_hi_z] of a caster box that the plan's
 // shadow maps draw: from z_clip_near on, and for the sun up to z_clip_far. False when the
 // maps draw none of it.
@@ -54,9 +66,12 @@ bool DrawnDepths(const BakePlan& plan, double box_lo_z, double box_hi_z, double*
 
 // For every tile of the plan, whether a caster may shadow it: each cluster's box marks the
 // tiles whose rays its points can shadow from some sample, by the same relation as the reach
-// (x_P - s z_P = a (1 - l), sun: x_P - s = -a (z - z_P)), widened by a pixel. A superset of
-// TileHasCasters (never false where it is true), in time linear in clusters and marked tiles:
-// a world of 10^5 tiles and 10^6 triangles costs milliseconds, not a reach per tile.
+// (x_P - s z_P = a (1 - l), sun: x_P - s = -a (z - z_P)) over the depths shadow maps draw,
+// widened by a pixel: never false where a drawn point of a caster can shadow the tile. Not a
+// superset of TileHasCasters, whose per-triangle test also keeps a triangle across the near
+// clip plane whose undrawn part alone is in the tile's reach. Time linear in clusters and
+// marked tiles: a world of 10^5 tiles and 10^6 triangles costs milliseconds, not a reach per
+// tile. The marks depend on the clusters' boxes, so PlanBake marks before leaving casters out.
 std::vector<bool> TilesCastersMayReach(const BakePlan& plan);
 
 // A PDSM ray of the tile seen in one sample's shadow map: a straight segment in lattice
