@@ -206,15 +206,14 @@ absl::StatusOr<std::vector<PlannedLight>> PlanJobLights(const pdsm::v1::Scene& s
   int64_t held_bytes = SceneHeldBytes(scene);
   for (size_t i = 0; i < count; ++i) {
     // A one-light scene is planned as it stands (its light may have no name).
-    const Scene one = count == 1 ? *std::move(loaded) : ForLight(*loaded, i);
-    absl::StatusOr<BakePlan> plan = PlanBake(one);
+    absl::StatusOr<BakePlan> plan = count == 1 ? PlanBake(*loaded) : PlanBake(*loaded, i);
     if (!plan.ok()) return plan.status();
     std::string fingerprint = PlanFingerprint(*plan);
     ReleaseRenderGeometry(&*plan);
     held_bytes += LightHeldBytes(*plan);
     if (limits != nullptr && held_bytes > limits->max_planned_bytes) {
       return PlannedBytesError(label, count == 1 ? "hold" : "hold (with the lights before it)",
-                               held_bytes, limits->max_planned_bytes, one.bake.surfaces_only);
+                               held_bytes, limits->max_planned_bytes, plan->header.surfaces_only);
     }
     plans.push_back(
         PlannedLight{std::make_shared<const BakePlan>(*std::move(plan)), std::move(fingerprint)});

@@ -301,7 +301,7 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
     if (!writer.ok()) return writer.status();
     int64_t tasks_before = 0;
     for (size_t i = 0; i < scene.LightCount(); ++i) {
-      absl::StatusOr<BakePlan> planned = PlanBake(ForLight(scene, i));
+      absl::StatusOr<BakePlan> planned = PlanBake(scene, i);
       if (!planned.ok()) return planned.status();
       const auto plan = std::make_shared<const BakePlan>(*std::move(planned));
       absl::StatusOr<PdsmWriter*> part = (*writer)->BeginLight(plan->header);

@@ -158,7 +158,7 @@ absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::Lo
                                                      "\" is not one of the scene's ",
                                                      (*scene)->LightCount(), " lights"));
     }
-    plan = PlanBake(ForLight(**scene, index));
+    plan = PlanBake(**scene, static_cast<size_t>(index));
   }
   if (!plan.ok()) return plan.status();
   auto context = std::make_shared<JobContext>();

@@ -151,6 +151,10 @@ int64_t TileCountOf(const BakeSettings& bake);
 enum class PlanCasters { kReachable, kEvery };
 absl::StatusOr<BakePlan> PlanBake(const Scene& scene,
                                   PlanCasters casters = PlanCasters::kReachable);
+// Light `light` of the scene (LightOf's numbering) without copying its meshes: the plan of
+// PlanBake(ForLight(scene, light)), bit for bit. REQUIRES: light < scene.LightCount().
+absl::StatusOr<BakePlan> PlanBake(const Scene& scene, size_t light,
+                                  PlanCasters casters = PlanCasters::kReachable);
 
 // Frees what only a shadow-map renderer uses: the casters and their clusters, and the
 // receivers unless the plan is surfaces-only (the tile assembly places its depth windows with
