@@ -9,6 +9,7 @@
 #include <random>
 
 #include "core/bake/plan_fingerprint.h"
+#include "core/bake/plan_test_scenes.h"
 #include "core/geometry/light_frame.h"
 #include "core/scene/scene.h"
 
@@ -19,10 +20,6 @@ Scene ThreeLights() {
   Scene scene;
   scene.name = "three_lights";
   scene.source_path = "three_lights.json";
-  TriangleMesh ground;
-  ground.role = MeshRole::kReceiverOnly;
-  ground.positions_world = {{-10, 0, -10}, {10, 0, -10}, {10, 0, 10}, {-10, 0, 10}};
-  ground.indices = {0, 1, 2, 0, 2, 3};
   TriangleMesh casters;
   casters.role = MeshRole::kCasterOnly;
   std::mt19937_64 rng(5);
@@ -34,7 +31,7 @@ Scene ThreeLights() {
       casters.indices.push_back(static_cast<uint32_t>(casters.positions_world.size() - 1));
     }
   }
-  scene.meshes = {ground, casters};
+  scene.meshes = {GroundQuad(), casters};
   const glm::dvec3 up(0, 0, 1);
   scene.light.shape = LightShape::kSun;
   scene.light.frame = MakeLightFrame({0, 0, 0}, glm::normalize(glm::dvec3(0.2, -1, 0.1)), &up);

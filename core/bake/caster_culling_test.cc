@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/bake/bake_plan.h"
+#include "core/bake/plan_test_scenes.h"
 #include "core/bake/tile_reach.h"
 #include "core/geometry/light_frame.h"
 #include "core/scene/scene.h"
@@ -28,10 +29,6 @@ Scene WorldAroundALight(const std::string& kind, uint64_t seed) {
   Scene scene;
   scene.name = "caster_culling_test";
   scene.source_path = "caster_culling_test.json";
-  TriangleMesh ground;
-  ground.role = MeshRole::kReceiverOnly;
-  ground.positions_world = {{-10, 0, -10}, {10, 0, -10}, {10, 0, 10}, {-10, 0, 10}};
-  ground.indices = {0, 1, 2, 0, 2, 3};
   TriangleMesh casters;
   casters.role = MeshRole::kCasterOnly;
   const auto add_triangles = [&](int count, double half_side, double y_lo, double y_hi,
@@ -50,7 +47,7 @@ Scene WorldAroundALight(const std::string& kind, uint64_t seed) {
   add_triangles(300, 6.0, 2.0, 8.0, 1.0);       // in reach
   add_triangles(300, 3.0, 9.0, 11.0, 1.5);      // around the light's plane
   add_triangles(3000, 200.0, -5.0, 20.0, 3.0);  // the world
-  scene.meshes = {ground, casters};
+  scene.meshes = {GroundQuad(), casters};
   const glm::dvec3 up(0, 0, 1);
   scene.light.frame = MakeLightFrame({0, 10, 0}, {0, -1, 0}, &up);
   scene.bake.width = 96;

@@ -13,6 +13,7 @@
 
 #include "core/bake/bake_plan.h"
 #include "core/bake/caster_clusters.h"
+#include "core/bake/plan_test_scenes.h"
 #include "core/geometry/light_frame.h"
 #include "core/scene/scene.h"
 
@@ -24,15 +25,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // ---------------------------------------------------------------------------------------------
 // Scenes: a light 10 units above a 20 x 20 ground quad (receiver only) at y = 0, random caster
 // triangles in between. Light space: x = world x, y = world z, depth z = 10 - world y.
-
-TriangleMesh Ground() {
-  TriangleMesh ground;
-  ground.label = "ground";
-  ground.role = MeshRole::kReceiverOnly;
-  ground.positions_world = {{-10, 0, -10}, {10, 0, -10}, {10, 0, 10}, {-10, 0, 10}};
-  ground.indices = {0, 1, 2, 0, 2, 3};
-  return ground;
-}
 
 TriangleMesh RandomCasters(uint64_t seed, int count) {
   std::mt19937_64 rng(seed);
@@ -57,7 +49,7 @@ Scene MakeScene(LightShape shape, uint64_t seed, int caster_count = 40) {
   Scene scene;
   scene.name = "tile_reach_test";
   scene.source_path = "tile_reach_test.json";
-  scene.meshes = {Ground(), RandomCasters(seed, caster_count)};
+  scene.meshes = {GroundQuad(), RandomCasters(seed, caster_count)};
   const glm::dvec3 up(0, 0, 1);
   scene.light.shape = shape;
   scene.light.frame = MakeLightFrame({0, 10, 0}, {0, -1, 0}, &up);
