@@ -18,8 +18,8 @@ packages=(
   libboost-dev libsqlite3-dev libssl-dev
   # TLS certificates (deploy/make_secrets.sh, the service tests)
   openssl
-  # pdsm-view's window; Embree occlusion rays for `pdsm reference`; caster clusters
-  libglfw3-dev libembree-dev libmeshoptimizer-dev
+  # pdsm-view's window; Embree occlusion rays for `pdsm reference`
+  libglfw3-dev libembree-dev
   # the services' Prometheus /metrics endpoint (metrics/metrics_http_server.h)
   libcpp-httplib-dev
   # the Python module for tools (python/): pybind11 and the interpreter's headers

@@ -204,9 +204,12 @@ absl::StatusOr<std::vector<PlannedLight>> PlanJobLights(const pdsm::v1::Scene& s
   std::vector<PlannedLight> plans;
   plans.reserve(count);
   int64_t held_bytes = SceneHeldBytes(scene);
+  // One index of the world's triangles serves every light's plan.
+  absl::StatusOr<std::shared_ptr<const SceneIndex>> index = SceneIndex::Build(*loaded);
+  if (!index.ok()) return index.status();
   for (size_t i = 0; i < count; ++i) {
     // A one-light scene is planned as it stands (its light may have no name).
-    absl::StatusOr<BakePlan> plan = count == 1 ? PlanBake(*loaded) : PlanBake(*loaded, i);
+    absl::StatusOr<BakePlan> plan = count == 1 ? PlanBake(**index) : PlanBake(**index, i);
     if (!plan.ok()) return plan.status();
     std::string fingerprint = PlanFingerprint(*plan);
     ReleaseRenderGeometry(&*plan);

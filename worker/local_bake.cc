@@ -279,6 +279,7 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
   if (scene.LightCount() == 1) {
     absl::StatusOr<BakePlan> planned = PlanBake(scene);
     if (!planned.ok()) return planned.status();
+    if (!options.preview_path.empty()) AddLightSpaceReceivers(scene, &*planned);
     const auto plan = std::make_shared<const BakePlan>(*std::move(planned));
     absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
         PdsmWriter::Create(options.output_path, plan->header, options.fs);
@@ -299,10 +300,14 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
         PdsmLightsWriter::Create(options.output_path, static_cast<int>(scene.LightCount()),
                                  max_width, max_height, options.fs);
     if (!writer.ok()) return writer.status();
+    // One index of the world's triangles serves every light's plan.
+    absl::StatusOr<std::shared_ptr<const SceneIndex>> index = SceneIndex::Build(scene);
+    if (!index.ok()) return index.status();
     int64_t tasks_before = 0;
     for (size_t i = 0; i < scene.LightCount(); ++i) {
-      absl::StatusOr<BakePlan> planned = PlanBake(scene, i);
+      absl::StatusOr<BakePlan> planned = PlanBake(**index, i);
       if (!planned.ok()) return planned.status();
+      if (!options.preview_path.empty()) AddLightSpaceReceivers(scene, &*planned);
       const auto plan = std::make_shared<const BakePlan>(*std::move(planned));
       absl::StatusOr<PdsmWriter*> part = (*writer)->BeginLight(plan->header);
       if (!part.ok()) return part.status();

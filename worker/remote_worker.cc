@@ -114,8 +114,8 @@ absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::Co
   return context;
 }
 
-absl::StatusOr<std::shared_ptr<const Scene>> RemoteWorker::JobScene(const std::string& job_id) {
-  if (scene_ && scene_job_ == job_id) return scene_;
+absl::StatusOr<RemoteWorker::JobWorld> RemoteWorker::JobScene(const std::string& job_id) {
+  if (world_.scene && scene_job_ == job_id) return world_;
   absl::StatusOr<pdsm::v1::GetJobSceneResponse> scene = client_->JobScene(job_id);
   if (!scene.ok()) return scene.status();
   const MeshAssetResolver resolver =
@@ -133,32 +133,37 @@ absl::StatusOr<std::shared_ptr<const Scene>> RemoteWorker::JobScene(const std::s
   absl::StatusOr<Scene> loaded =
       SceneFromProto(scene->scene(), absl::StrCat("job ", job_id), "", resolver);
   if (!loaded.ok()) return loaded.status();
-  auto shared = std::make_shared<const Scene>(*std::move(loaded));
+  JobWorld world;
+  world.scene = std::make_shared<const Scene>(*std::move(loaded));
+  absl::StatusOr<std::shared_ptr<const SceneIndex>> index = SceneIndex::Build(*world.scene);
+  if (!index.ok()) return index.status();
+  world.index = *std::move(index);
   // Kept for the job's other lights only: a one-light job's is planned once.
-  if (shared->LightCount() > 1) {
-    scene_ = shared;
+  if (world.scene->LightCount() > 1) {
+    world_ = world;
     scene_job_ = job_id;
   }
-  return shared;
+  return world;
 }
 
 absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::LoadContext(
     const std::string& job_id, const std::string& light) {
-  absl::StatusOr<std::shared_ptr<const Scene>> scene = JobScene(job_id);
-  if (!scene.ok()) return scene.status();
+  absl::StatusOr<JobWorld> world = JobScene(job_id);
+  if (!world.ok()) return world.status();
+  const Scene& scene = *world->scene;
   // The light as the coordinator planned it: the scene as it stands for its only light, else
   // the scene baking the named one.
   absl::StatusOr<BakePlan> plan;
-  if (light.empty() && (*scene)->LightCount() == 1) {
-    plan = PlanBake(**scene);
+  if (light.empty() && scene.LightCount() == 1) {
+    plan = PlanBake(*world->index);
   } else {
-    const int index = light.empty() ? -1 : FindLight(**scene, light);
+    const int index = light.empty() ? -1 : FindLight(scene, light);
     if (index < 0) {
       return absl::InvalidArgumentError(absl::StrCat("job ", job_id, ": the task's light \"", light,
                                                      "\" is not one of the scene's ",
-                                                     (*scene)->LightCount(), " lights"));
+                                                     scene.LightCount(), " lights"));
     }
-    plan = PlanBake(**scene, static_cast<size_t>(index));
+    plan = PlanBake(*world->index, static_cast<size_t>(index));
   }
   if (!plan.ok()) return plan.status();
   auto context = std::make_shared<JobContext>();

@@ -78,7 +78,13 @@ class RemoteWorker {
   absl::StatusOr<std::shared_ptr<const JobContext>> LoadContext(const std::string& job_id,
                                                                 const std::string& light)
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(jobs_mu_);
-  absl::StatusOr<std::shared_ptr<const Scene>> JobScene(const std::string& job_id)
+  // The job's scene and the index its lights are planned through (the index refers to the
+  // scene, which it keeps alive with it).
+  struct JobWorld {
+    std::shared_ptr<const Scene> scene;
+    std::shared_ptr<const SceneIndex> index;
+  };
+  absl::StatusOr<JobWorld> JobScene(const std::string& job_id)
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(jobs_mu_);
 
   CoordinatorClient* client_;
@@ -91,7 +97,7 @@ class RemoteWorker {
       ABSL_GUARDED_BY(jobs_mu_);
   // The scene of the job planned last (its lights are planned one by one as tasks come).
   std::string scene_job_ ABSL_GUARDED_BY(jobs_mu_);
-  std::shared_ptr<const Scene> scene_ ABSL_GUARDED_BY(jobs_mu_);
+  JobWorld world_ ABSL_GUARDED_BY(jobs_mu_);
 
   WorkerMetrics metrics_;
   std::atomic<bool> fatal_stop_{false};

@@ -13,6 +13,7 @@
 
 #include "absl/status/statusor.h"
 #include "core/bake/caster_clusters.h"
+#include "core/bake/scene_index.h"
 #include "core/bake/shadow_map_lattice.h"
 #include "core/bake/tile_groups.h"
 #include "core/pdsm/pdsm_image.h"
@@ -60,14 +61,17 @@ struct BakePlan {
   // no task at all.
   std::vector<bool> tile_has_casters;
   int tile_group_size = 0;  // the scene's bake.tileGroupSize (0: chosen by GroupSideInTiles)
-  // The casters some tile can reach (core/bake/caster_culling.h), in spatial order, cut into
-  // caster_clusters; casters_left_out more of the scene's are out of every tile's reach.
+  // The casters some tile can reach (core/bake/caster_culling.h), in the scene index's spatial
+  // order, in caster_clusters; casters_left_out more of the scene's are out of every tile's
+  // reach.
   LightSpaceMesh casters;
   std::vector<CasterCluster> caster_clusters;
   size_t casters_left_out = 0;
   // The masks casters.triangle_masks index (1-based), shared with the scene: empty when every
   // caster is opaque.
   std::vector<std::shared_ptr<const AlphaMask>> masks;
+  // Every receiver, for a surfaces-only plan (its depth windows); empty otherwise unless
+  // AddLightSpaceReceivers was called (the light-view preview draws them).
   LightSpaceMesh receivers;
 
   const PdsmGeometry& geometry() const { return header.geometry; }
@@ -149,12 +153,24 @@ int64_t TileCountOf(const BakeSettings& bake);
 // Which of the scene's casters a plan keeps: those some tile can reach (the default: the
 // bake is byte for byte the same), or every one (to compare against).
 enum class PlanCasters { kReachable, kEvery };
+// The plan of the scene's own light (light, bake, light_name), through a shared index of the
+// scene's triangles (core/bake/scene_index.h): a job plans every light through one.
+absl::StatusOr<BakePlan> PlanBake(const SceneIndex& index,
+                                  PlanCasters casters = PlanCasters::kReachable);
+// Light `light` of the index's scene (LightOf's numbering), without copying its meshes: the
+// plan of PlanBake(ForLight(scene, light)), bit for bit. REQUIRES: light < LightCount().
+absl::StatusOr<BakePlan> PlanBake(const SceneIndex& index, size_t light,
+                                  PlanCasters casters = PlanCasters::kReachable);
+// The same, indexing the scene first (a sort of its triangles: a caller planning several
+// lights of one scene builds the index once).
 absl::StatusOr<BakePlan> PlanBake(const Scene& scene,
                                   PlanCasters casters = PlanCasters::kReachable);
-// Light `light` of the scene (LightOf's numbering) without copying its meshes: the plan of
-// PlanBake(ForLight(scene, light)), bit for bit. REQUIRES: light < scene.LightCount().
 absl::StatusOr<BakePlan> PlanBake(const Scene& scene, size_t light,
                                   PlanCasters casters = PlanCasters::kReachable);
+
+// Sets plan->receivers to every receiver of `scene`, in the plan's light space, in scene order.
+// REQUIRES: the plan was made of `scene`.
+void AddLightSpaceReceivers(const Scene& scene, BakePlan* plan);
 
 // Frees what only a shadow-map renderer uses: the casters and their clusters, and the
 // receivers unless the plan is surfaces-only (the tile assembly places its depth windows with

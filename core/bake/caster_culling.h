@@ -1,34 +1,36 @@
-// A light's plan keeps only the casters some tile of its PDSM can reach (issue #12, large
-// worlds): a street lamp in a world of 10^6 triangles carries the few near it, not the world,
-// through its tile marking, its tasks and each worker's memory.
+// A light's casters, gathered from the scene index (issue #12, large worlds): a street lamp in
+// a world of 10^6 triangles carries the few near it, not the world, through its planning, its
+// tile marking, its tasks and each worker's memory, and plans in time for what it keeps plus a
+// box test per cluster of the world.
 //
-// Byte-neutral by construction: a triangle is left out only where every tile's reach drops it
-// (CastersSomeTileMayReach, core/bake/tile_reach.h), so every tile keeps the same triangles in
-// the same order, with the same ray blocks and depths, and every shadow map draws the same
-// triangles; the tiles are marked (BakePlan::tile_has_casters) before the cut, with every
-// caster. Both matter because a shadow map's projection is fitted to its window, the union of
-// its group's ray blocks: a different window rounds some triangle edges to the other side of a
-// texel centre. The reach is conservative (it keeps triangles that cross the near clip plane or
-// the light's plane where only their undrawn part is in reach), so a tighter cut, to the region
-// between a light sample and any ray, or a tile marking over the cut clusters, dropped blocks
-// that shadow nothing yet widened windows, and moved answers by one sample at a few points
-// (a street lamp of bench/large_world.py, 2026-12-03).
+// The tiles are marked (BakePlan::tile_has_casters) with every caster cluster of the index,
+// kept or not, so that what is left out never moves a mark: a tile's task, even one whose reach
+// only holds triangles that cannot shadow, widens its group's shadow-map windows, and a
+// different window rounds some triangle edges to the other side of a texel centre. A triangle
+// is left out only where every tile's reach drops it (CasterReachBound, core/bake/tile_reach.h),
+// so every tile keeps the same triangles in the same order, with the same ray blocks and depths,
+// and every shadow map draws the same triangles: leaving out changes no byte
+// (PlanCasters::kEvery keeps every caster, to compare against). The reach is conservative (it
+// keeps triangles that cross the near clip plane or the light's plane where only their undrawn
+// part is in reach), so a tighter cut, to the region between a light sample and any ray, or a
+// tile marking over the kept casters alone, dropped blocks that shadow nothing yet widened
+// windows, and moved answers by one sample at a few points (a street lamp of
+// bench/large_world.py, 2026-12-03).
 #ifndef PDSM_CORE_BAKE_CASTER_CULLING_H_
 #define PDSM_CORE_BAKE_CASTER_CULLING_H_
 
-#include <cstddef>
+#include "core/bake/bake_plan.h"
+#include "core/bake/scene_index.h"
 
 namespace pdsm {
 
-struct BakePlan;
-
-// Leaves out of plan->casters the triangles no tile can reach, keeping the others in their
-// order with their UVs and masks, and only the vertices they use; each cluster keeps its kept
-// triangles with their bounds, and empty clusters go. Returns how many triangles were left out
-// (0: the plan is untouched).
-// REQUIRES: the plan's tiles, samples, lattice, clip depths and caster clusters set (PlanBake
-// calls it last, after the tiles are marked).
-size_t LeaveOutUnreachableCasters(BakePlan* plan);
+// Fills plan->casters (light space, float, in the index's order, only the vertices they use,
+// with UVs and masks where the scene has alpha-tested casters), caster_clusters (each index
+// cluster's kept triangles with their light-space bounds; empty ones go), masks,
+// tile_has_casters and casters_left_out.
+// REQUIRES: the plan's geometry, tiles, samples, lattice and clip depths set; `index` built
+// from the scene the plan is made of.
+void GatherCasters(const SceneIndex& index, PlanCasters which, BakePlan* plan);
 
 }  // namespace pdsm
 

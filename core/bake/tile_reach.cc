@@ -265,28 +265,45 @@ struct HalfSpaceLowerBound {
 
 }  // namespace
 
-std::vector<bool> CastersSomeTileMayReach(const BakePlan& plan) {
-  const LightSpaceMesh& mesh = plan.casters;
-  std::vector<bool> reachable(mesh.TriangleCount(), false);
-  if (plan.tile_count() == 0) return reachable;
+struct CasterReachBound::Bounds {
   std::vector<HalfSpaceLowerBound> bounds;
+};
+
+CasterReachBound::CasterReachBound(const BakePlan& plan) {
+  auto bounds = std::make_shared<Bounds>();
   for (int i = 0; i < plan.tile_count(); ++i) {
     const std::vector<HalfSpace> region =
         ShadowingRegion(plan, SpanOf(plan.geometry(), plan.tile(i)));
-    bounds.resize(region.size());
-    for (size_t k = 0; k < region.size(); ++k) bounds[k].Add(region[k]);
+    bounds->bounds.resize(region.size());
+    for (size_t k = 0; k < region.size(); ++k) bounds->bounds[k].Add(region[k]);
   }
+  bounds_ = std::move(bounds);
+  none_ = plan.tile_count() == 0;
+}
+
+bool CasterReachBound::BoxMayReach(const glm::dvec3& lo, const glm::dvec3& hi) const {
+  if (none_) return false;
+  return std::none_of(bounds_->bounds.begin(), bounds_->bounds.end(),
+                      [&](const HalfSpaceLowerBound& b) { return b.BoxAbove(lo, hi); });
+}
+
+bool CasterReachBound::TriangleMayReach(const std::array<glm::dvec3, 3>& p) const {
+  if (none_) return false;
+  return std::none_of(bounds_->bounds.begin(), bounds_->bounds.end(),
+                      [&](const HalfSpaceLowerBound& b) {
+                        return b.Above(p[0], glm::abs(p[0])) && b.Above(p[1], glm::abs(p[1])) &&
+                               b.Above(p[2], glm::abs(p[2]));
+                      });
+}
+
+std::vector<bool> CastersSomeTileMayReach(const BakePlan& plan) {
+  const LightSpaceMesh& mesh = plan.casters;
+  std::vector<bool> reachable(mesh.TriangleCount(), false);
+  const CasterReachBound bound(plan);
   for (const CasterCluster& c : plan.caster_clusters) {
-    if (std::any_of(bounds.begin(), bounds.end(),
-                    [&](const HalfSpaceLowerBound& b) { return b.BoxAbove(c.lo, c.hi); })) {
-      continue;
-    }
+    if (!bound.BoxMayReach(c.lo, c.hi)) continue;
     for (uint32_t k = c.first_triangle; k < c.first_triangle + c.triangle_count; ++k) {
-      const std::array<glm::dvec3, 3> p = CasterTriangle(mesh, k);
-      reachable[k] = std::none_of(bounds.begin(), bounds.end(), [&](const HalfSpaceLowerBound& b) {
-        return b.Above(p[0], glm::abs(p[0])) && b.Above(p[1], glm::abs(p[1])) &&
-               b.Above(p[2], glm::abs(p[2]));
-      });
+      reachable[k] = bound.TriangleMayReach(CasterTriangle(mesh, k));
     }
   }
   return reachable;
@@ -352,7 +369,8 @@ bool DrawnDepths(const BakePlan& plan, double box_lo_z, double box_hi_z, double*
   return *z_lo <= *z_hi;
 }
 
-std::vector<bool> TilesCastersMayReach(const BakePlan& plan) {
+std::vector<bool> TilesCastersMayReach(const BakePlan& plan, std::span<const CasterBox> boxes,
+                                       const TriangleBoxes& triangle_boxes) {
   std::vector<bool> reached(plan.tile_count(), false);
   const PdsmGeometry& g = plan.geometry();
   const bool sun = g.projection == Projection::kOrthographic;
@@ -395,8 +413,9 @@ std::vector<bool> TilesCastersMayReach(const BakePlan& plan) {
       for (int64_t tx = tx0; tx <= tx1; ++tx) reached[ty * plan.tiles_x + tx] = true;
     }
   };
-  const LightSpaceMesh& mesh = plan.casters;
-  for (const CasterCluster& c : plan.caster_clusters) {
+  std::vector<std::pair<glm::dvec3, glm::dvec3>> triangles;
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    const CasterBox& c = boxes[i];
     int64_t tx0, tx1, ty0, ty1;
     if (!tiles_of(c.lo, c.hi, &tx0, &tx1, &ty0, &ty1)) continue;
     // A cluster's box is a coarse bound: 128 roofs scattered over a sparse world have one box
@@ -404,23 +423,41 @@ std::vector<bool> TilesCastersMayReach(const BakePlan& plan) {
     // 258,141 of 262,144 tiles). Where the box spans more tiles than the cluster has
     // triangles, each triangle's own box says which tiles it reaches: within the cluster's,
     // so as conservative. (Without the triangles, released, the box stands.)
-    const bool have_triangles =
-        mesh.indices.size() >= 3 * (size_t{c.first_triangle} + c.triangle_count);
-    if (!have_triangles || (tx1 - tx0 + 1) * (ty1 - ty0 + 1) <= int64_t{c.triangle_count}) {
+    if (!triangle_boxes || (tx1 - tx0 + 1) * (ty1 - ty0 + 1) <= int64_t{c.triangle_count}) {
       mark(tx0, tx1, ty0, ty1);
       continue;
     }
-    for (uint32_t t = c.first_triangle; t < c.first_triangle + c.triangle_count; ++t) {
-      glm::dvec3 lo(kInf), hi(-kInf);
-      for (int k = 0; k < 3; ++k) {
-        const glm::dvec3 p(mesh.positions[mesh.indices[3 * size_t{t} + k]]);
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-      }
+    triangles.clear();
+    triangle_boxes(i, &triangles);
+    for (const auto& [lo, hi] : triangles) {
       if (tiles_of(lo, hi, &tx0, &tx1, &ty0, &ty1)) mark(tx0, tx1, ty0, ty1);
     }
   }
   return reached;
+}
+
+std::vector<bool> TilesCastersMayReach(const BakePlan& plan) {
+  const LightSpaceMesh& mesh = plan.casters;
+  std::vector<CasterBox> boxes;
+  boxes.reserve(plan.caster_clusters.size());
+  bool have_triangles = true;
+  for (const CasterCluster& c : plan.caster_clusters) {
+    boxes.push_back(CasterBox{c.lo, c.hi, c.triangle_count});
+    have_triangles =
+        have_triangles && mesh.indices.size() >= 3 * (size_t{c.first_triangle} + c.triangle_count);
+  }
+  TriangleBoxes triangle_boxes;
+  if (have_triangles) {
+    triangle_boxes = [&](size_t i, std::vector<std::pair<glm::dvec3, glm::dvec3>>* out) {
+      const CasterCluster& c = plan.caster_clusters[i];
+      for (uint32_t t = c.first_triangle; t < c.first_triangle + c.triangle_count; ++t) {
+        const std::array<glm::dvec3, 3> p = CasterTriangle(mesh, t);
+        out->emplace_back(glm::min(glm::min(p[0], p[1]), p[2]),
+                          glm::max(glm::max(p[0], p[1]), p[2]));
+      }
+    };
+  }
+  return TilesCastersMayReach(plan, boxes, triangle_boxes);
 }
 
 RayInShadowMap RayForSample(const BakePlan& plan, double s, double t, const glm::dvec2& sample,

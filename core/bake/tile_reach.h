@@ -6,7 +6,12 @@
 #ifndef PDSM_CORE_BAKE_TILE_REACH_H_
 #define PDSM_CORE_BAKE_TILE_REACH_H_
 
+#include <array>
 #include <cstdint>
+#include <functional>
+#include <memory>
+#include <span>
+#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -46,16 +51,34 @@ TileReach ComputeTileReach(const BakePlan& plan, const TileRect& tile);
 // stopping at the first triangle kept. False: the tile is all lit and needs no shadow map.
 bool TileHasCasters(const BakePlan& plan, const TileRect& tile);
 
-// Per caster triangle of the plan: false only where ComputeTileReach and TileHasCasters drop
-// it for every tile of the plan, so that leaving the false ones out of the plan changes no
-// tile's reach (the same triangles in the same order, the same blocks and depths) and so no
+// Whether a caster can shadow some tile of a plan: false only where ComputeTileReach and
+// TileHasCasters drop it for every tile, so that leaving the false ones out of the plan changes
+// no tile's reach (the same triangles in the same order, the same blocks and depths) and so no
 // byte of the bake (core/bake/caster_culling.h). Each half-space of a tile's shadowing region is
 // bounded below over all the plan's tiles: at a point, each coefficient is the tiles' least or
 // greatest, whichever gives the smaller product with the point's coordinate (the rounded dot
-// product is monotone in each), and the constant the least. A triangle is false when its three
-// vertices are outside one such bound by a relative margin far above rounding. The bound is
-// loose only where tiles disagree: for a local light in a world, it keeps what lies between
-// the light and its window, and leaves out the world. Time linear in tiles and triangles.
+// product is monotone in each), and the constant the least. A triangle (or box) is false when
+// its three vertices (its eight corners) are outside one such bound by a relative margin far
+// above rounding; the bound is concave, so over a box it is least at a corner. It is loose only
+// where tiles disagree: for a local light in a world, it keeps what lies between the light and
+// its window, and leaves out the world. Made in time linear in tiles; needs the plan's tiles,
+// samples, lattice and clip depths, not its casters. Immutable: safe to share between threads.
+class CasterReachBound {
+ public:
+  explicit CasterReachBound(const BakePlan& plan);
+  // A light-space box (a cluster's) some point of which may be in reach.
+  bool BoxMayReach(const glm::dvec3& lo, const glm::dvec3& hi) const;
+  // A light-space triangle, as the plan's casters hold it (float vertices).
+  bool TriangleMayReach(const std::array<glm::dvec3, 3>& p) const;
+
+ private:
+  struct Bounds;
+  std::shared_ptr<const Bounds> bounds_;
+  bool none_ = true;  // a plan without tiles reaches nothing
+};
+
+// Per caster triangle of the plan: CasterReachBound's answer. Time linear in tiles and
+// triangles.
 std::vector<bool> CastersSomeTileMayReach(const BakePlan& plan);
 
 // The part [*z_lo, *z_hi] of the depths [box_lo_z, box_hi_z] of a caster box that the plan's
@@ -71,7 +94,20 @@ bool DrawnDepths(const BakePlan& plan, double box_lo_z, double box_hi_z, double*
 // superset of TileHasCasters, whose per-triangle test also keeps a triangle across the near
 // clip plane whose undrawn part alone is in the tile's reach. Time linear in clusters and
 // marked tiles: a world of 10^5 tiles and 10^6 triangles costs milliseconds, not a reach per
-// tile. The marks depend on the clusters' boxes, so PlanBake marks before leaving casters out.
+// tile. The marks depend on the boxes, so PlanBake marks with the scene index's clusters,
+// whatever it then leaves out (core/bake/caster_culling.h).
+// Light-space boxes of casters (`triangle_count` of them inside each).
+struct CasterBox {
+  glm::dvec3 lo, hi;
+  uint32_t triangle_count = 0;
+};
+// The light-space boxes of box i's triangles, appended to `out`: asked for where a box spans
+// more tiles than it has triangles. Empty: the boxes alone mark.
+using TriangleBoxes =
+    std::function<void(size_t i, std::vector<std::pair<glm::dvec3, glm::dvec3>>* out)>;
+std::vector<bool> TilesCastersMayReach(const BakePlan& plan, std::span<const CasterBox> boxes,
+                                       const TriangleBoxes& triangle_boxes);
+// The plan's own clusters and casters (the boxes alone once released).
 std::vector<bool> TilesCastersMayReach(const BakePlan& plan);
 
 // A PDSM ray of the tile seen in one sample's shadow map: a straight segment in lattice
