@@ -296,19 +296,6 @@ bool CasterReachBound::TriangleMayReach(const std::array<glm::dvec3, 3>& p) cons
                       });
 }
 
-std::vector<bool> CastersSomeTileMayReach(const BakePlan& plan) {
-  const LightSpaceMesh& mesh = plan.casters;
-  std::vector<bool> reachable(mesh.TriangleCount(), false);
-  const CasterReachBound bound(plan);
-  for (const CasterCluster& c : plan.caster_clusters) {
-    if (!bound.BoxMayReach(c.lo, c.hi)) continue;
-    for (uint32_t k = c.first_triangle; k < c.first_triangle + c.triangle_count; ++k) {
-      reachable[k] = bound.TriangleMayReach(CasterTriangle(mesh, k));
-    }
-  }
-  return reachable;
-}
-
 bool TileHasCasters(const BakePlan& plan, const TileRect& tile) {
   const std::vector<HalfSpace> region = ShadowingRegion(plan, SpanOf(plan.geometry(), tile));
   return !KeepInside(plan, region, /*first_only=*/true).triangles.empty();
@@ -422,7 +409,7 @@ std::vector<bool> TilesCastersMayReach(const BakePlan& plan, std::span<const Cas
     // over most of it, and every tile under it cost a task that found no caster (32768^2:
     // 258,141 of 262,144 tiles). Where the box spans more tiles than the cluster has
     // triangles, each triangle's own box says which tiles it reaches: within the cluster's,
-    // so as conservative. (Without the triangles, released, the box stands.)
+    // so as conservative.
     if (!triangle_boxes || (tx1 - tx0 + 1) * (ty1 - ty0 + 1) <= int64_t{c.triangle_count}) {
       mark(tx0, tx1, ty0, ty1);
       continue;
@@ -434,30 +421,6 @@ std::vector<bool> TilesCastersMayReach(const BakePlan& plan, std::span<const Cas
     }
   }
   return reached;
-}
-
-std::vector<bool> TilesCastersMayReach(const BakePlan& plan) {
-  const LightSpaceMesh& mesh = plan.casters;
-  std::vector<CasterBox> boxes;
-  boxes.reserve(plan.caster_clusters.size());
-  bool have_triangles = true;
-  for (const CasterCluster& c : plan.caster_clusters) {
-    boxes.push_back(CasterBox{c.lo, c.hi, c.triangle_count});
-    have_triangles =
-        have_triangles && mesh.indices.size() >= 3 * (size_t{c.first_triangle} + c.triangle_count);
-  }
-  TriangleBoxes triangle_boxes;
-  if (have_triangles) {
-    triangle_boxes = [&](size_t i, std::vector<std::pair<glm::dvec3, glm::dvec3>>* out) {
-      const CasterCluster& c = plan.caster_clusters[i];
-      for (uint32_t t = c.first_triangle; t < c.first_triangle + c.triangle_count; ++t) {
-        const std::array<glm::dvec3, 3> p = CasterTriangle(mesh, t);
-        out->emplace_back(glm::min(glm::min(p[0], p[1]), p[2]),
-                          glm::max(glm::max(p[0], p[1]), p[2]));
-      }
-    };
-  }
-  return TilesCastersMayReach(plan, boxes, triangle_boxes);
 }
 
 RayInShadowMap RayForSample(const BakePlan& plan, double s, double t, const glm::dvec2& sample,

@@ -77,10 +77,6 @@ class CasterReachBound {
   bool none_ = true;  // a plan without tiles reaches nothing
 };
 
-// Per caster triangle of the plan: CasterReachBound's answer. Time linear in tiles and
-// triangles.
-std::vector<bool> CastersSomeTileMayReach(const BakePlan& plan);
-
 // The part [*z_lo, *z_hi] of the depths [box_lo_z, box_hi_z] of a caster box that the plan's
 // shadow maps draw: from z_clip_near on, and for the sun up to z_clip_far. False when the
 // maps draw none of it.
@@ -107,8 +103,6 @@ using TriangleBoxes =
     std::function<void(size_t i, std::vector<std::pair<glm::dvec3, glm::dvec3>>* out)>;
 std::vector<bool> TilesCastersMayReach(const BakePlan& plan, std::span<const CasterBox> boxes,
                                        const TriangleBoxes& triangle_boxes);
-// The plan's own clusters and casters (the boxes alone once released).
-std::vector<bool> TilesCastersMayReach(const BakePlan& plan);
 
 // A PDSM ray of the tile seen in one sample's shadow map: a straight segment in lattice
 // (s, t) coordinates from its nearest to its farthest point (DESIGN.md: linear in w = 1/z for
