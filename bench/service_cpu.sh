@@ -57,7 +57,9 @@ for ((r = 1; r <= rounds; ++r)); do
     before=$(awk -v a="$before" -v b="$(cpu_of "$p")" 'BEGIN {print a + b}')
   done
   client_start=$(awk '{print $14 + $15 + $16 + $17}' /proc/$$/stat)
+  wall_start=$(date +%s.%N)
   job=$(bake_job)
+  wall=$(awk -v a="$wall_start" -v b="$(date +%s.%N)" 'BEGIN {printf "%.1f", b - a}')
   client_cpu=$(awk -v s="$client_start" -v t="$tick" '{print ($14 + $15 + $16 + $17 - s) / t}' /proc/$$/stat)
   after=0
   for p in "$coordinator" "${workers[@]}"; do after=$(awk -v a="$after" -v b="$(cpu_of "$p")" 'BEGIN {print a + b}'); done
@@ -69,7 +71,7 @@ for ((r = 1; r <= rounds; ++r)); do
   done
   "$pdsm" fetch "$job" -o "$out/remote.exr" --server "$address" >/dev/null
   same=$(cmp -s "$out/remote.exr" "$out/local.exr" && echo "byte-identical" || echo "DIFFERENT")
-  echo "round $r: local $local_cpu CPU-s, service $service_cpu CPU-s ($parts; $same)"
+  echo "round $r: local $local_cpu CPU-s, service $service_cpu CPU-s ($parts; submit->end ${wall} s; $same)"
   echo "$local_cpu" >>"$out/local" && echo "$service_cpu" >>"$out/service"
 done
 l=$(median <"$out/local") && s=$(median <"$out/service")

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <map>
+#include <string>
+#include <utility>
 
 #include <spdlog/spdlog.h>
 
@@ -257,16 +260,26 @@ absl::Status StoredJob::WriteFile() {
   absl::StatusOr<std::vector<bool>> all_lit = AllLitTiles();
   if (!all_lit.ok()) return all_lit.status();
   const auto write_light = [&](const JobLight& light, PdsmWriter* writer) -> absl::Status {
-    for (const TileRect& rect : AllTiles(*light.plan)) {
+    // Tiles without vertices differ only in where they are: encoded once per size.
+    std::map<std::pair<int, int>, std::string> empty_chunks;
+    const auto tile_of = [&](int64_t index) -> absl::StatusOr<EncodedTile> {
+      const int tile = static_cast<int>(index);
+      // The stored tiles are copied as they were compressed when they were finished.
+      if (!IsUnreachedTile(*light.plan, tile) && !(*all_lit)[light.tile_offset + tile]) {
+        return ReadTileChunk(paths_.Tile(light.tile_offset + tile));
+      }
       // A tile no caster reaches, or found all lit, was never stored: it is made again, as the
       // engine made it.
-      absl::StatusOr<PdsmTile> tile =
-          IsUnreachedTile(*light.plan, rect.index) || (*all_lit)[light.tile_offset + rect.index]
-              ? MakeUnreachedTile(*light.plan, rect.index).tile
-              : ReadTileFile(paths_.Tile(light.tile_offset + rect.index));
-      if (!tile.ok()) return tile.status();
-      if (absl::Status s = writer->WriteTile(*tile); !s.ok()) return s;
-    }
+      const PdsmTile made = MakeUnreachedTile(*light.plan, tile).tile;
+      std::string& chunk = empty_chunks[{made.width, made.height}];
+      if (chunk.empty()) {
+        absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(made);
+        if (!encoded.ok()) return encoded.status();
+        chunk = std::move(encoded->chunk);
+      }
+      return EncodedTile{made.x0, made.y0, made.width, made.height, made.samples, chunk};
+    };
+    if (absl::Status s = writer->WriteEncodedTiles(tile_of); !s.ok()) return s;
     return writer->Finish();
   };
   if (lights_.size() == 1) {

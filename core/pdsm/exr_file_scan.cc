@@ -329,10 +329,8 @@ absl::Status CheckTile(const Source& source, const Grid& g, int64_t index, uint6
   const int64_t h = std::min(g.tile, g.height - dy * g.tile);
   const uint64_t unpacked_table = static_cast<uint64_t>(w * h) * 4;
   // The packed bytes are in the file (checked above); what they unpack to must be possible.
-  const auto inflatable = [](uint64_t packed, uint64_t unpacked) {
-    return unpacked <= kMaxInflateRatio * packed + kInflateSlack;
-  };
-  if (!inflatable(packed_table, unpacked_table) || !inflatable(packed_data, unpacked_data) ||
+  if (!ExrUnpackedSizeIsPossible(packed_table, unpacked_table) ||
+      !ExrUnpackedSizeIsPossible(packed_data, unpacked_data) ||
       unpacked_data > static_cast<uint64_t>(std::numeric_limits<int32_t>::max())) {
     return corrupt(
         absl::StrFormat("impossible sizes (sample counts %d packed / %d bytes, "
@@ -396,6 +394,10 @@ absl::StatusOr<std::vector<ExrHeaderBytes>> ParseParts(const Source& source, abs
 }
 
 }  // namespace
+
+bool ExrUnpackedSizeIsPossible(uint64_t packed, uint64_t unpacked) {
+  return unpacked <= kMaxInflateRatio * packed + kInflateSlack;
+}
 
 const ExrAttributeBytes* ExrHeaderBytes::Find(std::string_view name) const {
   for (const ExrAttributeBytes& a : attributes) {

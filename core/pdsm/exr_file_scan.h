@@ -42,6 +42,11 @@ struct ExrHeaderBytes {
 // `label` when it is malformed. `end` counts from the start of `bytes`.
 absl::StatusOr<ExrHeaderBytes> ParseExrHeaderBytes(std::string_view bytes, absl::string_view label);
 
+// Whether `packed` bytes of OpenEXR's ZIP or RLE compression can unpack to `unpacked` bytes:
+// zlib inflates at most 1032 bytes per byte, and sizes that claim more are corrupt (refusing
+// them keeps every buffer OpenEXR allocates for a tile within a constant times its bytes).
+bool ExrUnpackedSizeIsPossible(uint64_t packed, uint64_t unpacked);
+
 // Reads and checks `path` within its own length: a single-part file, or a multipart one (one
 // part per light; docs/pdsm_format.md, "Several lights") whose every part is checked as below.
 // DATA_LOSS naming the file (and the part) when:

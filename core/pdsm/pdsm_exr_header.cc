@@ -349,18 +349,22 @@ absl::Status StatusFromCurrentException(absl::string_view path, absl::string_vie
 // ---------------------------------------------------------------------------------------
 // Header <-> attributes.
 
+void SetPdsmPixelLayout(Imf::Header* exr, int tile_width, int tile_height) {
+  exr->setType(Imf::DEEPTILE);
+  exr->compression() = Imf::ZIPS_COMPRESSION;  // deep allows only NONE, RLE, ZIPS
+  exr->lineOrder() = Imf::INCREASING_Y;
+  exr->setTileDescription(Imf::TileDescription(tile_width, tile_height, Imf::ONE_LEVEL));
+  exr->channels().insert(kDepthChannel, Imf::Channel(Imf::FLOAT));
+  exr->channels().insert(kAttenuationChannel, Imf::Channel(Imf::FLOAT));
+}
+
 Imf::Header ExrHeaderFromPdsm(const PdsmHeader& h,
                               const std::optional<Imath::Box2i>& display_window) {
   const PdsmGeometry& g = h.geometry;
   Imf::Header exr(g.width, g.height);  // data and display windows [0, w-1] x [0, h-1]
   if (display_window) exr.displayWindow() = *display_window;
-  exr.setType(Imf::DEEPTILE);
   if (!h.light_name.empty()) exr.setName(h.light_name);
-  exr.compression() = Imf::ZIPS_COMPRESSION;  // deep allows only NONE, RLE, ZIPS
-  exr.lineOrder() = Imf::INCREASING_Y;
-  exr.setTileDescription(Imf::TileDescription(h.tile_size, h.tile_size, Imf::ONE_LEVEL));
-  exr.channels().insert(kDepthChannel, Imf::Channel(Imf::FLOAT));
-  exr.channels().insert(kAttenuationChannel, Imf::Channel(Imf::FLOAT));
+  SetPdsmPixelLayout(&exr, h.tile_size, h.tile_size);
 
   exr.insert(kAttrFormatVersion, Imf::IntAttribute(h.format_version));
   exr.insert(kAttrAttenuationChannel, Imf::StringAttribute(kAttenuationNote));

@@ -32,6 +32,11 @@ inline constexpr uint64_t kMaxVerticesPerTile =
 // "<action> <path>: <what>". OpenEXR reports everything by throwing; nothing escapes core/pdsm.
 absl::Status StatusFromCurrentException(absl::string_view path, absl::string_view action);
 
+// What makes a deep tiled header a PDSM's pixels: DEEPTILE, ZIPS compression, INCREASING_Y,
+// one level of tile_width x tile_height tiles, FLOAT channels Z and attenuation. Everything
+// OpenEXR's compressed tile bytes depend on besides the pixels (tile_chunk.h).
+void SetPdsmPixelLayout(Imf::Header* exr, int tile_width, int tile_height);
+
 // The deep tiled header of a PDSM: channels, tiling, compression, chunkCount, every pdsm*
 // attribute, and the header checksum over all of them (SealExrHeader).
 // The part is named h.light_name when that is not empty. `display_window`: the parts of a

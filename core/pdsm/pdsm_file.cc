@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <set>
 #include <string_view>
@@ -29,12 +30,14 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "absl/strings/string_view.h"
+#include "core/pdsm/exr_chunked_file_stream.h"
 #include "core/pdsm/exr_file_scan.h"
 #include "core/pdsm/exr_output_stream.h"
 #include "core/pdsm/exr_scratch_stream.h"
 #include "core/pdsm/pdsm_exr_header.h"
 #include "core/pdsm/pdsm_exr_tiles.h"
 #include "core/pdsm/pdsm_lights.h"
+#include "core/pdsm/tile_chunk.h"
 #include "core/pdsm/tile_reorder_buffer.h"
 #include "core/util/atomic_file.h"
 #include "core/util/file_system.h"
@@ -93,6 +96,53 @@ class ExrPdsmWriter final : public PdsmWriter {
       if (!next.ok()) return Fail(next.status());
       if (absl::Status s = Emit(**next); !s.ok()) return s;
     }
+    return absl::OkStatus();
+  }
+
+  absl::Status WriteEncodedTiles(const EncodedTileSource& source) override {
+    if (!error_.ok()) return error_;
+    if (finished_ || next_tile_ != 0 || pending_.size() != 0) {
+      return absl::FailedPreconditionError(path_ + ": tiles were written already");
+    }
+    // The source's tiles, checked and moved to their place in the grid.
+    const auto chunk_of = [&](int64_t index) -> absl::StatusOr<std::string> {
+      absl::StatusOr<EncodedTile> tile = source(index);
+      if (!tile.ok()) return tile.status();
+      const int tx = static_cast<int>(index % grid_.TilesX());
+      const int ty = static_cast<int>(index / grid_.TilesX());
+      const int x0 = tx * grid_.tile_size, y0 = ty * grid_.tile_size;
+      if (tile->x0 != x0 || tile->y0 != y0 || tile->width != grid_.TileWidth(x0) ||
+          tile->height != grid_.TileHeight(y0) || tile->chunk.empty()) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "%s: encoded tile %d is at (%d, %d) size %dx%d with %d bytes, not the grid's cell "
+            "(%d, %d) size %dx%d",
+            path_, index, tile->x0, tile->y0, tile->width, tile->height, tile->chunk.size(), x0, y0,
+            grid_.TileWidth(x0), grid_.TileHeight(y0)));
+      }
+      if (header_.adaptive()) {
+        if (tile->samples < 1 || tile->samples > header_.samples) {
+          return absl::InvalidArgumentError(absl::StrFormat(
+              "%s: tile (%d, %d) of an adaptive bake has %d samples, expected [1, %d]", path_, x0,
+              y0, tile->samples, header_.samples));
+        }
+        header_.tile_samples[index] = tile->samples;
+      }
+      return RelocateTileChunk(std::move(tile->chunk), tx, ty);
+    };
+    absl::StatusOr<std::unique_ptr<ExrChunkedFileStream>> tiles = ExrChunkedFileStream::Create(
+        ExrHeaderFromPdsm(header_, display_window_), grid_.Count(), chunk_of, path_.c_str());
+    if (!tiles.ok()) return Fail(tiles.status());
+    try {
+      Imf::DeepTiledInputFile in(**tiles, /*numThreads=*/0);
+      exr_->copyPixels(in);
+    } catch (...) {
+      if (!(*tiles)->error().ok()) return Fail((*tiles)->error());
+      if (!stream_->error().ok()) return Fail(stream_->error());
+      return Fail(absl::InternalError(absl::StrCat(
+          StatusFromCurrentException(file_->temp_path(), "copying tiles into").message(), " (for ",
+          path_, ")")));
+    }
+    next_tile_ = grid_.Count();
     return absl::OkStatus();
   }
 

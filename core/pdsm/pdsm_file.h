@@ -6,6 +6,7 @@
 
 #include <OpenEXR/ImfForward.h>  // Imf::MultiPartInputFile, held by PdsmReader
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -15,6 +16,7 @@
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
 #include "core/pdsm/pdsm_image.h"
+#include "core/pdsm/tile_chunk.h"
 #include "core/pdsm/tile_reorder_buffer.h"
 #include "core/util/file_system.h"
 
@@ -41,6 +43,15 @@ class PdsmWriter {
 
   // REQUIRES: tile is one cell of the tile grid, given once.
   virtual absl::Status WriteTile(const PdsmTile& tile) = 0;
+  // Writes every tile at once from tiles encoded where they were finished
+  // (core/pdsm/tile_chunk.h), copied into the file without being decoded or compressed again:
+  // `source(index)` gives the tile of row-major index `index` of the grid, each once, in
+  // ascending order. The file's bytes are those WriteTile would write for the same tiles.
+  // REQUIRES: no tile written yet. Errors: the source's (the first, returned as it is),
+  // INVALID_ARGUMENT for a tile that is not the grid's cell `index` (or, in an adaptive bake,
+  // has samples outside [1, header.samples]), and the writer's own.
+  using EncodedTileSource = std::function<absl::StatusOr<EncodedTile>(int64_t index)>;
+  virtual absl::Status WriteEncodedTiles(const EncodedTileSource& source) = 0;
   // REQUIRES: every tile written. Commits the file (AtomicFile::Commit: sync, rename, sync
   // the folder).
   virtual absl::Status Finish() = 0;

@@ -8,11 +8,14 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <optional>
 #include <string_view>
+#include <utility>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/string_view.h"
+#include "core/pdsm/tile_chunk.h"
 #include "core/util/atomic_file.h"
 #include "core/util/file_system.h"
 #include "core/util/little_endian.h"
@@ -21,13 +24,17 @@ namespace pdsm {
 namespace {
 
 constexpr char kMagic[8] = {'P', 'D', 'S', 'M', 'T', 'I', 'L', 'E'};
-// magic, version, x0, y0, width, height, offset_count, vertex_count.
-constexpr size_t kHeaderBytes = sizeof(kMagic) + 4 + 4 * 4 + 8 + 8;
 constexpr size_t kChecksumBytes = 8;
+// Version 3: magic, version, x0, y0, width, height, samples, chunk_bytes.
+constexpr size_t kChunkHeaderBytes = sizeof(kMagic) + 4 + 4 * 4 + 4 + 8;
+// Versions 1 and 2 (earlier builds): magic, version, x0, y0, width, height, offset_count,
+// vertex_count.
+constexpr size_t kHeaderBytes = sizeof(kMagic) + 4 + 4 * 4 + 8 + 8;
 constexpr size_t kOffsetBytes = 8;
 constexpr size_t kVertexBytes = 8;  // float z, float a
 // Version 2 (tiles of adaptive bakes) appends int32 samples after the vertices.
 constexpr uint32_t kFixedSamplesVersion = 1;
+constexpr uint32_t kAdaptiveVersion = 2;
 constexpr size_t kSamplesBytes = 4;
 
 // FNV-1a, 64 bits.
@@ -64,7 +71,7 @@ absl::Status CheckTileForWrite(const PdsmTile& tile, const std::string& path) {
   return absl::OkStatus();
 }
 
-std::string Encode(const PdsmTile& tile) {
+std::string EncodeFunctions(const PdsmTile& tile) {
   // Fixed-count tiles keep version 1, byte for byte.
   const bool adaptive = tile.samples > 0;
   const size_t size = kHeaderBytes + tile.offsets.size() * kOffsetBytes +
@@ -73,7 +80,7 @@ std::string Encode(const PdsmTile& tile) {
   std::string bytes(size, '\0');
   ByteWriter out(bytes.data());
   out.Bytes(kMagic, sizeof(kMagic));
-  out.U32(adaptive ? kTileFileVersion : kFixedSamplesVersion);
+  out.U32(adaptive ? kAdaptiveVersion : kFixedSamplesVersion);
   out.I32(tile.x0);
   out.I32(tile.y0);
   out.I32(tile.width);
@@ -122,7 +129,91 @@ absl::StatusOr<std::string> ReadWholeFile(const std::string& path) {
   return bytes;
 }
 
-absl::StatusOr<PdsmTile> Decode(const std::string& bytes, const std::string& path) {
+std::string EncodeChunk(const EncodedTile& tile) {
+  const size_t size = kChunkHeaderBytes + tile.chunk.size() + kChecksumBytes;
+  std::string bytes(size, '\0');
+  ByteWriter out(bytes.data());
+  out.Bytes(kMagic, sizeof(kMagic));
+  out.U32(kTileFileVersion);
+  out.I32(tile.x0);
+  out.I32(tile.y0);
+  out.I32(tile.width);
+  out.I32(tile.height);
+  out.I32(tile.samples);
+  out.U64(tile.chunk.size());
+  out.Bytes(tile.chunk.data(), tile.chunk.size());
+  out.U64(Checksum(std::string_view(bytes).substr(0, size - kChecksumBytes)));
+  return bytes;
+}
+
+// A tile file's contents: the encoded tile (version 3) or the functions (versions 1, 2).
+struct Contents {
+  EncodedTile encoded;
+  std::optional<PdsmTile> functions;
+};
+
+absl::StatusOr<PdsmTile> DecodeFunctions(const std::string& bytes, const std::string& path);
+
+absl::StatusOr<Contents> Parse(const std::string& bytes, const std::string& path) {
+  const auto corrupt = [&](absl::string_view what) {
+    return absl::DataLossError(absl::StrCat("tile file ", path, ": ", what));
+  };
+  const size_t size = bytes.size();
+  if (size < sizeof(kMagic) + 4 || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0) {
+    if (size < kChunkHeaderBytes + kChecksumBytes) {
+      return corrupt(absl::StrFormat("truncated (%d bytes, a tile file has at least %d)", size,
+                                     kChunkHeaderBytes + kChecksumBytes));
+    }
+    return corrupt("not a tile file (bad magic)");
+  }
+  const uint32_t version = ByteReader(bytes.data() + sizeof(kMagic)).U32();
+  if (version > kTileFileVersion && size >= sizeof(kMagic) + 4 + kChecksumBytes &&
+      ByteReader(bytes.data() + size - kChecksumBytes).U64() ==
+          Checksum(std::string_view(bytes).substr(0, size - kChecksumBytes))) {
+    return absl::FailedPreconditionError(
+        absl::StrFormat("tile file %s: version %d is newer than this build reads (%d)", path,
+                        version, kTileFileVersion));
+  }
+  if (version != kTileFileVersion) {
+    absl::StatusOr<PdsmTile> functions = DecodeFunctions(bytes, path);
+    if (!functions.ok()) return functions.status();
+    Contents contents;
+    contents.encoded = {functions->x0,     functions->y0,      functions->width,
+                        functions->height, functions->samples, {}};
+    contents.functions = *std::move(functions);
+    return contents;
+  }
+  if (size < kChunkHeaderBytes + kChecksumBytes) {
+    return corrupt(absl::StrFormat("truncated (%d bytes, a tile file has at least %d)", size,
+                                   kChunkHeaderBytes + kChecksumBytes));
+  }
+  ByteReader in(bytes.data() + sizeof(kMagic) + 4);
+  Contents contents;
+  EncodedTile& tile = contents.encoded;
+  tile.x0 = in.I32();
+  tile.y0 = in.I32();
+  tile.width = in.I32();
+  tile.height = in.I32();
+  tile.samples = in.I32();
+  const uint64_t chunk_bytes = in.U64();
+  // Sizes first, for a better message than a checksum mismatch on a truncated file.
+  if (chunk_bytes != size - kChunkHeaderBytes - kChecksumBytes) {
+    return corrupt(absl::StrFormat("%d bytes, but its header describes a chunk of %d (truncated?)",
+                                   size, chunk_bytes));
+  }
+  const uint64_t stored_checksum = ByteReader(bytes.data() + size - kChecksumBytes).U64();
+  if (stored_checksum != Checksum(std::string_view(bytes).substr(0, size - kChecksumBytes))) {
+    return corrupt("checksum mismatch");
+  }
+  if (tile.x0 < 0 || tile.y0 < 0 || tile.width < 0 || tile.height < 0 || tile.samples < 0) {
+    return corrupt(absl::StrFormat("negative corner, size or samples (%d, %d) %dx%d, %d samples",
+                                   tile.x0, tile.y0, tile.width, tile.height, tile.samples));
+  }
+  tile.chunk.assign(bytes, kChunkHeaderBytes, static_cast<size_t>(chunk_bytes));
+  return contents;
+}
+
+absl::StatusOr<PdsmTile> DecodeFunctions(const std::string& bytes, const std::string& path) {
   const auto corrupt = [&](absl::string_view what) {
     return absl::DataLossError(absl::StrCat("tile file ", path, ": ", what));
   };
@@ -143,8 +234,8 @@ absl::StatusOr<PdsmTile> Decode(const std::string& bytes, const std::string& pat
   tile.height = in.I32();
   const uint64_t offset_count = in.U64();
   const uint64_t vertex_count = in.U64();
-  const size_t trailer = version == kTileFileVersion ? kSamplesBytes : 0;
-  if (version == kTileFileVersion || version == kFixedSamplesVersion) {
+  const size_t trailer = version == kAdaptiveVersion ? kSamplesBytes : 0;
+  if (version == kAdaptiveVersion || version == kFixedSamplesVersion) {
     // Sizes first, for a better message than a checksum mismatch on a truncated file.
     if (tile.x0 < 0 || tile.y0 < 0 || tile.width < 0 || tile.height < 0) {
       return corrupt(absl::StrFormat("negative corner or size (%d, %d) %dx%d", tile.x0, tile.y0,
@@ -174,7 +265,7 @@ absl::StatusOr<PdsmTile> Decode(const std::string& bytes, const std::string& pat
         absl::StrFormat("tile file %s: version %d is newer than this build reads (%d)", path,
                         version, kTileFileVersion));
   }
-  if (version != kTileFileVersion && version != kFixedSamplesVersion) {
+  if (version != kAdaptiveVersion && version != kFixedSamplesVersion) {
     return corrupt(absl::StrCat("invalid version ", version));
   }
 
@@ -206,17 +297,41 @@ absl::StatusOr<PdsmTile> Decode(const std::string& bytes, const std::string& pat
 
 absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile, FileSystem* fs) {
   if (absl::Status s = CheckTileForWrite(tile, path); !s.ok()) return s;
-  return WriteFileAtomically(path, Encode(tile), fs);
+  absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(tile);
+  if (!encoded.ok()) {
+    return absl::Status(encoded.status().code(),
+                        absl::StrCat(path, ": ", encoded.status().message()));
+  }
+  return WriteFileAtomically(path, EncodeChunk(*encoded), fs);
 }
 
 absl::StatusOr<PdsmTile> ReadTileFile(const std::string& path) {
   absl::StatusOr<std::string> bytes = ReadWholeFile(path);
   if (!bytes.ok()) return bytes.status();
-  return Decode(*bytes, path);
+  return DecodeTileFile(*bytes, path);
 }
 
 absl::StatusOr<PdsmTile> DecodeTileFile(const std::string& bytes, const std::string& label) {
-  return Decode(bytes, label);
+  absl::StatusOr<Contents> contents = Parse(bytes, label);
+  if (!contents.ok()) return contents.status();
+  if (contents->functions) return *std::move(contents->functions);
+  return DecodeTileChunk(contents->encoded, absl::StrCat("tile file ", label));
 }
+
+absl::StatusOr<EncodedTile> ReadTileChunk(const std::string& path) {
+  absl::StatusOr<std::string> bytes = ReadWholeFile(path);
+  if (!bytes.ok()) return bytes.status();
+  absl::StatusOr<Contents> contents = Parse(*bytes, path);
+  if (!contents.ok()) return contents.status();
+  if (!contents->functions) return std::move(contents->encoded);
+  // A file of an earlier build: encoded now, as the file will hold it.
+  absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(*contents->functions);
+  if (!encoded.ok()) {
+    return absl::DataLossError(absl::StrCat("tile file ", path, ": ", encoded.status().message()));
+  }
+  return encoded;
+}
+
+std::string EncodeEarlierTileFile(const PdsmTile& tile) { return EncodeFunctions(tile); }
 
 }  // namespace pdsm

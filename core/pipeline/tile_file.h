@@ -1,17 +1,20 @@
 // One finished (assembled, compressed) tile on the coordinator's disk, so that a restarted
 // coordinator resumes a job without recomputing the tiles it had finished.
 //
-// Layout, all integers little-endian, floats as their IEEE-754 bits (stored exactly):
+// Layout, all integers little-endian (version 3):
 //   char[8]  magic "PDSMTILE"
 //   uint32   version (kTileFileVersion)
 //   int32    x0, y0, width, height
-//   uint64   offset_count   (= width * height + 1)
-//   uint64   vertex_count   (= the last offset)
-//   uint64   offsets[offset_count]   (start at 0, nondecreasing)
-//   float32  z, a            per vertex, vertex_count times
-//   int32    samples         version 2 only: the tile's light samples (adaptive bakes); a
-//                            tile with samples == 0 (fixed-count bake) is written as version 1
+//   int32    samples         the tile's light samples (adaptive bakes); 0 in a fixed-count bake
+//   uint64   chunk_bytes
+//   char     chunk[chunk_bytes]   the tile as the PDSM file stores it: OpenEXR's compressed
+//                            deep tile, tile-local (core/pdsm/tile_chunk.h), so that the job's
+//                            file is assembled by copying it (PdsmWriter::WriteEncodedTiles)
 //   uint64   checksum: FNV-1a 64 of every byte before it
+// Versions 1 and 2, written by earlier builds, are still read (a job survives an upgrade of its
+// coordinator): after x0..height they hold uint64 offset_count (= width * height + 1), uint64
+// vertex_count, uint64 offsets[offset_count], float32 z, a per vertex (IEEE-754 bits), version
+// 2 an int32 samples, then the same checksum.
 #ifndef PDSM_CORE_PIPELINE_TILE_FILE_H_
 #define PDSM_CORE_PIPELINE_TILE_FILE_H_
 
@@ -21,11 +24,12 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "core/pdsm/pdsm_image.h"
+#include "core/pdsm/tile_chunk.h"
 #include "core/util/file_system.h"
 
 namespace pdsm {
 
-inline constexpr uint32_t kTileFileVersion = 2;
+inline constexpr uint32_t kTileFileVersion = 3;
 
 // Writes `tile` to `path`, crash-safe, through WriteFileAtomically (core/util/atomic_file.h):
 // the bytes go to a unique "<path>.tmp-XXXXXX", are synced, the file is renamed onto `path`
@@ -33,7 +37,8 @@ inline constexpr uint32_t kTileFileVersion = 2;
 // never part of one, and concurrent writers of one tile never share a temporary file. On
 // error no temporary file is left; a crash can leave one, which no reader opens.
 // Errors: INVALID_ARGUMENT when the tile's offsets are not width * height + 1 nondecreasing
-// values from 0 to the vertex count, or width or height is negative; otherwise the errno
+// values from 0 to the vertex count, width or height is negative, or a function is not one a
+// PDSM holds (CheckTileFunctions); otherwise the errno
 // status of the failing step (e.g. RESOURCE_EXHAUSTED for a full disk), naming the path.
 // `fs` null means FileSystem::Default().
 absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile, FileSystem* fs = nullptr);
@@ -48,6 +53,14 @@ absl::StatusOr<PdsmTile> ReadTileFile(const std::string& path);
 // The same from the file's bytes (received over the network: FetchTile); `label` names them
 // in errors.
 absl::StatusOr<PdsmTile> DecodeTileFile(const std::string& bytes, const std::string& label);
+
+// The tile as the PDSM file will hold it, without decoding it (a file of version 1 or 2 is
+// encoded now). Errors as ReadTileFile's.
+absl::StatusOr<EncodedTile> ReadTileChunk(const std::string& path);
+
+// `tile` in the layout of versions 1 and 2, as earlier builds wrote it: for tests that this
+// build still reads them.
+std::string EncodeEarlierTileFile(const PdsmTile& tile);
 
 }  // namespace pdsm
 

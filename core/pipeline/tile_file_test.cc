@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/pdsm/pdsm_test_images.h"
+#include "core/pdsm/tile_chunk.h"
 #include "tests/test_support.h"
 #include "tests/write_faults.h"
 
@@ -28,6 +29,9 @@ using ::testing::HasSubstr;
 
 // Offsets of the layout (see tile_file.h).
 constexpr size_t kVersionAt = 8;
+constexpr size_t kChunkBytesAt = 32;
+constexpr size_t kChunkAt = 40;
+// Of versions 1 and 2.
 constexpr size_t kOffsetCountAt = 28;
 constexpr size_t kVertexCountAt = 36;
 constexpr size_t kOffsetsAt = 44;
@@ -41,10 +45,14 @@ PdsmTile SmallTile() {
   tile.width = 3;
   tile.height = 2;
   tile.offsets = {0, 2, 2, 5, 6, 6, 8};
-  tile.vertices = {{1.0f / 3.0f, 0.0f},  {2.5f, 1.0f},
-                   {0.1f, 0.0f},         {0.1f, 0.25f},  // jump
-                   {1e6f + 0.5f, 0.75f}, {-0.0f, std::nextafter(1.0f, 0.0f)},
-                   {3.0f, 0.5f},         {std::numeric_limits<float>::denorm_min(), 1.0f}};
+  tile.vertices = {{1.0f / 3.0f, 0.0f},
+                   {2.5f, 1.0f},
+                   {0.1f, 0.0f},
+                   {0.1f, 0.25f},  // jump
+                   {1e6f + 0.5f, 0.75f},
+                   {-0.0f, std::nextafter(1.0f, 0.0f)},
+                   {std::numeric_limits<float>::denorm_min(), 1.0f},
+                   {3.0f, 0.5f}};
   return tile;
 }
 
@@ -83,11 +91,20 @@ TEST(TileFileTest, RoundTripIsExact) {
   absl::StatusOr<PdsmTile> read = ReadTileFile(path);
   ASSERT_TRUE(read.ok()) << read.status();
   ExpectSameTile(*read, tile);
-  EXPECT_EQ(ReadBytes(path).size(), 44 + 7 * 8 + 8 * 8 + 8u);
+  // The file holds the tile as the PDSM will: its chunk, not its vertices.
+  absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(tile);
+  ASSERT_TRUE(encoded.ok()) << encoded.status();
+  const std::string bytes = ReadBytes(path);
+  EXPECT_EQ(bytes[kVersionAt], 3);
+  EXPECT_EQ(bytes.size(), kChunkAt + encoded->chunk.size() + 8u);
+  EXPECT_EQ(bytes.substr(kChunkAt, encoded->chunk.size()), encoded->chunk);
+  absl::StatusOr<EncodedTile> chunk = ReadTileChunk(path);
+  ASSERT_TRUE(chunk.ok()) << chunk.status();
+  EXPECT_EQ(chunk->chunk, encoded->chunk);
+  EXPECT_EQ(chunk->x0, 64);
+  EXPECT_EQ(chunk->height, 2);
 }
 
-// Tiles of adaptive bakes carry their sample count (version 2); fixed-count tiles keep the
-// version-1 bytes.
 TEST(TileFileTest, AdaptiveTileKeepsItsSampleCount) {
   TempDir dir;
   PdsmTile tile = SmallTile();
@@ -97,17 +114,35 @@ TEST(TileFileTest, AdaptiveTileKeepsItsSampleCount) {
   ASSERT_TRUE(read.ok()) << read.status();
   ExpectSameTile(*read, tile);
   EXPECT_EQ(read->samples, 48);
-  const std::string bytes = ReadBytes(dir.File("a"));
-  EXPECT_EQ(bytes.size(), 44 + 7 * 8 + 8 * 8 + 4 + 8u);
-  EXPECT_EQ(bytes[8], 2);  // version
-  for (size_t cut = 1; cut < 12; ++cut) {
-    WriteText(dir.File("cut"), bytes.substr(0, bytes.size() - cut));
-    EXPECT_EQ(ReadTileFile(dir.File("cut")).status().code(), absl::StatusCode::kDataLoss);
-  }
+  EXPECT_EQ(ReadTileChunk(dir.File("a"))->samples, 48);
   tile.samples = 0;
   ASSERT_TRUE(WriteTileFile(dir.File("f"), tile).ok());
-  EXPECT_EQ(ReadBytes(dir.File("f"))[8], 1);
   EXPECT_EQ(ReadTileFile(dir.File("f"))->samples, 0);
+}
+
+// Files of earlier builds (versions 1 and 2: the vertices themselves) are still read, so a job
+// survives an upgrade of its coordinator; their chunk is made when the file is assembled.
+TEST(TileFileTest, EarlierVersionsAreStillRead) {
+  TempDir dir;
+  for (const int samples : {0, 48}) {
+    PdsmTile tile = SmallTile();
+    tile.samples = samples;
+    const std::string bytes = EncodeEarlierTileFile(tile);
+    EXPECT_EQ(bytes[kVersionAt], samples == 0 ? 1 : 2);
+    EXPECT_EQ(bytes.size(), 44 + 7 * 8 + 8 * 8 + (samples == 0 ? 0 : 4) + 8u);
+    WriteText(dir.File("old"), bytes);
+    absl::StatusOr<PdsmTile> read = ReadTileFile(dir.File("old"));
+    ASSERT_TRUE(read.ok()) << read.status();
+    ExpectSameTile(*read, tile);
+    absl::StatusOr<EncodedTile> chunk = ReadTileChunk(dir.File("old"));
+    ASSERT_TRUE(chunk.ok()) << chunk.status();
+    EXPECT_EQ(chunk->chunk, EncodeTileChunk(tile)->chunk);
+    EXPECT_EQ(chunk->samples, samples);
+    for (size_t cut = 1; cut < 12; ++cut) {
+      WriteText(dir.File("cut"), bytes.substr(0, bytes.size() - cut));
+      EXPECT_EQ(ReadTileFile(dir.File("cut")).status().code(), absl::StatusCode::kDataLoss);
+    }
+  }
 }
 
 TEST(TileFileTest, RoundTripOfTileWithoutVertices) {
@@ -275,7 +310,7 @@ TEST(TileFileTest, ChecksumMismatchIsNamed) {
   const std::string path = dir.File("tile");
   ASSERT_TRUE(WriteTileFile(path, SmallTile()).ok());
   std::string bytes = ReadBytes(path);
-  bytes[kOffsetsAt + 7 * 8 + 3] ^= 0x10;  // in a vertex
+  bytes[kChunkAt + 20] ^= 0x10;  // in the chunk
   WriteText(path, bytes);
   EXPECT_THAT(ReadTileFile(path).status().message(), HasSubstr("checksum"));
 }
@@ -289,40 +324,45 @@ TEST(TileFileTest, NotATileFile) {
   EXPECT_THAT(read.status().message(), HasSubstr("magic"));
 }
 
-// A header claiming huge counts under a valid checksum: rejected against the file's length,
+// A header claiming huge sizes under a valid checksum: rejected against the file's length,
 // without trying to allocate what it claims.
-TEST(TileFileTest, HugeCountsUnderValidChecksumAreDataLoss) {
+TEST(TileFileTest, HugeSizesUnderValidChecksumAreDataLoss) {
   TempDir dir;
   const std::string good = dir.File("good");
   ASSERT_TRUE(WriteTileFile(good, SmallTile()).ok());
   const std::string path = dir.File("huge");
   for (const uint64_t count : {uint64_t{1} << 40, uint64_t{1} << 61, ~uint64_t{0}}) {
     std::string bytes = ReadBytes(good);
+    PutU64(&bytes, kChunkBytesAt, count);
+    Reseal(&bytes);
+    WriteText(path, bytes);
+    EXPECT_EQ(ReadTileFile(path).status().code(), absl::StatusCode::kDataLoss) << count;
+
+    bytes = EncodeEarlierTileFile(SmallTile());
     PutU64(&bytes, kVertexCountAt, count);
     Reseal(&bytes);
     WriteText(path, bytes);
     EXPECT_EQ(ReadTileFile(path).status().code(), absl::StatusCode::kDataLoss) << count;
 
-    bytes = ReadBytes(good);
+    bytes = EncodeEarlierTileFile(SmallTile());
     PutU64(&bytes, kOffsetCountAt, count);
     Reseal(&bytes);
     WriteText(path, bytes);
     EXPECT_EQ(ReadTileFile(path).status().code(), absl::StatusCode::kDataLoss) << count;
   }
   // Width and height as large as int32 allows.
-  std::string bytes = ReadBytes(good);
-  for (size_t at : {20, 24}) {
-    for (int i = 0; i < 4; ++i) bytes[at + i] = static_cast<char>(i == 3 ? 0x7f : 0xff);
+  for (std::string bytes : {ReadBytes(good), EncodeEarlierTileFile(SmallTile())}) {
+    for (size_t at : {20, 24}) {
+      for (int i = 0; i < 4; ++i) bytes[at + i] = static_cast<char>(i == 3 ? 0x7f : 0xff);
+    }
+    Reseal(&bytes);
+    WriteText(path, bytes);
+    EXPECT_EQ(ReadTileFile(path).status().code(), absl::StatusCode::kDataLoss);
   }
-  Reseal(&bytes);
-  WriteText(path, bytes);
-  EXPECT_EQ(ReadTileFile(path).status().code(), absl::StatusCode::kDataLoss);
 }
 
-TEST(TileFileTest, BadOffsetsUnderValidChecksumAreDataLoss) {
+TEST(TileFileTest, BadOffsetsOfAnEarlierVersionUnderValidChecksumAreDataLoss) {
   TempDir dir;
-  const std::string good = dir.File("good");
-  ASSERT_TRUE(WriteTileFile(good, SmallTile()).ok());
   const std::string path = dir.File("bad");
   struct Case {
     size_t index;
@@ -331,7 +371,7 @@ TEST(TileFileTest, BadOffsetsUnderValidChecksumAreDataLoss) {
   };
   for (const Case& c :
        {Case{2, 1, "decrease"}, Case{0, 1, "first offset"}, Case{6, 7, "last offset"}}) {
-    std::string bytes = ReadBytes(good);
+    std::string bytes = EncodeEarlierTileFile(SmallTile());
     PutU64(&bytes, kOffsetsAt + 8 * c.index, c.value);
     Reseal(&bytes);
     WriteText(path, bytes);

@@ -1,0 +1,172 @@
+#include "core/pdsm/tile_chunk.h"
+
+#include <OpenEXR/ImfDeepTiledInputFile.h>
+#include <OpenEXR/ImfDeepTiledOutputFile.h>
+#include <OpenEXR/ImfHeader.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <utility>
+
+#include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "core/pdsm/exr_file_scan.h"
+#include "core/pdsm/exr_memory_stream.h"
+#include "core/pdsm/pdsm_exr_header.h"
+#include "core/pdsm/pdsm_exr_tiles.h"
+#include "core/util/little_endian.h"
+
+namespace pdsm {
+namespace {
+
+// A chunk of a single-part deep tiled file starts with int32 dx, dy, lx, ly (OpenEXR's file
+// layout), then the sizes and the data.
+constexpr size_t kCoordinateBytes = 16;
+// Then uint64 packed sample-count table, packed samples and unpacked samples sizes.
+constexpr size_t kPrefixBytes = kCoordinateBytes + 3 * 8;
+
+// Corner and size are ones an OpenEXR data window can hold (and a deep tile's counts).
+bool HasAPlace(const EncodedTile& tile) {
+  constexpr int kMax = std::numeric_limits<int>::max();
+  return tile.x0 >= 0 && tile.y0 >= 0 && tile.width >= 0 && tile.height >= 0 &&
+         tile.width <= kMax - tile.x0 && tile.height <= kMax - tile.y0 &&
+         static_cast<uint64_t>(tile.width) * static_cast<uint64_t>(tile.height) <=
+             kMaxVerticesPerTile;
+}
+
+// The header of an image whose only tile is `tile`'s rectangle.
+Imf::Header OneTileHeader(const EncodedTile& tile, Imf::LineOrder order) {
+  const Imath::Box2i window(Imath::V2i(tile.x0, tile.y0),
+                            Imath::V2i(tile.x0 + tile.width - 1, tile.y0 + tile.height - 1));
+  Imf::Header exr(window, window);
+  SetPdsmPixelLayout(&exr, tile.width, tile.height);
+  exr.lineOrder() = order;
+  return exr;
+}
+
+}  // namespace
+
+absl::StatusOr<EncodedTile> EncodeTileChunk(const PdsmTile& tile) {
+  EncodedTile encoded{tile.x0, tile.y0, tile.width, tile.height, tile.samples, {}};
+  if (!HasAPlace(encoded)) {
+    return absl::InvalidArgumentError(absl::StrFormat("tile at (%d, %d) of size %dx%d", tile.x0,
+                                                      tile.y0, tile.width, tile.height));
+  }
+  const size_t pixels = static_cast<size_t>(tile.width) * tile.height;
+  if (tile.offsets.size() != pixels + 1) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("tile at (%d, %d) has %d offsets, expected %d", tile.x0, tile.y0,
+                        tile.offsets.size(), pixels + 1));
+  }
+  if (absl::Status s = CheckTileFunctions(tile, "tile"); !s.ok()) return s;
+  if (pixels == 0) return encoded;
+  ExrStringOStream out("tile chunk");
+  try {
+    // RANDOM_Y: OpenEXR writes the tile as it is given instead of waiting for tiles before it.
+    Imf::DeepTiledOutputFile file(out, OneTileHeader(encoded, Imf::RANDOM_Y), /*numThreads=*/0);
+    const uint64_t start = out.tellp();  // after the header and the offset table
+    DeepTileBuffers buffers;
+    buffers.Resize(pixels);
+    // OpenEXR only reads through these pointers when writing.
+    Vertex* vertices = const_cast<Vertex*>(tile.vertices.data());
+    for (size_t p = 0; p < pixels; ++p) {
+      buffers.Set(p, vertices, tile.offsets[p], tile.offsets[p + 1]);
+    }
+    file.setFrameBuffer(buffers.FrameBuffer(tile.width));
+    file.writeTile(0, 0);
+    const uint64_t end = out.tellp();
+    encoded.chunk =
+        out.bytes().substr(static_cast<size_t>(start), static_cast<size_t>(end - start));
+  } catch (...) {
+    return absl::InternalError(StatusFromCurrentException("tile", "cannot encode").message());
+  }
+  return encoded;
+}
+
+absl::StatusOr<PdsmTile> DecodeTileChunk(const EncodedTile& encoded, absl::string_view label) {
+  const auto corrupt = [&](absl::string_view what) {
+    return absl::DataLossError(absl::StrCat(label, ": ", what));
+  };
+  PdsmTile tile;
+  tile.x0 = encoded.x0;
+  tile.y0 = encoded.y0;
+  tile.width = encoded.width;
+  tile.height = encoded.height;
+  tile.samples = encoded.samples;
+  if (!HasAPlace(encoded)) {
+    return corrupt(absl::StrFormat("a tile at (%d, %d) of size %dx%d", tile.x0, tile.y0, tile.width,
+                                   tile.height));
+  }
+  const size_t pixels = static_cast<size_t>(tile.width) * tile.height;
+  if (pixels == 0) {
+    if (!encoded.chunk.empty()) return corrupt("a tile of no pixel with a chunk");
+    tile.offsets.assign(1, 0);
+    return tile;
+  }
+  // Its sizes against its length and what zlib can inflate, before OpenEXR allocates for
+  // them (as ScanPdsmFile checks a file's chunks).
+  if (encoded.chunk.size() < kPrefixBytes) {
+    return corrupt(absl::StrFormat("a chunk of %d bytes", encoded.chunk.size()));
+  }
+  ByteReader sizes(encoded.chunk.data() + kCoordinateBytes);
+  const uint64_t packed_table = sizes.U64(), packed_data = sizes.U64();
+  const uint64_t unpacked_data = sizes.U64();
+  const uint64_t left = encoded.chunk.size() - kPrefixBytes;
+  if (packed_table > left || packed_data != left - packed_table ||
+      !ExrUnpackedSizeIsPossible(packed_table, uint64_t{4} * pixels) ||
+      !ExrUnpackedSizeIsPossible(packed_data, unpacked_data) ||
+      unpacked_data > static_cast<uint64_t>(std::numeric_limits<int32_t>::max())) {
+    return corrupt(absl::StrFormat(
+        "impossible sizes for %dx%d pixels in a chunk of %d bytes (sample counts %d packed, "
+        "samples %d packed / %d bytes)",
+        tile.width, tile.height, encoded.chunk.size(), packed_table, packed_data, unpacked_data));
+  }
+  tile.offsets.assign(pixels + 1, 0);
+  try {
+    // A file of this one tile: its header, its offset table (one entry: the chunk right after
+    // it), the chunk.
+    ExrStringOStream made("tile chunk");
+    { Imf::DeepTiledOutputFile empty(made, OneTileHeader(encoded, Imf::INCREASING_Y), 0); }
+    std::string& file = made.bytes();
+    ByteWriter(file.data() + file.size() - sizeof(uint64_t)).U64(file.size());
+    file += RelocateTileChunk(encoded.chunk, 0, 0);
+    const std::string name(label);
+    ExrStringIStream in(file, name.c_str());
+    Imf::DeepTiledInputFile exr(in, /*numThreads=*/0);
+    DeepTileBuffers buffers;
+    buffers.Resize(pixels);
+    exr.setFrameBuffer(buffers.FrameBuffer(tile.width));
+    exr.readPixelSampleCount(0, 0);
+    for (size_t p = 0; p < pixels; ++p) tile.offsets[p + 1] = tile.offsets[p] + buffers.counts[p];
+    // Checked before anything is allocated from the counts.
+    if (tile.offsets.back() > kMaxVerticesPerTile) {
+      return corrupt(absl::StrFormat("counts %d vertices, more than a tile holds (%d)",
+                                     tile.offsets.back(), kMaxVerticesPerTile));
+    }
+    if (tile.offsets.back() > 0) {
+      tile.vertices.resize(tile.offsets.back());
+      for (size_t p = 0; p < pixels; ++p) {
+        buffers.Set(p, tile.vertices.data(), tile.offsets[p], tile.offsets[p + 1]);
+      }
+      exr.setFrameBuffer(buffers.FrameBuffer(tile.width));
+      exr.readTile(0, 0);
+    }
+  } catch (...) {
+    return corrupt(StatusFromCurrentException("chunk", "cannot decode").message());
+  }
+  if (absl::Status s = CheckTileFunctions(tile, label); !s.ok()) return corrupt(s.message());
+  return tile;
+}
+
+std::string RelocateTileChunk(std::string chunk, int dx, int dy) {
+  ByteWriter out(chunk.data());
+  out.I32(dx);
+  out.I32(dy);
+  out.I32(0);  // level 0 in x
+  out.I32(0);  // and in y
+  return chunk;
+}
+
+}  // namespace pdsm
