@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
-#include <map>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -145,7 +145,9 @@ absl::StatusOr<std::string> StoredJob::FinishedTileFile(int light, int tile) con
   }
   // Two requests at once both write the same bytes; the rename makes either whole.
   std::filesystem::create_directories(paths_.tiles, ec);
-  if (absl::Status s = WriteTileFile(path, MakeUnreachedTile(*l.plan, tile).tile, fs_); !s.ok()) {
+  if (absl::Status s =
+          WriteTileFile(path, MakeUnreachedTile(*l.plan, tile).tile, l.plan->header.tile_size, fs_);
+      !s.ok()) {
     return s;
   }
   return path;
@@ -179,7 +181,9 @@ absl::Status StoredJob::StoreTile(const JobLight& light, const PdsmTile& tile) {
   }
   std::error_code ec;
   std::filesystem::create_directories(paths_.tiles, ec);
-  if (absl::Status s = WriteTileFile(paths_.Tile(index), tile, fs_); !s.ok()) return s;
+  if (absl::Status s = WriteTileFile(paths_.Tile(index), tile, light.plan->header.tile_size, fs_);
+      !s.ok())
+    return s;
   if (ended_) return absl::OkStatus();  // cancelled meanwhile: the file goes with the folder
   if (absl::Status s = store_->MarkTileDone(record_.job_id, index, UnixNowMs()); !s.ok()) {
     return s;
@@ -260,24 +264,24 @@ absl::Status StoredJob::WriteFile() {
   absl::StatusOr<std::vector<bool>> all_lit = AllLitTiles();
   if (!all_lit.ok()) return all_lit.status();
   const auto write_light = [&](const JobLight& light, PdsmWriter* writer) -> absl::Status {
-    // Tiles without vertices differ only in where they are: encoded once per size.
-    std::map<std::pair<int, int>, std::string> empty_chunks;
+    EmptyTileChunks empty_chunks(light.plan->header.tile_size);
+    std::optional<int> unreached_samples;  // UnreachedTileSamples, found at the first use
     const auto tile_of = [&](int64_t index) -> absl::StatusOr<EncodedTile> {
       const int tile = static_cast<int>(index);
       // The stored tiles are copied as they were compressed when they were finished.
       if (!IsUnreachedTile(*light.plan, tile) && !(*all_lit)[light.tile_offset + tile]) {
-        return ReadTileChunk(paths_.Tile(light.tile_offset + tile));
+        return ReadTileChunk(paths_.Tile(light.tile_offset + tile), light.plan->header.tile_size);
       }
       // A tile no caster reaches, or found all lit, was never stored: it is made again, as the
       // engine made it.
-      const PdsmTile made = MakeUnreachedTile(*light.plan, tile).tile;
-      std::string& chunk = empty_chunks[{made.width, made.height}];
-      if (chunk.empty()) {
-        absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(made);
-        if (!encoded.ok()) return encoded.status();
-        chunk = std::move(encoded->chunk);
-      }
-      return EncodedTile{made.x0, made.y0, made.width, made.height, made.samples, chunk};
+      if (!unreached_samples) unreached_samples = UnreachedTileSamples(*light.plan);
+      const TileRect rect = light.plan->tile(tile);
+      absl::StatusOr<std::string> chunk = empty_chunks.Chunk(rect.width, rect.height);
+      if (!chunk.ok()) return chunk.status();
+      EncodedTile made{rect.x0, rect.y0, rect.width, rect.height, *unreached_samples, 0, {}};
+      made.tile_size = light.plan->header.tile_size;
+      made.chunk = *std::move(chunk);
+      return made;
     };
     if (absl::Status s = writer->WriteEncodedTiles(tile_of); !s.ok()) return s;
     return writer->Finish();

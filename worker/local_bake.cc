@@ -159,7 +159,8 @@ absl::StatusOr<BakeSummary> BakePlanned(std::shared_ptr<const BakePlan> plan, Pd
   const auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
-  auto output = std::make_shared<LocalOutput>(*plan, writer, preview_path, options.fs);
+  auto output =
+      std::make_shared<LocalOutput>(*plan, writer, preview_path, options.output_path, options.fs);
 
   const int threads = ThreadCount(*plan, options);
   // One GL context per thread: llvmpipe's own helper threads per context would only

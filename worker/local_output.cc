@@ -4,16 +4,19 @@
 #include <utility>
 #include <vector>
 
+#include "core/pipeline/unreached_tile.h"
+
 namespace pdsm {
 
 LocalOutput::LocalOutput(const BakePlan& plan, PdsmWriter* writer, std::string preview_path,
-                         FileSystem* fs)
+                         std::string output_path, FileSystem* fs)
     : plan_(plan),
       preview_path_(std::move(preview_path)),
       fs_(fs),
       receiver_depth_(has_preview() ? plan.tile_count() : 0),
       preview_(has_preview() ? plan.geometry().width : 0,
                has_preview() ? plan.geometry().height : 0),
+      tiles_(plan.header, std::move(output_path), fs),
       writer_(writer) {}
 
 void LocalOutput::SetReceiverDepth(int tile_index, std::span<const float> depth) {
@@ -28,15 +31,24 @@ absl::Status LocalOutput::StoreTile(const PdsmTile& tile) {
     preview_.ShadeTile(tile, depth);
     std::vector<float>().swap(depth);  // each tile is stored once
   }
-  absl::MutexLock lock(&writer_mu_);
-  return writer_->WriteTile(tile);
+  return tiles_.Put(tile);
+}
+
+absl::Status LocalOutput::StoreUnreachedTiles(const BakePlan& plan, const std::vector<int>& tiles) {
+  if (has_preview()) return JobOutput::StoreUnreachedTiles(plan, tiles);
+  const int samples = UnreachedTileSamples(plan);
+  for (const int t : tiles) {
+    const TileRect rect = plan.tile(t);
+    if (absl::Status s = tiles_.PutWithoutVertices(rect.x0, rect.y0, samples); !s.ok()) return s;
+  }
+  return absl::OkStatus();
 }
 
 absl::Status LocalOutput::Finish() {
   if (has_preview()) {
     if (absl::Status s = preview_.Write(preview_path_, fs_); !s.ok()) return s;
   }
-  absl::MutexLock lock(&writer_mu_);
+  if (absl::Status s = tiles_.WriteTo(writer_); !s.ok()) return s;
   return writer_->Finish();
 }
 

@@ -1,6 +1,8 @@
-// Where the local bake's tiles go (a JobOutput, core/pipeline/bake_engine.h): straight into
-// the PDSM file as they finish, and, when a preview is asked for, shaded into the preview
-// image from the receivers' depths rendered before the bake.
+// Where the local bake's tiles go (a JobOutput, core/pipeline/bake_engine.h): compressed as
+// they finish, on the thread that finished them, into an EncodedTileStore
+// (core/pdsm/encoded_tile_store.h), and copied into the PDSM file when the light is done; and,
+// when a preview is asked for, shaded into the preview image from the receivers' depths
+// rendered before the bake.
 #ifndef PDSM_WORKER_LOCAL_OUTPUT_H_
 #define PDSM_WORKER_LOCAL_OUTPUT_H_
 
@@ -13,6 +15,7 @@
 #include "absl/status/status.h"
 #include "absl/synchronization/mutex.h"
 #include "core/bake/bake_plan.h"
+#include "core/pdsm/encoded_tile_store.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pipeline/bake_engine.h"
 #include "worker/preview_image.h"
@@ -21,10 +24,11 @@ namespace pdsm {
 
 class LocalOutput final : public JobOutput {
  public:
-  // `plan` and `writer` outlive this. `preview_path` empty: no preview. `fs`: where the
-  // preview is written (null: the real file system).
+  // `plan` and `writer` outlive this. `preview_path` empty: no preview. `output_path`: the
+  // PDSM's path, beside which the compressed tiles wait for the end of the light. `fs`: where
+  // they and the preview are written (null: the real file system).
   LocalOutput(const BakePlan& plan, PdsmWriter* writer, std::string preview_path,
-              FileSystem* fs = nullptr);
+              std::string output_path, FileSystem* fs = nullptr);
 
   bool has_preview() const { return !preview_path_.empty(); }
   // The preview's surface for tile `tile_index`: the light-space depth of the nearest receiver
@@ -35,7 +39,11 @@ class LocalOutput final : public JobOutput {
   void SetReceiverDepth(int tile_index, std::span<const float> depth);
 
   absl::Status StoreTile(const PdsmTile& tile) override;
-  absl::Status Finish() override;  // writes the preview, then renames the PDSM into place
+  // Without a preview to shade, kept as their rectangles (no tile made and assembled each: a
+  // sparse world has 2^18); with one, each through StoreTile.
+  absl::Status StoreUnreachedTiles(const BakePlan& plan, const std::vector<int>& tiles) override;
+  // Writes the preview, then the PDSM's tiles, then renames the PDSM into place.
+  absl::Status Finish() override;
   void Ended(JobEnd end, const absl::Status& status, const JobProgress& progress) override;
 
   // True once Ended() ran; then status() and progress() hold what it was given.
@@ -49,9 +57,8 @@ class LocalOutput final : public JobOutput {
   FileSystem* const fs_;
   std::vector<std::vector<float>> receiver_depth_;  // by tile, sampled; dropped once shaded
   PreviewImage preview_;                            // tiles are disjoint: shading needs no lock
-
-  absl::Mutex writer_mu_;
-  PdsmWriter* const writer_ ABSL_PT_GUARDED_BY(writer_mu_);
+  EncodedTileStore tiles_;
+  PdsmWriter* const writer_;  // used by Finish() only
 
   mutable absl::Mutex end_mu_;
   std::atomic<bool> ended_{false};

@@ -71,6 +71,9 @@ class ExrPdsmWriter final : public PdsmWriter {
   }
 
   ~ExrPdsmWriter() override {
+    // An unfinished file is given up first, so that OpenEXR's destructor, which writes the
+    // offset table, writes nothing (the disk may be full: that is often why it is unfinished).
+    if (!finished_ && file_) file_->Abandon();
     // In this order: OpenEXR writes through the stream, the stream through the file; the
     // file removes its temporary unless committed.
     exr_.reset();
@@ -112,12 +115,14 @@ class ExrPdsmWriter final : public PdsmWriter {
       const int ty = static_cast<int>(index / grid_.TilesX());
       const int x0 = tx * grid_.tile_size, y0 = ty * grid_.tile_size;
       if (tile->x0 != x0 || tile->y0 != y0 || tile->width != grid_.TileWidth(x0) ||
-          tile->height != grid_.TileHeight(y0) || tile->chunk.empty()) {
+          tile->height != grid_.TileHeight(y0) || tile->tile_size != grid_.tile_size ||
+          tile->chunk.empty()) {
         return absl::InvalidArgumentError(absl::StrFormat(
-            "%s: encoded tile %d is at (%d, %d) size %dx%d with %d bytes, not the grid's cell "
-            "(%d, %d) size %dx%d",
-            path_, index, tile->x0, tile->y0, tile->width, tile->height, tile->chunk.size(), x0, y0,
-            grid_.TileWidth(x0), grid_.TileHeight(y0)));
+            "%s: encoded tile %d is at (%d, %d) size %dx%d in tiles of %d with %d bytes, not the "
+            "grid's cell (%d, %d) size %dx%d in tiles of %d",
+            path_, index, tile->x0, tile->y0, tile->width, tile->height, tile->tile_size,
+            tile->chunk.size(), x0, y0, grid_.TileWidth(x0), grid_.TileHeight(y0),
+            grid_.tile_size));
       }
       if (header_.adaptive()) {
         if (tile->samples < 1 || tile->samples > header_.samples) {

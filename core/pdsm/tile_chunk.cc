@@ -27,11 +27,13 @@ constexpr size_t kCoordinateBytes = 16;
 // Then uint64 packed sample-count table, packed samples and unpacked samples sizes.
 constexpr size_t kPrefixBytes = kCoordinateBytes + 3 * 8;
 
-// Corner and size are ones an OpenEXR data window can hold (and a deep tile's counts).
+// Corner and size are ones an OpenEXR data window can hold, within one tile of the tile size
+// (and a deep tile's counts).
 bool HasAPlace(const EncodedTile& tile) {
   constexpr int kMax = std::numeric_limits<int>::max();
   return tile.x0 >= 0 && tile.y0 >= 0 && tile.width >= 0 && tile.height >= 0 &&
          tile.width <= kMax - tile.x0 && tile.height <= kMax - tile.y0 &&
+         tile.width <= tile.tile_size && tile.height <= tile.tile_size &&
          static_cast<uint64_t>(tile.width) * static_cast<uint64_t>(tile.height) <=
              kMaxVerticesPerTile;
 }
@@ -41,18 +43,19 @@ Imf::Header OneTileHeader(const EncodedTile& tile, Imf::LineOrder order) {
   const Imath::Box2i window(Imath::V2i(tile.x0, tile.y0),
                             Imath::V2i(tile.x0 + tile.width - 1, tile.y0 + tile.height - 1));
   Imf::Header exr(window, window);
-  SetPdsmPixelLayout(&exr, tile.width, tile.height);
+  SetPdsmPixelLayout(&exr, tile.tile_size, tile.tile_size);
   exr.lineOrder() = order;
   return exr;
 }
 
 }  // namespace
 
-absl::StatusOr<EncodedTile> EncodeTileChunk(const PdsmTile& tile) {
-  EncodedTile encoded{tile.x0, tile.y0, tile.width, tile.height, tile.samples, {}};
+absl::StatusOr<EncodedTile> EncodeTileChunk(const PdsmTile& tile, int tile_size) {
+  EncodedTile encoded{tile.x0, tile.y0, tile.width, tile.height, tile.samples, tile_size, {}};
   if (!HasAPlace(encoded)) {
-    return absl::InvalidArgumentError(absl::StrFormat("tile at (%d, %d) of size %dx%d", tile.x0,
-                                                      tile.y0, tile.width, tile.height));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("tile at (%d, %d) of size %dx%d in tiles of %d", tile.x0, tile.y0,
+                        tile.width, tile.height, tile_size));
   }
   const size_t pixels = static_cast<size_t>(tile.width) * tile.height;
   if (tile.offsets.size() != pixels + 1) {
@@ -96,8 +99,8 @@ absl::StatusOr<PdsmTile> DecodeTileChunk(const EncodedTile& encoded, absl::strin
   tile.height = encoded.height;
   tile.samples = encoded.samples;
   if (!HasAPlace(encoded)) {
-    return corrupt(absl::StrFormat("a tile at (%d, %d) of size %dx%d", tile.x0, tile.y0, tile.width,
-                                   tile.height));
+    return corrupt(absl::StrFormat("a tile at (%d, %d) of size %dx%d in tiles of %d", tile.x0,
+                                   tile.y0, tile.width, tile.height, encoded.tile_size));
   }
   const size_t pixels = static_cast<size_t>(tile.width) * tile.height;
   if (pixels == 0) {
@@ -167,6 +170,25 @@ std::string RelocateTileChunk(std::string chunk, int dx, int dy) {
   out.I32(0);  // level 0 in x
   out.I32(0);  // and in y
   return chunk;
+}
+
+absl::StatusOr<std::string> EmptyTileChunks::Chunk(int width, int height) {
+  {
+    absl::MutexLock lock(&mu_);
+    const auto known = by_size_.find({width, height});
+    if (known != by_size_.end()) return known->second;
+  }
+  PdsmTile empty;
+  empty.width = width;
+  empty.height = height;
+  if (width >= 0 && height >= 0) {
+    empty.offsets.assign(static_cast<size_t>(width) * static_cast<size_t>(height) + 1, 0);
+  }
+  absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(empty, tile_size_);
+  if (!encoded.ok()) return encoded.status();
+  absl::MutexLock lock(&mu_);
+  by_size_.emplace(std::make_pair(width, height), encoded->chunk);
+  return std::move(encoded->chunk);
 }
 
 }  // namespace pdsm

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "absl/strings/str_format.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_test_images.h"
 #include "tests/test_support.h"
@@ -27,10 +28,10 @@ using ::pdsm::testing::TempDir;
 using ::pdsm::testing::WriteTiles;
 using ::testing::HasSubstr;
 
-std::vector<EncodedTile> EncodeAll(const std::vector<PdsmTile>& tiles) {
+std::vector<EncodedTile> EncodeAll(const std::vector<PdsmTile>& tiles, int tile_size) {
   std::vector<EncodedTile> encoded;
   for (const PdsmTile& tile : tiles) {
-    absl::StatusOr<EncodedTile> e = EncodeTileChunk(tile);
+    absl::StatusOr<EncodedTile> e = EncodeTileChunk(tile, tile_size);
     EXPECT_TRUE(e.ok()) << e.status();
     encoded.push_back(e.ok() ? *e : EncodedTile{});
   }
@@ -54,7 +55,7 @@ TEST(PdsmTileChunkTest, EveryTileComesBackExactly) {
   // Edge tiles of 37 x 21 in tiles of 16 are 5 and 5 wide: every shape a grid cuts.
   const PdsmImage image = RandomImage(FullHeader(37, 21, 16), 7, /*big_count=*/300);
   for (const PdsmTile& tile : CutTiles(image)) {
-    absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(tile);
+    absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(tile, 16);
     ASSERT_TRUE(encoded.ok()) << encoded.status();
     EXPECT_EQ(encoded->x0, tile.x0);
     EXPECT_EQ(encoded->width, tile.width);
@@ -71,7 +72,7 @@ TEST(PdsmTileChunkTest, TilesWithoutVerticesAndWithoutPixels) {
   lit.height = 3;
   lit.samples = 12;
   lit.offsets.assign(16 * 3 + 1, 0);
-  absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(lit);
+  absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(lit, 16);
   ASSERT_TRUE(encoded.ok()) << encoded.status();
   EXPECT_FALSE(encoded->chunk.empty());
   EXPECT_EQ(encoded->samples, 12);
@@ -81,7 +82,7 @@ TEST(PdsmTileChunkTest, TilesWithoutVerticesAndWithoutPixels) {
 
   PdsmTile none;
   none.offsets = {0};
-  encoded = EncodeTileChunk(none);
+  encoded = EncodeTileChunk(none, 16);
   ASSERT_TRUE(encoded.ok()) << encoded.status();
   EXPECT_TRUE(encoded->chunk.empty());
   decoded = DecodeTileChunk(*encoded, "test");
@@ -95,14 +96,14 @@ TEST(PdsmTileChunkTest, RefusesWhatAPdsmCannotHold) {
   tile.height = 1;
   tile.offsets = {0, 2, 3};
   tile.vertices = {{2.0f, 0.5f}, {1.0f, 1.0f}, {1.0f, 0.0f}};  // depths decrease
-  EXPECT_EQ(EncodeTileChunk(tile).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(EncodeTileChunk(tile, 16).status().code(), absl::StatusCode::kInvalidArgument);
   tile.offsets = {0, 2};
-  EXPECT_EQ(EncodeTileChunk(tile).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(EncodeTileChunk(tile, 16).status().code(), absl::StatusCode::kInvalidArgument);
 }
 
 TEST(PdsmTileChunkTest, ACorruptChunkIsDataLossNamingIt) {
   const PdsmImage image = RandomImage(FullHeader(16, 16, 16), 3);
-  absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(CutTiles(image).front());
+  absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(CutTiles(image).front(), 16);
   ASSERT_TRUE(encoded.ok()) << encoded.status();
   std::mt19937 rng(5);
   int refused = 0;
@@ -134,8 +135,27 @@ TEST(PdsmTileChunkTest, EncodedTilesMakeTheSameFileAsTiles) {
   const std::string direct = (dir.path() / "direct.exr").string();
   const std::string copied = (dir.path() / "copied.exr").string();
   ASSERT_TRUE(WriteTiles(direct, header, tiles).ok());
-  ASSERT_TRUE(WriteEncoded(copied, header, EncodeAll(tiles)).ok());
+  ASSERT_TRUE(WriteEncoded(copied, header, EncodeAll(tiles, header.tile_size)).ok());
   EXPECT_EQ(ReadBytes(copied), ReadBytes(direct));
+}
+
+TEST(PdsmTileChunkTest, EncodedTilesMakeTheSameFileAtEverySmallSize) {
+  TempDir dir;
+  struct Size {
+    int width, height, tile;
+  };
+  for (const Size& size : {Size{1, 1, 16}, Size{1, 1, 1}, Size{1, 5, 4}, Size{17, 1, 16},
+                           Size{2, 2, 64}, Size{16, 16, 16}, Size{33, 2, 8}}) {
+    SCOPED_TRACE(absl::StrFormat("%dx%d in tiles of %d", size.width, size.height, size.tile));
+    const PdsmHeader header = FullHeader(size.width, size.height, size.tile);
+    const std::vector<PdsmTile> tiles =
+        CutTiles(RandomImage(header, 3 + static_cast<uint32_t>(size.width)));
+    const std::string direct = (dir.path() / "direct.exr").string();
+    const std::string copied = (dir.path() / "copied.exr").string();
+    ASSERT_TRUE(WriteTiles(direct, header, tiles).ok());
+    ASSERT_TRUE(WriteEncoded(copied, header, EncodeAll(tiles, header.tile_size)).ok());
+    EXPECT_EQ(ReadBytes(copied), ReadBytes(direct));
+  }
 }
 
 TEST(PdsmTileChunkTest, EncodedTilesMakeTheSameAdaptiveFile) {
@@ -150,7 +170,7 @@ TEST(PdsmTileChunkTest, EncodedTilesMakeTheSameAdaptiveFile) {
   const std::string direct = (dir.path() / "direct.exr").string();
   const std::string copied = (dir.path() / "copied.exr").string();
   ASSERT_TRUE(WriteTiles(direct, header, tiles).ok());
-  ASSERT_TRUE(WriteEncoded(copied, header, EncodeAll(tiles)).ok());
+  ASSERT_TRUE(WriteEncoded(copied, header, EncodeAll(tiles, header.tile_size)).ok());
   EXPECT_EQ(ReadBytes(copied), ReadBytes(direct));
 }
 
@@ -169,7 +189,7 @@ TEST(PdsmTileChunkTest, EncodedTilesMakeTheSameMultipartFile) {
       const std::vector<PdsmTile> tiles =
           CutTiles(RandomImage(headers[l], 20 + static_cast<uint32_t>(l)));
       if (encoded) {
-        const std::vector<EncodedTile> chunks = EncodeAll(tiles);
+        const std::vector<EncodedTile> chunks = EncodeAll(tiles, headers[l].tile_size);
         ASSERT_TRUE((*part)
                         ->WriteEncodedTiles([&](int64_t index) -> absl::StatusOr<EncodedTile> {
                           return chunks.at(index);
@@ -191,7 +211,8 @@ TEST(PdsmTileChunkTest, EncodedTilesMakeTheSameMultipartFile) {
 TEST(PdsmTileChunkTest, ASourceErrorOrAMisplacedTileLeavesNoFile) {
   TempDir dir;
   const PdsmHeader header = FullHeader(40, 40, 16);
-  const std::vector<EncodedTile> tiles = EncodeAll(CutTiles(RandomImage(header, 17)));
+  const std::vector<EncodedTile> tiles =
+      EncodeAll(CutTiles(RandomImage(header, 17)), header.tile_size);
   const std::string path = (dir.path() / "out.exr").string();
   absl::StatusOr<std::unique_ptr<PdsmWriter>> writer = PdsmWriter::Create(path, header);
   ASSERT_TRUE(writer.ok());

@@ -25,8 +25,8 @@ namespace {
 
 constexpr char kMagic[8] = {'P', 'D', 'S', 'M', 'T', 'I', 'L', 'E'};
 constexpr size_t kChecksumBytes = 8;
-// Version 3: magic, version, x0, y0, width, height, samples, chunk_bytes.
-constexpr size_t kChunkHeaderBytes = sizeof(kMagic) + 4 + 4 * 4 + 4 + 8;
+// Version 3: magic, version, x0, y0, width, height, samples, tile_size, chunk_bytes.
+constexpr size_t kChunkHeaderBytes = sizeof(kMagic) + 4 + 4 * 4 + 4 + 4 + 8;
 // Versions 1 and 2 (earlier builds): magic, version, x0, y0, width, height, offset_count,
 // vertex_count.
 constexpr size_t kHeaderBytes = sizeof(kMagic) + 4 + 4 * 4 + 8 + 8;
@@ -140,6 +140,7 @@ std::string EncodeChunk(const EncodedTile& tile) {
   out.I32(tile.width);
   out.I32(tile.height);
   out.I32(tile.samples);
+  out.I32(tile.tile_size);
   out.U64(tile.chunk.size());
   out.Bytes(tile.chunk.data(), tile.chunk.size());
   out.U64(Checksum(std::string_view(bytes).substr(0, size - kChecksumBytes)));
@@ -178,8 +179,11 @@ absl::StatusOr<Contents> Parse(const std::string& bytes, const std::string& path
     absl::StatusOr<PdsmTile> functions = DecodeFunctions(bytes, path);
     if (!functions.ok()) return functions.status();
     Contents contents;
-    contents.encoded = {functions->x0,     functions->y0,      functions->width,
-                        functions->height, functions->samples, {}};
+    contents.encoded.x0 = functions->x0;
+    contents.encoded.y0 = functions->y0;
+    contents.encoded.width = functions->width;
+    contents.encoded.height = functions->height;
+    contents.encoded.samples = functions->samples;
     contents.functions = *std::move(functions);
     return contents;
   }
@@ -195,6 +199,7 @@ absl::StatusOr<Contents> Parse(const std::string& bytes, const std::string& path
   tile.width = in.I32();
   tile.height = in.I32();
   tile.samples = in.I32();
+  tile.tile_size = in.I32();
   const uint64_t chunk_bytes = in.U64();
   // Sizes first, for a better message than a checksum mismatch on a truncated file.
   if (chunk_bytes != size - kChunkHeaderBytes - kChecksumBytes) {
@@ -295,9 +300,10 @@ absl::StatusOr<PdsmTile> DecodeFunctions(const std::string& bytes, const std::st
 
 }  // namespace
 
-absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile, FileSystem* fs) {
+absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile, int tile_size,
+                           FileSystem* fs) {
   if (absl::Status s = CheckTileForWrite(tile, path); !s.ok()) return s;
-  absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(tile);
+  absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(tile, tile_size);
   if (!encoded.ok()) {
     return absl::Status(encoded.status().code(),
                         absl::StrCat(path, ": ", encoded.status().message()));
@@ -318,14 +324,14 @@ absl::StatusOr<PdsmTile> DecodeTileFile(const std::string& bytes, const std::str
   return DecodeTileChunk(contents->encoded, absl::StrCat("tile file ", label));
 }
 
-absl::StatusOr<EncodedTile> ReadTileChunk(const std::string& path) {
+absl::StatusOr<EncodedTile> ReadTileChunk(const std::string& path, int tile_size) {
   absl::StatusOr<std::string> bytes = ReadWholeFile(path);
   if (!bytes.ok()) return bytes.status();
   absl::StatusOr<Contents> contents = Parse(*bytes, path);
   if (!contents.ok()) return contents.status();
   if (!contents->functions) return std::move(contents->encoded);
   // A file of an earlier build: encoded now, as the file will hold it.
-  absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(*contents->functions);
+  absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(*contents->functions, tile_size);
   if (!encoded.ok()) {
     return absl::DataLossError(absl::StrCat("tile file ", path, ": ", encoded.status().message()));
   }

@@ -6,6 +6,7 @@
 //   uint32   version (kTileFileVersion)
 //   int32    x0, y0, width, height
 //   int32    samples         the tile's light samples (adaptive bakes); 0 in a fixed-count bake
+//   int32    tile_size       the grid's tile size, which the chunk was encoded with
 //   uint64   chunk_bytes
 //   char     chunk[chunk_bytes]   the tile as the PDSM file stores it: OpenEXR's compressed
 //                            deep tile, tile-local (core/pdsm/tile_chunk.h), so that the job's
@@ -41,7 +42,9 @@ inline constexpr uint32_t kTileFileVersion = 3;
 // PDSM holds (CheckTileFunctions); otherwise the errno
 // status of the failing step (e.g. RESOURCE_EXHAUSTED for a full disk), naming the path.
 // `fs` null means FileSystem::Default().
-absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile, FileSystem* fs = nullptr);
+// `tile_size`: the grid's (tile_chunk.h).
+absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile, int tile_size,
+                           FileSystem* fs = nullptr);
 
 // Reads a tile written by WriteTileFile. Sizes in the file are checked against the file's
 // length before anything is allocated from them, so a corrupt file costs no more memory than
@@ -55,8 +58,8 @@ absl::StatusOr<PdsmTile> ReadTileFile(const std::string& path);
 absl::StatusOr<PdsmTile> DecodeTileFile(const std::string& bytes, const std::string& label);
 
 // The tile as the PDSM file will hold it, without decoding it (a file of version 1 or 2 is
-// encoded now). Errors as ReadTileFile's.
-absl::StatusOr<EncodedTile> ReadTileChunk(const std::string& path);
+// encoded now, in tiles of `tile_size`). Errors as ReadTileFile's.
+absl::StatusOr<EncodedTile> ReadTileChunk(const std::string& path, int tile_size);
 
 // `tile` in the layout of versions 1 and 2, as earlier builds wrote it: for tests that this
 // build still reads them.

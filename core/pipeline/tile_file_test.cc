@@ -29,8 +29,10 @@ using ::testing::HasSubstr;
 
 // Offsets of the layout (see tile_file.h).
 constexpr size_t kVersionAt = 8;
-constexpr size_t kChunkBytesAt = 32;
-constexpr size_t kChunkAt = 40;
+constexpr size_t kChunkBytesAt = 36;
+constexpr size_t kChunkAt = 44;
+// The grid's tile size the tiles below are cells of.
+constexpr int kTileSize = 64;
 // Of versions 1 and 2.
 constexpr size_t kOffsetCountAt = 28;
 constexpr size_t kVertexCountAt = 36;
@@ -87,18 +89,18 @@ TEST(TileFileTest, RoundTripIsExact) {
   TempDir dir;
   const std::string path = dir.File("tile_7.bin");
   const PdsmTile tile = SmallTile();
-  ASSERT_TRUE(WriteTileFile(path, tile).ok());
+  ASSERT_TRUE(WriteTileFile(path, tile, kTileSize).ok());
   absl::StatusOr<PdsmTile> read = ReadTileFile(path);
   ASSERT_TRUE(read.ok()) << read.status();
   ExpectSameTile(*read, tile);
   // The file holds the tile as the PDSM will: its chunk, not its vertices.
-  absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(tile);
+  absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(tile, kTileSize);
   ASSERT_TRUE(encoded.ok()) << encoded.status();
   const std::string bytes = ReadBytes(path);
   EXPECT_EQ(bytes[kVersionAt], 3);
   EXPECT_EQ(bytes.size(), kChunkAt + encoded->chunk.size() + 8u);
   EXPECT_EQ(bytes.substr(kChunkAt, encoded->chunk.size()), encoded->chunk);
-  absl::StatusOr<EncodedTile> chunk = ReadTileChunk(path);
+  absl::StatusOr<EncodedTile> chunk = ReadTileChunk(path, kTileSize);
   ASSERT_TRUE(chunk.ok()) << chunk.status();
   EXPECT_EQ(chunk->chunk, encoded->chunk);
   EXPECT_EQ(chunk->x0, 64);
@@ -109,14 +111,14 @@ TEST(TileFileTest, AdaptiveTileKeepsItsSampleCount) {
   TempDir dir;
   PdsmTile tile = SmallTile();
   tile.samples = 48;
-  ASSERT_TRUE(WriteTileFile(dir.File("a"), tile).ok());
+  ASSERT_TRUE(WriteTileFile(dir.File("a"), tile, kTileSize).ok());
   absl::StatusOr<PdsmTile> read = ReadTileFile(dir.File("a"));
   ASSERT_TRUE(read.ok()) << read.status();
   ExpectSameTile(*read, tile);
   EXPECT_EQ(read->samples, 48);
-  EXPECT_EQ(ReadTileChunk(dir.File("a"))->samples, 48);
+  EXPECT_EQ(ReadTileChunk(dir.File("a"), kTileSize)->samples, 48);
   tile.samples = 0;
-  ASSERT_TRUE(WriteTileFile(dir.File("f"), tile).ok());
+  ASSERT_TRUE(WriteTileFile(dir.File("f"), tile, kTileSize).ok());
   EXPECT_EQ(ReadTileFile(dir.File("f"))->samples, 0);
 }
 
@@ -134,9 +136,9 @@ TEST(TileFileTest, EarlierVersionsAreStillRead) {
     absl::StatusOr<PdsmTile> read = ReadTileFile(dir.File("old"));
     ASSERT_TRUE(read.ok()) << read.status();
     ExpectSameTile(*read, tile);
-    absl::StatusOr<EncodedTile> chunk = ReadTileChunk(dir.File("old"));
+    absl::StatusOr<EncodedTile> chunk = ReadTileChunk(dir.File("old"), kTileSize);
     ASSERT_TRUE(chunk.ok()) << chunk.status();
-    EXPECT_EQ(chunk->chunk, EncodeTileChunk(tile)->chunk);
+    EXPECT_EQ(chunk->chunk, EncodeTileChunk(tile, kTileSize)->chunk);
     EXPECT_EQ(chunk->samples, samples);
     for (size_t cut = 1; cut < 12; ++cut) {
       WriteText(dir.File("cut"), bytes.substr(0, bytes.size() - cut));
@@ -153,7 +155,7 @@ TEST(TileFileTest, RoundTripOfTileWithoutVertices) {
   tile.width = 4;
   tile.height = 3;
   tile.offsets.assign(13, 0);
-  ASSERT_TRUE(WriteTileFile(dir.File("empty"), tile).ok());
+  ASSERT_TRUE(WriteTileFile(dir.File("empty"), tile, kTileSize).ok());
   absl::StatusOr<PdsmTile> read = ReadTileFile(dir.File("empty"));
   ASSERT_TRUE(read.ok()) << read.status();
   ExpectSameTile(*read, tile);
@@ -164,7 +166,7 @@ TEST(TileFileTest, RoundTripOfZeroPixelTile) {
   TempDir dir;
   PdsmTile tile;
   tile.offsets = {0};
-  ASSERT_TRUE(WriteTileFile(dir.File("zero"), tile).ok());
+  ASSERT_TRUE(WriteTileFile(dir.File("zero"), tile, kTileSize).ok());
   absl::StatusOr<PdsmTile> read = ReadTileFile(dir.File("zero"));
   ASSERT_TRUE(read.ok()) << read.status();
   ExpectSameTile(*read, tile);
@@ -184,7 +186,7 @@ TEST(TileFileTest, RoundTripOfLargerTile) {
     }
     tile.offsets.push_back(tile.vertices.size());
   }
-  ASSERT_TRUE(WriteTileFile(dir.File("big"), tile).ok());
+  ASSERT_TRUE(WriteTileFile(dir.File("big"), tile, kTileSize).ok());
   absl::StatusOr<PdsmTile> read = ReadTileFile(dir.File("big"));
   ASSERT_TRUE(read.ok()) << read.status();
   ExpectSameTile(*read, tile);
@@ -194,10 +196,10 @@ TEST(TileFileTest, OverwritesAndLeavesNoTemporaryFile) {
   TempDir dir;
   const std::string path = dir.File("tile");
   PdsmTile first = SmallTile();
-  ASSERT_TRUE(WriteTileFile(path, first).ok());
+  ASSERT_TRUE(WriteTileFile(path, first, kTileSize).ok());
   PdsmTile second = SmallTile();
   second.vertices[0].a = 0.5f;
-  ASSERT_TRUE(WriteTileFile(path, second).ok());
+  ASSERT_TRUE(WriteTileFile(path, second, kTileSize).ok());
   EXPECT_THAT(FilesIn(dir.path()), ::testing::ElementsAre("tile"));
   absl::StatusOr<PdsmTile> read = ReadTileFile(path);
   ASSERT_TRUE(read.ok()) << read.status();
@@ -212,7 +214,7 @@ TEST(TileFileTest, TemporaryFileLeftByACrashIsNotTheTile) {
   const std::string crashed = path + ".tmp-AbC123";
   WriteText(crashed, "left over by a crash");
   EXPECT_EQ(ReadTileFile(path).status().code(), absl::StatusCode::kNotFound);
-  ASSERT_TRUE(WriteTileFile(path, SmallTile()).ok());
+  ASSERT_TRUE(WriteTileFile(path, SmallTile(), kTileSize).ok());
   // Unlocked, so its writer is gone: the first write in the folder sweeps it (atomic_file.h).
   EXPECT_FALSE(std::filesystem::exists(crashed));
   absl::StatusOr<PdsmTile> read = ReadTileFile(path);
@@ -223,12 +225,12 @@ TEST(TileFileTest, TemporaryFileLeftByACrashIsNotTheTile) {
 TEST(TileFileTest, EveryFileSystemFailureLeavesThePreviousTile) {
   TempDir dir;
   const std::string path = dir.File("tile_3.tile");
-  ASSERT_TRUE(WriteTileFile(path, SmallTile()).ok());
+  ASSERT_TRUE(WriteTileFile(path, SmallTile(), kTileSize).ok());
   PdsmTile next = SmallTile();
   next.vertices[1].a = 0.125f;
   next.samples = 12;
   ::pdsm::testing::ExpectWriteFailuresLeaveTargetIntact(
-      path, dir.path(), [&](FileSystem* fs) { return WriteTileFile(path, next, fs); });
+      path, dir.path(), [&](FileSystem* fs) { return WriteTileFile(path, next, kTileSize, fs); });
   absl::StatusOr<PdsmTile> read = ReadTileFile(path);
   ASSERT_TRUE(read.ok()) << read.status();
   ExpectSameTile(*read, SmallTile());
@@ -243,7 +245,7 @@ TEST(TileFileTest, MissingFileIsNotFound) {
 
 TEST(TileFileTest, WriteIntoMissingFolderFailsCleanly) {
   TempDir dir;
-  const absl::Status s = WriteTileFile(dir.File("no/such/folder/tile"), SmallTile());
+  const absl::Status s = WriteTileFile(dir.File("no/such/folder/tile"), SmallTile(), kTileSize);
   EXPECT_EQ(s.code(), absl::StatusCode::kNotFound) << s;
   EXPECT_THAT(s.message(), HasSubstr("no/such/folder/tile"));
 }
@@ -260,7 +262,7 @@ TEST(TileFileTest, RejectsInconsistentTileOnWrite) {
   PdsmTile negative = SmallTile();
   negative.width = -3;
   for (const PdsmTile& tile : {wrong_count, not_spanning, decreasing, negative}) {
-    EXPECT_EQ(WriteTileFile(path, tile).code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_EQ(WriteTileFile(path, tile, kTileSize).code(), absl::StatusCode::kInvalidArgument);
   }
   EXPECT_TRUE(FilesIn(dir.path()).empty());
 }
@@ -268,7 +270,7 @@ TEST(TileFileTest, RejectsInconsistentTileOnWrite) {
 TEST(TileFileTest, TruncationAtEveryByteIsDataLoss) {
   TempDir dir;
   const std::string good = dir.File("good");
-  ASSERT_TRUE(WriteTileFile(good, SmallTile()).ok());
+  ASSERT_TRUE(WriteTileFile(good, SmallTile(), kTileSize).ok());
   const std::string bytes = ReadBytes(good);
   const std::string path = dir.File("cut");
   for (size_t n = 0; n < bytes.size(); ++n) {
@@ -282,7 +284,7 @@ TEST(TileFileTest, TruncationAtEveryByteIsDataLoss) {
 TEST(TileFileTest, TrailingBytesAreDataLoss) {
   TempDir dir;
   const std::string path = dir.File("tile");
-  ASSERT_TRUE(WriteTileFile(path, SmallTile()).ok());
+  ASSERT_TRUE(WriteTileFile(path, SmallTile(), kTileSize).ok());
   WriteText(path, ReadBytes(path) + std::string(8, '\0'));
   EXPECT_EQ(ReadTileFile(path).status().code(), absl::StatusCode::kDataLoss);
 }
@@ -290,7 +292,7 @@ TEST(TileFileTest, TrailingBytesAreDataLoss) {
 TEST(TileFileTest, FlippedBitAnywhereIsDataLoss) {
   TempDir dir;
   const std::string good = dir.File("good");
-  ASSERT_TRUE(WriteTileFile(good, SmallTile()).ok());
+  ASSERT_TRUE(WriteTileFile(good, SmallTile(), kTileSize).ok());
   const std::string bytes = ReadBytes(good);
   const std::string path = dir.File("flipped");
   for (size_t i = 0; i < bytes.size(); ++i) {
@@ -308,7 +310,7 @@ TEST(TileFileTest, FlippedBitAnywhereIsDataLoss) {
 TEST(TileFileTest, ChecksumMismatchIsNamed) {
   TempDir dir;
   const std::string path = dir.File("tile");
-  ASSERT_TRUE(WriteTileFile(path, SmallTile()).ok());
+  ASSERT_TRUE(WriteTileFile(path, SmallTile(), kTileSize).ok());
   std::string bytes = ReadBytes(path);
   bytes[kChunkAt + 20] ^= 0x10;  // in the chunk
   WriteText(path, bytes);
@@ -329,7 +331,7 @@ TEST(TileFileTest, NotATileFile) {
 TEST(TileFileTest, HugeSizesUnderValidChecksumAreDataLoss) {
   TempDir dir;
   const std::string good = dir.File("good");
-  ASSERT_TRUE(WriteTileFile(good, SmallTile()).ok());
+  ASSERT_TRUE(WriteTileFile(good, SmallTile(), kTileSize).ok());
   const std::string path = dir.File("huge");
   for (const uint64_t count : {uint64_t{1} << 40, uint64_t{1} << 61, ~uint64_t{0}}) {
     std::string bytes = ReadBytes(good);
@@ -384,7 +386,7 @@ TEST(TileFileTest, BadOffsetsOfAnEarlierVersionUnderValidChecksumAreDataLoss) {
 TEST(TileFileTest, NewerVersionIsFailedPrecondition) {
   TempDir dir;
   const std::string path = dir.File("tile");
-  ASSERT_TRUE(WriteTileFile(path, SmallTile()).ok());
+  ASSERT_TRUE(WriteTileFile(path, SmallTile(), kTileSize).ok());
   std::string bytes = ReadBytes(path);
   bytes[kVersionAt] = static_cast<char>(kTileFileVersion + 1);
   Reseal(&bytes);

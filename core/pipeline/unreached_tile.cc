@@ -40,4 +40,6 @@ UnreachedTile MakeUnreachedTile(const BakePlan& plan, int tile_index) {
   return out;
 }
 
+int UnreachedTileSamples(const BakePlan& plan) { return MakeUnreachedTile(plan, 0).tile.samples; }
+
 }  // namespace pdsm

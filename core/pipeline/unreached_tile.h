@@ -33,6 +33,12 @@ struct UnreachedTile {
 // the same bytes the engine stores. Pure; thread-safe.
 UnreachedTile MakeUnreachedTile(const BakePlan& plan, int tile_index);
 
+// What every such tile of `plan` holds besides its rectangle: MakeUnreachedTile's
+// tile.samples, the same for all of them (the pilot's samples in an adaptive bake, else 0),
+// found by making one. For writers of many such tiles (a sparse world has 2^18), which then
+// need no assembly each: the tile has no vertex (tile_chunk.h's EmptyTileChunks).
+int UnreachedTileSamples(const BakePlan& plan);
+
 }  // namespace pdsm
 
 #endif  // PDSM_CORE_PIPELINE_UNREACHED_TILE_H_

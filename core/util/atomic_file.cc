@@ -44,7 +44,9 @@ AtomicFile::AtomicFile(std::string path, FileSystem* fs, std::unique_ptr<Writabl
       file_(std::move(file)),
       cleanup_handle_(RegisterTempFile(temp_path_)) {}
 
-AtomicFile::~AtomicFile() {
+AtomicFile::~AtomicFile() { Abandon(); }
+
+void AtomicFile::Abandon() {
   if (!committed_ && status_.ok()) Fail(absl::CancelledError("abandoned")).IgnoreError();
 }
 

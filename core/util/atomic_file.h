@@ -55,6 +55,10 @@ class AtomicFile {
   // that reads back its own temporary file.
   absl::Status Flush();
 
+  // Gives the write up now, as destruction would: the temporary file goes, and every later
+  // call returns CANCELLED without touching the file system (a format library that writes its
+  // trailer from its destructor then writes nothing). No-op once committed or failed.
+  void Abandon();
   // Syncs and closes the temporary file, renames it onto `path`, syncs the folder.
   // REQUIRES: not committed yet. A failure before the rename leaves `path` as it was; a
   // failure of the folder sync comes after it, so `path` then holds the whole new file but

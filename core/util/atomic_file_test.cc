@@ -127,6 +127,25 @@ TEST(AtomicFile, AbandonedFileLeavesNothing) {
   EXPECT_EQ(ReadBytes(path), "old");
 }
 
+// Abandon() is destruction ahead of time: the temporary file goes now, and what a format
+// library writes afterwards (OpenEXR's offset table, from its destructor) is refused.
+TEST(AtomicFile, AbandonDropsTheFileNowAndRefusesLaterWrites) {
+  TempDir dir;
+  const std::string path = dir.File("out.bin");
+  ASSERT_TRUE(WriteFileAtomically(path, "old").ok());
+  absl::StatusOr<std::unique_ptr<AtomicFile>> file = AtomicFile::Create(path);
+  ASSERT_TRUE(file.ok()) << file.status();
+  ASSERT_TRUE((*file)->Append("new, never committed").ok());
+  (*file)->Abandon();
+  EXPECT_THAT(FilesUnder(dir.path()), ElementsAre("out.bin"));
+  EXPECT_EQ((*file)->Append("trailer").code(), absl::StatusCode::kCancelled);
+  EXPECT_EQ((*file)->Commit().code(), absl::StatusCode::kCancelled);
+  (*file)->Abandon();  // again: nothing
+  file->reset();
+  EXPECT_THAT(FilesUnder(dir.path()), ElementsAre("out.bin"));
+  EXPECT_EQ(ReadBytes(path), "old");
+}
+
 // The first error removes the temporary file at once (a writer that goes on failing, as
 // OpenEXR's destructor does, writes nothing more) and every later call returns it.
 TEST(AtomicFile, FirstErrorIsStickyAndRemovesTheTemporaryFile) {

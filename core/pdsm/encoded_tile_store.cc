@@ -1,0 +1,131 @@
+#include "core/pdsm/encoded_tile_store.h"
+
+#include <algorithm>
+#include <limits>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "core/util/file_system.h"
+
+namespace pdsm {
+
+EncodedTileStore::EncodedTileStore(const PdsmHeader& header, std::string output_path,
+                                   FileSystem* fs)
+    : width_(header.geometry.width),
+      height_(header.geometry.height),
+      tile_size_(header.tile_size),
+      tiles_x_((header.geometry.width + header.tile_size - 1) / header.tile_size),
+      output_path_(std::move(output_path)),
+      fs_(fs != nullptr ? fs : FileSystem::Default()),
+      empty_(header.tile_size),
+      places_(static_cast<size_t>(tiles_x_) *
+              ((header.geometry.height + header.tile_size - 1) / header.tile_size)) {}
+
+absl::Status EncodedTileStore::ForOutput(const absl::Status& status) const {
+  return absl::Status(status.code(), absl::StrCat(status.message(), " (for ", output_path_, ")"));
+}
+
+absl::StatusOr<size_t> EncodedTileStore::CellIndex(int x0, int y0, int width, int height) const {
+  const bool is_cell = x0 >= 0 && y0 >= 0 && x0 < width_ && y0 < height_ && x0 % tile_size_ == 0 &&
+                       y0 % tile_size_ == 0 && width == std::min(tile_size_, width_ - x0) &&
+                       height == std::min(tile_size_, height_ - y0);
+  if (!is_cell) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "tile at (%d, %d) size %dx%d is not a cell of the %dx%d grid of %d-pixel tiles", x0, y0,
+        width, height, width_, height_, tile_size_));
+  }
+  return static_cast<size_t>(y0 / tile_size_) * tiles_x_ + static_cast<size_t>(x0 / tile_size_);
+}
+
+absl::Status EncodedTileStore::Put(const PdsmTile& tile) {
+  absl::StatusOr<size_t> index = CellIndex(tile.x0, tile.y0, tile.width, tile.height);
+  if (!index.ok()) return index.status();
+  const size_t pixels = static_cast<size_t>(tile.width) * tile.height;
+  if (tile.vertices.empty() && tile.offsets.size() == pixels + 1 && tile.offsets.back() == 0) {
+    return PutWithoutVertices(tile.x0, tile.y0, tile.samples);
+  }
+  // Encoded before the lock: this is the bake's compression, on the thread that finished it.
+  absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(tile, tile_size_);
+  if (!encoded.ok()) return encoded.status();
+  if (encoded->chunk.size() > std::numeric_limits<uint32_t>::max()) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("tile at (%d, %d) compresses to %d bytes, more than a chunk holds", tile.x0,
+                        tile.y0, encoded->chunk.size()));
+  }
+  return Keep(*index, Place{0, static_cast<uint32_t>(encoded->chunk.size()), tile.samples, true},
+              encoded->chunk, tile.x0, tile.y0);
+}
+
+absl::Status EncodedTileStore::PutWithoutVertices(int x0, int y0, int samples) {
+  const int width = std::min(tile_size_, width_ - x0), height = std::min(tile_size_, height_ - y0);
+  absl::StatusOr<size_t> index = CellIndex(x0, y0, width, height);
+  if (!index.ok()) return index.status();
+  // Encoded once per size, so that WriteTo finds it and a failure shows here.
+  if (absl::StatusOr<std::string> empty = empty_.Chunk(width, height); !empty.ok()) {
+    return empty.status();
+  }
+  return Keep(*index, Place{0, 0, samples, true}, "", x0, y0);
+}
+
+absl::Status EncodedTileStore::Keep(size_t index, Place place, const std::string& chunk, int x0,
+                                    int y0) {
+  absl::MutexLock lock(&mu_);
+  if (!error_.ok()) return error_;
+  if (places_[index].present) {
+    return absl::InvalidArgumentError(absl::StrFormat("tile at (%d, %d) stored twice", x0, y0));
+  }
+  if (!chunk.empty()) {
+    if (!scratch_) {
+      absl::StatusOr<std::unique_ptr<ScratchFile>> scratch =
+          fs_->NewScratchFile(ParentDir(output_path_));
+      if (!scratch.ok()) return error_ = ForOutput(scratch.status());
+      scratch_ = *std::move(scratch);
+    }
+    if (absl::Status s = scratch_->WriteAt(scratch_end_, chunk); !s.ok()) {
+      return error_ = ForOutput(s);
+    }
+    place.offset = scratch_end_;
+    scratch_end_ += chunk.size();
+  }
+  places_[index] = place;
+  return absl::OkStatus();
+}
+
+absl::Status EncodedTileStore::WriteTo(PdsmWriter* writer) {
+  absl::MutexLock lock(&mu_);
+  if (!error_.ok()) return error_;
+  // Copied under the lock (16 bytes a tile), which stays held until the writer is done: the
+  // analysis does not follow a lock into the lambda.
+  const std::vector<Place> places = places_;
+  ScratchFile* const scratch = scratch_.get();
+  return writer->WriteEncodedTiles([&](int64_t index) -> absl::StatusOr<EncodedTile> {
+    const Place& place = places.at(static_cast<size_t>(index));
+    const int x0 = static_cast<int>(index % tiles_x_) * tile_size_;
+    const int y0 = static_cast<int>(index / tiles_x_) * tile_size_;
+    EncodedTile tile{x0,
+                     y0,
+                     std::min(tile_size_, width_ - x0),
+                     std::min(tile_size_, height_ - y0),
+                     place.samples,
+                     tile_size_,
+                     {}};
+    if (!place.present) {
+      return absl::FailedPreconditionError(
+          absl::StrFormat("tile at (%d, %d) was never stored", x0, y0));
+    }
+    if (place.size == 0) {
+      absl::StatusOr<std::string> empty = empty_.Chunk(tile.width, tile.height);
+      if (!empty.ok()) return empty.status();
+      tile.chunk = *std::move(empty);
+      return tile;
+    }
+    tile.chunk.resize(place.size);
+    if (absl::Status s = scratch->ReadAt(place.offset, place.size, tile.chunk.data()); !s.ok()) {
+      return ForOutput(s);
+    }
+    return tile;
+  });
+}
+
+}  // namespace pdsm
