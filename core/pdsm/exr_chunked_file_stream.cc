@@ -40,14 +40,18 @@ absl::StatusOr<std::unique_ptr<ExrChunkedFileStream>> ExrChunkedFileStream::Crea
     table.U64(prefix.size() + (static_cast<uint64_t>(i) << kChunkStrideBits));
   }
   return std::unique_ptr<ExrChunkedFileStream>(
-      new ExrChunkedFileStream(std::move(prefix), std::move(source), name));
+      new ExrChunkedFileStream(std::move(prefix), tiles, std::move(source), name));
 }
 
-ExrChunkedFileStream::ExrChunkedFileStream(std::string prefix, ChunkSource source, const char* name)
-    : Imf::IStream(name), prefix_(std::move(prefix)), source_(std::move(source)) {}
+ExrChunkedFileStream::ExrChunkedFileStream(std::string prefix, int64_t tiles, ChunkSource source,
+                                           const char* name)
+    : Imf::IStream(name), prefix_(std::move(prefix)), tiles_(tiles), source_(std::move(source)) {}
 
 void ExrChunkedFileStream::Hold(int64_t index) {
   if (index == held_index_) return;
+  if (index >= tiles_) {
+    throw Iex::InputExc(absl::StrCat(fileName(), ": read past the last tile's chunk"));
+  }
   held_index_ = -1;
   absl::StatusOr<std::string> chunk = source_(index);
   if (!chunk.ok()) {

@@ -33,8 +33,8 @@ class ExrChunkedFileStream final : public Imf::IStream {
                                                                       ChunkSource source,
                                                                       const char* name);
 
-  // Throws Iex::InputExc for bytes outside the header and the chunks, and when the source
-  // fails (error() then says why).
+  // Throws Iex::InputExc for bytes outside the header and the chunks (the source is asked only
+  // for tiles in [0, tiles)), and when the source fails (error() then says why).
   bool read(char c[], int n) override;
   uint64_t tellg() override { return position_; }
   void seekg(uint64_t pos) override { position_ = pos; }
@@ -43,11 +43,12 @@ class ExrChunkedFileStream final : public Imf::IStream {
   const absl::Status& error() const { return error_; }
 
  private:
-  ExrChunkedFileStream(std::string prefix, ChunkSource source, const char* name);
+  ExrChunkedFileStream(std::string prefix, int64_t tiles, ChunkSource source, const char* name);
   // Makes tile `index`'s chunk the one held, fetching it unless it is already.
   void Hold(int64_t index);
 
   std::string prefix_;  // the header and the offset table
+  const int64_t tiles_;
   ChunkSource source_;
   uint64_t position_ = 0;
   int64_t held_index_ = -1;
