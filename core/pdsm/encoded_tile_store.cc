@@ -6,6 +6,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "core/pdsm/pdsm_exr_tiles.h"
 #include "core/util/file_system.h"
 
 namespace pdsm {
@@ -15,27 +16,28 @@ EncodedTileStore::EncodedTileStore(const PdsmHeader& header, std::string output_
     : width_(header.geometry.width),
       height_(header.geometry.height),
       tile_size_(header.tile_size),
-      tiles_x_((header.geometry.width + header.tile_size - 1) / header.tile_size),
       output_path_(std::move(output_path)),
       fs_(fs != nullptr ? fs : FileSystem::Default()),
       empty_(header.tile_size),
-      places_(static_cast<size_t>(tiles_x_) *
-              ((header.geometry.height + header.tile_size - 1) / header.tile_size)) {}
+      places_(static_cast<size_t>(Grid().Count())) {}
+
+TileGrid EncodedTileStore::Grid() const { return TileGrid{width_, height_, tile_size_}; }
 
 absl::Status EncodedTileStore::ForOutput(const absl::Status& status) const {
   return absl::Status(status.code(), absl::StrCat(status.message(), " (for ", output_path_, ")"));
 }
 
 absl::StatusOr<size_t> EncodedTileStore::CellIndex(int x0, int y0, int width, int height) const {
-  const bool is_cell = x0 >= 0 && y0 >= 0 && x0 < width_ && y0 < height_ && x0 % tile_size_ == 0 &&
-                       y0 % tile_size_ == 0 && width == std::min(tile_size_, width_ - x0) &&
-                       height == std::min(tile_size_, height_ - y0);
+  const TileGrid grid = Grid();
+  const int ts = grid.tile_size;
+  const bool is_cell = x0 >= 0 && y0 >= 0 && x0 < grid.width && y0 < grid.height && x0 % ts == 0 &&
+                       y0 % ts == 0 && width == grid.TileWidth(x0) && height == grid.TileHeight(y0);
   if (!is_cell) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "tile at (%d, %d) size %dx%d is not a cell of the %dx%d grid of %d-pixel tiles", x0, y0,
-        width, height, width_, height_, tile_size_));
+        width, height, grid.width, grid.height, ts));
   }
-  return static_cast<size_t>(y0 / tile_size_) * tiles_x_ + static_cast<size_t>(x0 / tile_size_);
+  return static_cast<size_t>(y0 / ts * grid.TilesX() + x0 / ts);
 }
 
 absl::Status EncodedTileStore::Put(const PdsmTile& tile) {
@@ -58,7 +60,8 @@ absl::Status EncodedTileStore::Put(const PdsmTile& tile) {
 }
 
 absl::Status EncodedTileStore::PutWithoutVertices(int x0, int y0, int samples) {
-  const int width = std::min(tile_size_, width_ - x0), height = std::min(tile_size_, height_ - y0);
+  const TileGrid grid = Grid();
+  const int width = grid.TileWidth(x0), height = grid.TileHeight(y0);
   absl::StatusOr<size_t> index = CellIndex(x0, y0, width, height);
   if (!index.ok()) return index.status();
   // Encoded once per size, so that WriteTo finds it and a failure shows here.
@@ -99,16 +102,12 @@ absl::Status EncodedTileStore::WriteTo(PdsmWriter* writer) {
   // analysis does not follow a lock into the lambda.
   const std::vector<Place> places = places_;
   ScratchFile* const scratch = scratch_.get();
+  const TileGrid grid = Grid();
   return writer->WriteEncodedTiles([&](int64_t index) -> absl::StatusOr<EncodedTile> {
     const Place& place = places.at(static_cast<size_t>(index));
-    const int x0 = static_cast<int>(index % tiles_x_) * tile_size_;
-    const int y0 = static_cast<int>(index / tiles_x_) * tile_size_;
-    EncodedTile tile{x0,
-                     y0,
-                     std::min(tile_size_, width_ - x0),
-                     std::min(tile_size_, height_ - y0),
-                     place.samples,
-                     tile_size_,
+    const int x0 = static_cast<int>(index % grid.TilesX()) * grid.tile_size;
+    const int y0 = static_cast<int>(index / grid.TilesX()) * grid.tile_size;
+    EncodedTile tile{x0, y0, grid.TileWidth(x0), grid.TileHeight(y0), place.samples, grid.tile_size,
                      {}};
     if (!place.present) {
       return absl::FailedPreconditionError(

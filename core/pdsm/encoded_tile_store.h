@@ -26,6 +26,8 @@
 
 namespace pdsm {
 
+struct TileGrid;
+
 class EncodedTileStore {
  public:
   // The grid of `header` (its size and tile size), for the part written to `output_path`:
@@ -66,10 +68,14 @@ class EncodedTileStore {
   // Errors of the scratch file name the output.
   absl::Status Keep(size_t index, Place place, const std::string& chunk, int x0, int y0);
 
-  const int width_, height_, tile_size_, tiles_x_;
+  // The grid (core/pdsm/pdsm_exr_tiles.h, which OpenEXR's headers come with: kept out of
+  // this header, which the worker includes).
+  TileGrid Grid() const;
+
+  const int width_, height_, tile_size_;
   const std::string output_path_;
   FileSystem* const fs_;
-  EmptyTileChunks empty_;  // in tiles of tile_size_
+  EmptyTileChunks empty_;  // in tiles of the grid's size
 
   absl::Mutex mu_;
   std::vector<Place> places_ ABSL_GUARDED_BY(mu_);
