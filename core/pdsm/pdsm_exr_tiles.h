@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "absl/status/status.h"
+#include "absl/strings/str_format.h"
 #include "absl/strings/string_view.h"
 #include "core/pdsm/pdsm_exr_header.h"
 #include "core/pdsm/pdsm_image.h"
@@ -75,6 +76,37 @@ struct DeepTileBuffers {
                           sizeof(char*) * tile_width, sizeof(Vertex), 1, 1, 0.0, true, true);
   }
 };
+
+// Reads tile (tile_x, tile_y) of `exr` (an Imf::DeepTiledInputFile or DeepTiledInputPart)
+// into `tile`, whose rectangle is already set: its sample counts, then its vertices unless it
+// has none (an all-lit tile: OpenEXR would still walk and copy every pixel of it). DATA_LOSS
+// naming `label` and the tile when the counts sum past kMaxVerticesPerTile, checked before
+// anything is allocated from them (a corrupt file's are any size). OpenEXR's exceptions
+// propagate: the caller turns them into a status (StatusFromCurrentException).
+template <typename DeepTiledInput>
+absl::Status ReadDeepTile(DeepTiledInput& exr, int tile_x, int tile_y, absl::string_view label,
+                          PdsmTile* tile) {
+  const size_t pixels = static_cast<size_t>(tile->width) * tile->height;
+  DeepTileBuffers buffers;
+  buffers.Resize(pixels);
+  exr.setFrameBuffer(buffers.FrameBuffer(tile->width));
+  exr.readPixelSampleCount(tile_x, tile_y);
+  tile->offsets.assign(pixels + 1, 0);
+  for (size_t p = 0; p < pixels; ++p) tile->offsets[p + 1] = tile->offsets[p] + buffers.counts[p];
+  if (tile->offsets.back() > kMaxVerticesPerTile) {
+    return absl::DataLossError(
+        absl::StrFormat("%s: tile (%d, %d) counts %d vertices, more than a tile holds (%d)", label,
+                        tile_x, tile_y, tile->offsets.back(), kMaxVerticesPerTile));
+  }
+  if (tile->offsets.back() == 0) return absl::OkStatus();
+  tile->vertices.resize(tile->offsets.back());
+  for (size_t p = 0; p < pixels; ++p) {
+    buffers.Set(p, tile->vertices.data(), tile->offsets[p], tile->offsets[p + 1]);
+  }
+  exr.setFrameBuffer(buffers.FrameBuffer(tile->width));
+  exr.readTile(tile_x, tile_y);
+  return absl::OkStatus();
+}
 
 }  // namespace pdsm
 

@@ -642,35 +642,10 @@ absl::StatusOr<PdsmTile> PdsmReader::ReadTile(int part, int tile_x, int tile_y) 
   if (!header.tile_samples.empty()) {
     tile.samples = header.TileSamples(static_cast<size_t>(tile_y * grid.TilesX() + tile_x));
   }
-  const size_t pixels = static_cast<size_t>(tile.width) * tile.height;
-  DeepTileBuffers buffers;
-  buffers.Resize(pixels);
   absl::MutexLock lock(read_mu_.get());
   try {
     Imf::DeepTiledInputPart exr_part(*file_, part);
-    exr_part.setFrameBuffer(buffers.FrameBuffer(tile.width));
-    exr_part.readPixelSampleCount(tile_x, tile_y);
-    tile.offsets.assign(pixels + 1, 0);
-    for (size_t p = 0; p < pixels; ++p) {
-      tile.offsets[p + 1] = tile.offsets[p] + buffers.counts[p];
-    }
-    // Checked before anything is allocated from the counts (a corrupt file's are any size).
-    if (tile.offsets.back() > kMaxVerticesPerTile) {
-      return absl::DataLossError(
-          absl::StrFormat("%s: tile (%d, %d) counts %d vertices, more than "
-                          "a tile holds (%d)",
-                          path_, tile_x, tile_y, tile.offsets.back(), kMaxVerticesPerTile));
-    }
-    // A tile without any vertex (all lit: most of a sparse world's map) has nothing more to
-    // read; OpenEXR would still walk and copy every pixel of it.
-    if (tile.offsets.back() > 0) {
-      tile.vertices.resize(tile.offsets.back());
-      for (size_t p = 0; p < pixels; ++p) {
-        buffers.Set(p, tile.vertices.data(), tile.offsets[p], tile.offsets[p + 1]);
-      }
-      exr_part.setFrameBuffer(buffers.FrameBuffer(tile.width));
-      exr_part.readTile(tile_x, tile_y);
-    }
+    if (absl::Status s = ReadDeepTile(exr_part, tile_x, tile_y, path_, &tile); !s.ok()) return s;
   } catch (...) {
     return StatusFromCurrentException(path_, "cannot read");
   }

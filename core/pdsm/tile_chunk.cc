@@ -126,7 +126,6 @@ absl::StatusOr<PdsmTile> DecodeTileChunk(const EncodedTile& encoded, absl::strin
         "samples %d packed / %d bytes)",
         tile.width, tile.height, encoded.chunk.size(), packed_table, packed_data, unpacked_data));
   }
-  tile.offsets.assign(pixels + 1, 0);
   try {
     // A file of this one tile: its header, its offset table (one entry: the chunk right after
     // it), the chunk.
@@ -138,24 +137,7 @@ absl::StatusOr<PdsmTile> DecodeTileChunk(const EncodedTile& encoded, absl::strin
     const std::string name(label);
     ExrStringIStream in(file, name.c_str());
     Imf::DeepTiledInputFile exr(in, /*numThreads=*/0);
-    DeepTileBuffers buffers;
-    buffers.Resize(pixels);
-    exr.setFrameBuffer(buffers.FrameBuffer(tile.width));
-    exr.readPixelSampleCount(0, 0);
-    for (size_t p = 0; p < pixels; ++p) tile.offsets[p + 1] = tile.offsets[p] + buffers.counts[p];
-    // Checked before anything is allocated from the counts.
-    if (tile.offsets.back() > kMaxVerticesPerTile) {
-      return corrupt(absl::StrFormat("counts %d vertices, more than a tile holds (%d)",
-                                     tile.offsets.back(), kMaxVerticesPerTile));
-    }
-    if (tile.offsets.back() > 0) {
-      tile.vertices.resize(tile.offsets.back());
-      for (size_t p = 0; p < pixels; ++p) {
-        buffers.Set(p, tile.vertices.data(), tile.offsets[p], tile.offsets[p + 1]);
-      }
-      exr.setFrameBuffer(buffers.FrameBuffer(tile.width));
-      exr.readTile(0, 0);
-    }
+    if (absl::Status s = ReadDeepTile(exr, 0, 0, label, &tile); !s.ok()) return s;
   } catch (...) {
     return corrupt(StatusFromCurrentException("chunk", "cannot decode").message());
   }
