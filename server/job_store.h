@@ -49,9 +49,10 @@ struct JobRecord {
 class JobStore {
  public:
   // The database's schema version (PRAGMA user_version).
-  // 2 since 2026-12-03 (done tiles flagged all lit); a version-1 database is upgraded in
-  // place when opened (and is then no longer readable by older builds).
-  static constexpr int kSchemaVersion = 2;
+  // 2 since 2026-12-03 (done tiles flagged all lit), 3 since 2026-12-06 (each job counts its
+  // done tiles); an older database is upgraded in place when opened (and is then no longer
+  // readable by older builds).
+  static constexpr int kSchemaVersion = 3;
 
   // Opens or creates DATA_DIR/jobs.db, creating DATA_DIR (and its parents) if needed.
   // FAILED_PRECONDITION when the database's schema is newer than kSchemaVersion (written by a

@@ -5,6 +5,7 @@
 #include <sqlite3.h>
 
 #include <memory>
+#include <random>
 #include <string>
 #include <thread>
 #include <vector>
@@ -284,7 +285,9 @@ TEST(JobStoreTest, ASchemaOneDatabaseIsUpgraded) {
   }
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open((dir.path() / "jobs.db").string().c_str(), &db), SQLITE_OK);
-  EXPECT_EQ(sqlite3_exec(db, "ALTER TABLE done_tiles DROP COLUMN all_lit; PRAGMA user_version = 1;",
+  EXPECT_EQ(sqlite3_exec(db,
+                         "ALTER TABLE done_tiles DROP COLUMN all_lit; "
+                         "ALTER TABLE jobs DROP COLUMN tiles_done; PRAGMA user_version = 1;",
                          nullptr, nullptr, nullptr),
             SQLITE_OK);
   sqlite3_close(db);
@@ -293,8 +296,69 @@ TEST(JobStoreTest, ASchemaOneDatabaseIsUpgraded) {
   ASSERT_NE(store, nullptr);
   EXPECT_THAT(*store->DoneTiles(id), ElementsAre(2));
   EXPECT_THAT(*store->AllLitTiles(id), IsEmpty());
+  EXPECT_EQ(store->GetJob(id)->tiles_done, 1);
   ASSERT_TRUE(store->MarkTileDone(id, 3, 11, /*all_lit=*/true).ok());
   EXPECT_THAT(*store->AllLitTiles(id), ElementsAre(3));
+  EXPECT_EQ(store->GetJob(id)->tiles_done, 2);
+}
+
+// A database of schema 2 (before jobs counted their done tiles) is upgraded in place when
+// opened: each job's count is its done tiles', and counting goes on from there.
+TEST(JobStoreTest, ASchemaTwoDatabaseIsUpgradedWithItsCounts) {
+  TempDir dir;
+  std::string first, second;
+  {
+    std::unique_ptr<JobStore> store = OpenOrDie(dir.path().string());
+    ASSERT_NE(store, nullptr);
+    first = CreateOrDie(*store, SampleJob(1)).job_id;
+    second = CreateOrDie(*store, SampleJob(2)).job_id;
+    ASSERT_TRUE(store->MarkTilesDone(first, {1, 2, 3}, 10).ok());
+    ASSERT_TRUE(store->MarkTileDone(second, 4, 10, /*all_lit=*/true).ok());
+  }
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open((dir.path() / "jobs.db").string().c_str(), &db), SQLITE_OK);
+  EXPECT_EQ(sqlite3_exec(db, "ALTER TABLE jobs DROP COLUMN tiles_done; PRAGMA user_version = 2;",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+
+  std::unique_ptr<JobStore> store = OpenOrDie(dir.path().string());
+  ASSERT_NE(store, nullptr);
+  EXPECT_EQ(store->GetJob(first)->tiles_done, 3);
+  EXPECT_EQ(store->GetJob(second)->tiles_done, 1);
+  EXPECT_THAT(*store->AllLitTiles(second), ElementsAre(4));
+  ASSERT_TRUE(store->MarkTileDone(first, 2, 11).ok());  // again: no new tile
+  ASSERT_TRUE(store->MarkTileUndone(first, 1).ok());
+  EXPECT_EQ(store->GetJob(first)->tiles_done, 2);
+  EXPECT_EQ((*store->ListJobs(0))[1].tiles_done, 2);  // newest first: `first` is second
+}
+
+// The count each job keeps equals its done tiles after any mix of marks, repeats, all-lit
+// batches and withdrawals, in both directions across a reopen.
+TEST(JobStoreTest, TheDoneCountFollowsEveryMarkAndWithdrawal) {
+  TempDir dir;
+  std::string id;
+  std::mt19937 random(11);
+  for (int round = 0; round < 2; ++round) {
+    std::unique_ptr<JobStore> store = OpenOrDie(dir.path().string());
+    ASSERT_NE(store, nullptr);
+    if (round == 0) id = CreateOrDie(*store, SampleJob(1)).job_id;  // 16 tiles
+    for (int step = 0; step < 200; ++step) {
+      const int tile = static_cast<int>(random() % 16);
+      switch (random() % 3) {
+        case 0:
+          ASSERT_TRUE(store->MarkTileDone(id, tile, step, random() % 2 == 0).ok());
+          break;
+        case 1:
+          ASSERT_TRUE(store->MarkTilesDone(id, {tile, (tile + 5) % 16}, step, true).ok());
+          break;
+        default:
+          ASSERT_TRUE(store->MarkTileUndone(id, tile).ok());
+      }
+      ASSERT_EQ(store->GetJob(id)->tiles_done, static_cast<int>(store->DoneTiles(id)->size()))
+          << "round " << round << " step " << step;
+    }
+  }
 }
 
 TEST(JobStoreTest, AWithdrawnTileIsNoLongerDoneUntilMarkedAgain) {
