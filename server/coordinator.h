@@ -59,7 +59,11 @@ struct CoordinatorOptions {
   // that even a one-group job is at least 8 tasks the farm's workers share.
   int samples_per_task = 0;
   int64_t lease_ms = 30'000;
-  int max_open_tiles = 64;  // tiles whose partial results may be open at once
+  // Tiles whose partial results may be open at once (at least one group is, however large).
+  // 4096 since 2026-12-06: at 64, any group of more than 64 tiles (a sun over a world: groups
+  // of hundreds or thousands of tiles) ran alone, one after the other, while workers idled
+  // between them; 4096 open tiles cost the coordinator no measurable memory (docs/service.md).
+  int max_open_tiles = 4096;
   // Partial results (running event lists) held in memory before they move to a scratch file
   // in data_dir (core/pipeline/event_spill.h). Changes no byte of any PDSM.
   int64_t event_memory_budget_bytes = kDefaultEventMemoryBudget;
