@@ -166,6 +166,12 @@ absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<in
       store_.get(), options_.data_dir, record, std::move(scene), std::move(plans),
       [this](const std::string& id) { Forget(id); },
       [this, job_id](const absl::Status& why) { EndLights(job_id, why); }, options_.fs);
+  absl::StatusOr<std::vector<int>> resumed = job->ResumeTiles(done_tiles);
+  if (!resumed.ok()) {
+    return absl::Status(resumed.status().code(),
+                        absl::StrCat("job ", job_id, ": ", resumed.status().message()));
+  }
+  const std::vector<int>& done = *resumed;
   {
     absl::MutexLock lock(&mu_);
     active_[job_id] = job;
@@ -180,9 +186,8 @@ absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<in
                                 ? options_.samples_per_task
                                 : std::clamp((light.plan->header.samples + 7) / 8, 1, 64);
     // The light's range of the done tiles (ascending: JobStore::DoneTiles), in its own indices.
-    const auto first = std::lower_bound(done_tiles.begin(), done_tiles.end(), light.tile_offset);
-    const auto last =
-        std::lower_bound(first, done_tiles.end(), light.tile_offset + light.tile_count());
+    const auto first = std::lower_bound(done.begin(), done.end(), light.tile_offset);
+    const auto last = std::lower_bound(first, done.end(), light.tile_offset + light.tile_count());
     for (auto it = first; it != last; ++it) spec.done_tiles.push_back(*it - light.tile_offset);
     spec.started = record.state == pdsm::v1::RUNNING;
     spec.output = job->LightOutput(light.index);
@@ -524,8 +529,8 @@ absl::StatusOr<std::vector<int>> Coordinator::FinishedTiles(const std::string& j
   return (*job)->FinishedTiles(*index);
 }
 
-absl::StatusOr<std::string> Coordinator::FinishedTilePath(const std::string& job_id,
-                                                          std::string_view light, int tile_index) {
+absl::StatusOr<std::string> Coordinator::FinishedTileBytes(const std::string& job_id,
+                                                           std::string_view light, int tile_index) {
   // The index is checked first, against the light's tiles as the stored scene sizes them: a
   // tile that can never exist is INVALID_ARGUMENT whatever the job's state.
   absl::StatusOr<JobRecord> record = store_->GetJob(job_id);
@@ -546,7 +551,7 @@ absl::StatusOr<std::string> Coordinator::FinishedTilePath(const std::string& job
   if (!job.ok()) return job.status();
   absl::StatusOr<int> index = FindJobLight((*job)->lights(), light, job_id);
   if (!index.ok()) return index.status();
-  return (*job)->FinishedTileFile(*index, tile_index);
+  return (*job)->FinishedTileBytes(*index, tile_index);
 }
 
 absl::StatusOr<QueryAnswer> Coordinator::Query(const std::string& job_id, std::string_view light,

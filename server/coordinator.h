@@ -111,8 +111,9 @@ class Coordinator {
   // tile index outside the light's [0, tiles_total).
   absl::StatusOr<std::vector<int>> FinishedTiles(const std::string& job_id,
                                                  std::string_view light = {});
-  absl::StatusOr<std::string> FinishedTilePath(const std::string& job_id, std::string_view light,
-                                               int tile_index);
+  // The tile's bytes: a tile file (core/pipeline/tile_file.h).
+  absl::StatusOr<std::string> FinishedTileBytes(const std::string& job_id, std::string_view light,
+                                                int tile_index);
   // The attenuation at each point of the finished job's light `light` ("" every light): as
   // QueryCache::Query.
   absl::StatusOr<QueryAnswer> Query(const std::string& job_id, std::string_view light,

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <sstream>
 
 #include <spdlog/spdlog.h>
 
@@ -93,21 +94,32 @@ class UploadReactor final : public grpc::ServerReadReactor<pdsm::v1::AssetChunk>
 // FetchPdsm: streams the file in chunks, one write in flight at a time.
 class FetchReactor final : public grpc::ServerWriteReactor<pdsm::v1::PdsmChunk> {
  public:
+  // Streams the file at `path` (a PDSM).
   explicit FetchReactor(const absl::StatusOr<std::string>& path) {
     if (!path.ok()) {
       Finish(ToGrpcStatus(path.status()));
       return;
     }
-    in_.open(*path, std::ios::binary);
-    if (!in_) {
+    file_.open(*path, std::ios::binary);
+    if (!file_) {
       Finish(grpc::Status(grpc::StatusCode::DATA_LOSS, "the PDSM file cannot be read"));
       return;
     }
-    in_.seekg(0, std::ios::end);
-    total_ = static_cast<uint64_t>(in_.tellg());
-    in_.seekg(0);
-    chunk_.set_total_bytes(total_);
-    Next();
+    in_ = &file_;
+    Start();
+  }
+  // Streams `bytes` (a tile file).
+  struct Bytes {
+    absl::StatusOr<std::string> bytes;
+  };
+  explicit FetchReactor(Bytes bytes) {
+    if (!bytes.bytes.ok()) {
+      Finish(ToGrpcStatus(bytes.bytes.status()));
+      return;
+    }
+    memory_.str(*std::move(bytes.bytes));
+    in_ = &memory_;
+    Start();
   }
 
   void OnWriteDone(bool ok) override {
@@ -119,18 +131,28 @@ class FetchReactor final : public grpc::ServerWriteReactor<pdsm::v1::PdsmChunk> 
   void OnDone() override { delete this; }
 
  private:
+  void Start() {
+    in_->seekg(0, std::ios::end);
+    total_ = static_cast<uint64_t>(in_->tellg());
+    in_->seekg(0);
+    chunk_.set_total_bytes(total_);
+    Next();
+  }
+
   void Next() {
     if (sent_ == total_ && sent_any_) return Finish(grpc::Status::OK);
     std::string data(std::min<uint64_t>(kChunkBytes, total_ - sent_), '\0');
-    in_.read(data.data(), static_cast<std::streamsize>(data.size()));
-    if (!in_) return Finish(grpc::Status(grpc::StatusCode::DATA_LOSS, "short read"));
+    in_->read(data.data(), static_cast<std::streamsize>(data.size()));
+    if (!*in_) return Finish(grpc::Status(grpc::StatusCode::DATA_LOSS, "short read"));
     sent_ += data.size();
     sent_any_ = true;
     *chunk_.mutable_data() = std::move(data);
     StartWrite(&chunk_);
   }
 
-  std::ifstream in_;
+  std::ifstream file_;
+  std::istringstream memory_;
+  std::istream* in_ = nullptr;  // file_ or memory_
   uint64_t total_ = 0, sent_ = 0;
   bool sent_any_ = false;
   pdsm::v1::PdsmChunk chunk_;
@@ -290,8 +312,8 @@ grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>* JobsService::FetchTile(
   if (!valid.ok()) {
     return new RefusedStream<grpc::ServerWriteReactor<pdsm::v1::PdsmChunk>>(ToGrpcStatus(valid));
   }
-  return new FetchReactor(
-      coordinator_->FinishedTilePath(request->job_id(), request->light(), request->tile_index()));
+  return new FetchReactor(FetchReactor::Bytes{
+      coordinator_->FinishedTileBytes(request->job_id(), request->light(), request->tile_index())});
 }
 
 grpc::ServerUnaryReactor* JobsService::QueryAttenuation(

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <optional>
 #include <string>
 #include <utility>
@@ -41,8 +43,9 @@ pdsm::v1::JobState StateOf(JobEnd end) {
 
 JobPaths::JobPaths(const std::string& data_dir, const std::string& job_id)
     : dir((std::filesystem::path(data_dir) / "jobs" / job_id).string()),
-      tiles((std::filesystem::path(dir) / "tiles").string()),
-      pdsm((std::filesystem::path(dir) / "pdsm.exr").string()) {}
+      log((std::filesystem::path(dir) / "tiles.log").string()),
+      pdsm((std::filesystem::path(dir) / "pdsm.exr").string()),
+      tiles((std::filesystem::path(dir) / "tiles").string()) {}
 
 std::string JobPaths::Tile(int tile_index) const {
   return (std::filesystem::path(tiles) / absl::StrCat(tile_index, ".tile")).string();
@@ -56,6 +59,7 @@ class StoredJob::Light final : public JobOutput {
       : job_(std::move(job)), light_(light) {}
   void Started() override { job_->Started(); }
   absl::Status StoreTile(const PdsmTile& tile) override { return job_->StoreTile(*light_, tile); }
+  absl::Status CommitTiles() override { return job_->CommitTiles(); }
   absl::Status StoreUnreachedTiles(const BakePlan&, const std::vector<int>& tiles) override {
     return job_->StoreUnreachedTiles(*light_, tiles);
   }
@@ -99,16 +103,14 @@ std::shared_ptr<JobOutput> StoredJob::LightOutput(int light) {
 
 std::vector<int> StoredJob::FinishedTiles(int light) const {
   const JobLight& l = lights_.at(light);
-  // One read of the folder, not a stat per tile (2^18 of them on the largest job). Only
-  // complete files count: "<n>.tile", not a temporary "<n>.tile.tmp-…".
   std::vector<bool> stored(l.plan->tile_count(), false);
-  std::error_code ec;
-  for (const auto& entry : std::filesystem::directory_iterator(paths_.tiles, ec)) {
-    const std::filesystem::path& path = entry.path();
-    int index = 0;
-    if (path.extension() != ".tile" || !absl::SimpleAtoi(path.stem().string(), &index)) continue;
-    index -= l.tile_offset;
-    if (index >= 0 && index < static_cast<int>(stored.size())) stored[index] = true;
+  if (absl::StatusOr<TileLog*> log = Log(); log.ok()) {
+    for (int index : (*log)->Tiles()) {
+      index -= l.tile_offset;
+      if (index >= 0 && index < static_cast<int>(stored.size())) stored[index] = true;
+    }
+  } else {
+    spdlog::warn("job {}: {}", record_.job_id, std::string(log.status().message()));
   }
   // Tiles stored as all lit count too; if the store cannot say which, they are left out (not
   // finished yet, to the caller), never made up.
@@ -127,30 +129,110 @@ std::vector<int> StoredJob::FinishedTiles(int light) const {
   return done;
 }
 
-absl::StatusOr<std::string> StoredJob::FinishedTileFile(int light, int tile) const {
+absl::StatusOr<std::string> StoredJob::FinishedTileBytes(int light, int tile) const {
   const JobLight& l = lights_.at(light);
-  const std::string path = paths_.Tile(l.tile_offset + tile);
-  std::error_code ec;
-  if (std::filesystem::exists(path, ec)) return path;
-  bool made = tile >= 0 && tile < l.plan->tile_count() && IsUnreachedTile(*l.plan, tile);
-  if (!made && tile >= 0 && tile < l.plan->tile_count()) {
+  const auto not_yet = [&] {
+    return absl::NotFoundError(
+        absl::StrCat("job ", record_.job_id, ": tile ", tile, " is not assembled (yet)"));
+  };
+  if (tile < 0 || tile >= l.plan->tile_count()) return not_yet();
+  // All lit first: the log may still hold a record of what the tile was before.
+  bool made = IsUnreachedTile(*l.plan, tile);
+  if (!made) {
     absl::MutexLock lock(&all_lit_mu_);
     absl::StatusOr<const std::vector<bool>*> all_lit = AllLitLocked();
     if (!all_lit.ok()) return all_lit.status();
     made = (**all_lit)[l.tile_offset + tile];
   }
-  if (!made) {
-    return absl::NotFoundError(
-        absl::StrCat("job ", record_.job_id, ": tile ", tile, " is not assembled (yet)"));
+  if (made) {
+    return EncodeTileFile(MakeUnreachedTile(*l.plan, tile).tile, l.plan->header.tile_size,
+                          absl::StrCat("job ", record_.job_id, " tile ", tile));
   }
-  // Two requests at once both write the same bytes; the rename makes either whole.
-  std::filesystem::create_directories(paths_.tiles, ec);
-  if (absl::Status s =
-          WriteTileFile(path, MakeUnreachedTile(*l.plan, tile).tile, l.plan->header.tile_size, fs_);
-      !s.ok()) {
-    return s;
+  absl::StatusOr<TileLog*> log = Log();
+  if (!log.ok()) return log.status();
+  absl::StatusOr<std::string> bytes = (*log)->Read(l.tile_offset + tile);
+  if (absl::IsNotFound(bytes.status())) return not_yet();
+  return bytes;
+}
+
+absl::StatusOr<TileLog*> StoredJob::Log() const {
+  absl::MutexLock lock(&log_mu_);
+  if (!log_) {
+    std::error_code ec;
+    std::filesystem::create_directories(paths_.dir, ec);
+    absl::StatusOr<std::unique_ptr<TileLog>> log = TileLog::Open(paths_.log, fs_);
+    if (!log.ok()) return log.status();
+    if (absl::Status s = TakeInTileFiles(log->get()); !s.ok()) return s;
+    log_ = *std::move(log);
   }
-  return path;
+  return log_.get();
+}
+
+absl::Status StoredJob::TakeInTileFiles(TileLog* log) const {
+  std::error_code ec;
+  if (!std::filesystem::is_directory(paths_.tiles, ec)) return absl::OkStatus();
+  // Complete files only: "<n>.tile", not a temporary "<n>.tile.tmp-…".
+  int taken = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(paths_.tiles, ec)) {
+    const std::filesystem::path& path = entry.path();
+    int index = 0;
+    if (path.extension() != ".tile" || !absl::SimpleAtoi(path.stem().string(), &index) ||
+        index < 0) {
+      continue;
+    }
+    std::ifstream in(path, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (!in.is_open() || in.bad()) {
+      spdlog::warn("job {}: cannot read {}: left out", record_.job_id, path.string());
+      continue;
+    }
+    if (absl::Status s = CheckTileFileBytes(bytes, path.string()); !s.ok()) {
+      spdlog::warn("job {}: {}: left out", record_.job_id, std::string(s.message()));
+      continue;
+    }
+    if (absl::Status s = log->Append(index, bytes); !s.ok()) return s;
+    ++taken;
+  }
+  if (absl::Status s = log->Sync(); !s.ok()) return s;
+  std::filesystem::remove_all(paths_.tiles, ec);
+  spdlog::info("job {}: took {} tile files of an earlier build into {}", record_.job_id, taken,
+               log->path());
+  return absl::OkStatus();
+}
+
+absl::StatusOr<std::vector<int>> StoredJob::ResumeTiles(const std::vector<int>& done_tiles) {
+  absl::StatusOr<TileLog*> log = Log();
+  if (!log.ok()) return log.status();
+  absl::StatusOr<std::vector<bool>> all_lit = AllLitTiles();
+  if (!all_lit.ok()) return all_lit.status();
+  std::vector<bool> done(all_lit->size(), false);
+  std::vector<int> kept;
+  kept.reserve(done_tiles.size());
+  for (const int index : done_tiles) {
+    if (index < 0 || index >= static_cast<int>(done.size())) continue;
+    done[index] = true;
+    const JobLight& light = LightOfTile(index);
+    const int tile = index - light.tile_offset;
+    if ((*all_lit)[index] || IsUnreachedTile(*light.plan, tile) || (*log)->Has(index)) {
+      kept.push_back(index);
+      continue;
+    }
+    spdlog::warn("job {}: tile {} is done but {} has no record of it: computing it again",
+                 record_.job_id, index, (*log)->path());
+    if (absl::Status s = store_->MarkTileUndone(record_.job_id, index); !s.ok()) return s;
+  }
+  // Records without a row were never committed, or were withdrawn: they are not the job's.
+  for (const int index : (*log)->Tiles()) {
+    if (index >= static_cast<int>(done.size()) || !done[index]) (*log)->Forget(index);
+  }
+  return kept;
+}
+
+const JobLight& StoredJob::LightOfTile(int index) const {
+  for (const JobLight& light : lights_) {
+    if (index < light.tile_offset + light.tile_count()) return light;
+  }
+  return lights_.back();
 }
 
 void StoredJob::Started() {
@@ -164,32 +246,59 @@ void StoredJob::Started() {
 absl::Status StoredJob::StoreTile(const JobLight& light, const PdsmTile& tile) {
   const int tile_in_light = light.plan->TileIndexAt(tile.x0, tile.y0);
   const int index = light.tile_offset + tile_in_light;
+  absl::StatusOr<TileLog*> log = Log();
+  if (!log.ok()) return log.status();
   if (IsMadeFromThePlan(*light.plan, tile_in_light, tile)) {
-    // All lit: the row alone (one sync, where a file costs three), made again when needed.
+    // All lit: the row alone, made again when needed.
     if (ended_) return absl::OkStatus();
-    if (absl::Status s = store_->MarkTileDone(record_.job_id, index, UnixNowMs(),
-                                              /*all_lit=*/true);
+    (*log)->Forget(index);
+    if (absl::Status s = SetAllLit(index, true); !s.ok()) return s;
+    AddPending(index, /*all_lit=*/true);
+    return absl::OkStatus();
+  }
+  // Encoded (compressed) here, on the executor's thread; the log only appends.
+  absl::StatusOr<std::string> bytes = EncodeTileFile(
+      tile, light.plan->header.tile_size, absl::StrCat("job ", record_.job_id, " tile ", index));
+  if (!bytes.ok()) return bytes.status();
+  if (absl::Status s = (*log)->Append(index, *bytes); !s.ok()) return s;
+  if (ended_) return absl::OkStatus();  // cancelled meanwhile: the log goes with the job
+  if (absl::Status s = SetAllLit(index, false); !s.ok()) return s;
+  AddPending(index, /*all_lit=*/false);
+  spdlog::debug("job {} tile {}: stored, {} vertices", record_.job_id, index, tile.vertices.size());
+  return absl::OkStatus();
+}
+
+void StoredJob::AddPending(int index, bool all_lit) {
+  absl::MutexLock lock(&pending_mu_);
+  pending_[index] = all_lit;
+}
+
+absl::Status StoredJob::CommitTiles() {
+  absl::MutexLock commit(&commit_mu_);
+  std::map<int, bool> batch;
+  {
+    absl::MutexLock lock(&pending_mu_);
+    batch.swap(pending_);
+  }
+  if (batch.empty()) return absl::OkStatus();
+  std::vector<int> files, all_lit;
+  for (const auto& [index, lit] : batch) (lit ? all_lit : files).push_back(index);
+  if (!files.empty()) {
+    absl::StatusOr<TileLog*> log = Log();
+    if (!log.ok()) return log.status();
+    if (absl::Status s = (*log)->Sync(); !s.ok()) return s;
+  }
+  if (ended_) return absl::OkStatus();
+  const int64_t now_ms = UnixNowMs();
+  if (!files.empty()) {
+    if (absl::Status s = store_->MarkTilesDone(record_.job_id, files, now_ms); !s.ok()) return s;
+  }
+  if (!all_lit.empty()) {
+    if (absl::Status s = store_->MarkTilesDone(record_.job_id, all_lit, now_ms, /*all_lit=*/true);
         !s.ok()) {
       return s;
     }
-    if (absl::Status s = SetAllLit(index, true); !s.ok()) return s;
-    // A file of an earlier run (its row lost in a crash) would only be ignored: remove it.
-    FileSystem* fs = fs_ != nullptr ? fs_ : FileSystem::Default();
-    const absl::Status removed = fs->RemoveFile(paths_.Tile(index));
-    if (!removed.ok() && !absl::IsNotFound(removed)) return removed;
-    return absl::OkStatus();
   }
-  std::error_code ec;
-  std::filesystem::create_directories(paths_.tiles, ec);
-  if (absl::Status s = WriteTileFile(paths_.Tile(index), tile, light.plan->header.tile_size, fs_);
-      !s.ok())
-    return s;
-  if (ended_) return absl::OkStatus();  // cancelled meanwhile: the file goes with the folder
-  if (absl::Status s = store_->MarkTileDone(record_.job_id, index, UnixNowMs()); !s.ok()) {
-    return s;
-  }
-  if (absl::Status s = SetAllLit(index, false); !s.ok()) return s;
-  spdlog::debug("job {} tile {}: stored, {} vertices", record_.job_id, index, tile.vertices.size());
   return absl::OkStatus();
 }
 
@@ -237,13 +346,18 @@ absl::Status StoredJob::StoreUnreachedTiles(const JobLight& light, const std::ve
 }
 
 absl::Status StoredJob::WithdrawTiles(const JobLight& light, const std::vector<int>& tiles) {
+  absl::MutexLock commit(&commit_mu_);
+  absl::StatusOr<TileLog*> log = Log();
+  if (!log.ok()) return log.status();
   for (int tile : tiles) {
     const int index = light.tile_offset + tile;
-    // The row first: a crash before the file goes leaves a tile a restart recomputes.
+    {
+      absl::MutexLock lock(&pending_mu_);
+      pending_.erase(index);
+    }
+    // The row goes; the record stays in the log, and a restart forgets it (no row).
     if (absl::Status s = store_->MarkTileUndone(record_.job_id, index); !s.ok()) return s;
-    FileSystem* fs = fs_ != nullptr ? fs_ : FileSystem::Default();
-    const absl::Status removed = fs->RemoveFile(paths_.Tile(index));
-    if (!removed.ok() && !absl::IsNotFound(removed)) return removed;
+    (*log)->Forget(index);
     if (absl::Status s = SetAllLit(index, false); !s.ok()) return s;
     spdlog::info("job {} tile {}: withdrawn, to be computed again", record_.job_id, index);
   }
@@ -263,6 +377,11 @@ absl::Status StoredJob::WriteFile() {
   std::filesystem::create_directories(paths_.dir, ec);
   absl::StatusOr<std::vector<bool>> all_lit = AllLitTiles();
   if (!all_lit.ok()) return all_lit.status();
+  absl::StatusOr<TileLog*> log = Log();
+  if (!log.ok()) {
+    return absl::Status(log.status().code(),
+                        absl::StrCat("cannot write ", paths_.pdsm, ": ", log.status().message()));
+  }
   const auto write_light = [&](const JobLight& light, PdsmWriter* writer) -> absl::Status {
     EmptyTileChunks empty_chunks(light.plan->header.tile_size);
     std::optional<int> unreached_samples;  // UnreachedTileSamples, found at the first use
@@ -270,7 +389,10 @@ absl::Status StoredJob::WriteFile() {
       const int tile = static_cast<int>(index);
       // The stored tiles are copied as they were compressed when they were finished.
       if (!IsUnreachedTile(*light.plan, tile) && !(*all_lit)[light.tile_offset + tile]) {
-        return ReadTileChunk(paths_.Tile(light.tile_offset + tile), light.plan->header.tile_size);
+        absl::StatusOr<std::string> bytes = (*log)->Read(light.tile_offset + tile);
+        if (!bytes.ok()) return bytes.status();
+        return DecodeTileChunkFile(*bytes, absl::StrCat((*log)->path(), " tile ", index),
+                                   light.plan->header.tile_size);
       }
       // A tile no caster reaches, or found all lit, was never stored: it is made again, as the
       // engine made it.
@@ -374,7 +496,8 @@ void StoredJob::Ended(JobEnd end, const absl::Status& status, int tiles_total) {
     spdlog::info("job {}: CANCELLED", id);
     std::filesystem::remove(paths_.pdsm, ec);  // a cancel that won the race keeps no file
   }
-  std::filesystem::remove_all(paths_.tiles, ec);
+  std::filesystem::remove(paths_.log, ec);
+  std::filesystem::remove_all(paths_.tiles, ec);  // an earlier build's
   if (on_ended_) on_ended_(id);
 }
 

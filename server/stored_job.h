@@ -1,14 +1,17 @@
 // A coordinator's job while it runs, and where its results go: one JobOutput
 // (core/pipeline/bake_engine.h) per light of the job (server/job_lights.h), each its light's
 // engine job's. Under DATA_DIR/jobs/<id>/:
-//   tiles/<index>.tile  each finished tile (core/pipeline/tile_file.h) by its index among the
-//                       job's tiles, durable once its row is in the job store (MarkTileDone),
-//                       so a restart resumes the job with only its missing tiles; a tile
-//                       found all lit (what the plan alone makes again) has no file, its
-//                       row in the store says so (JobStore::MarkTileDone's all_lit);
-//   pdsm.exr            the PDSM, written from the tile files when every light's tiles are
-//                       stored: for one light the single-part file, for several the multipart
-//                       file the local bake writes (PdsmLightsWriter), byte for byte.
+//   tiles.log           each finished tile (server/tile_log.h) by its index among the job's
+//                       tiles, appended as it is stored; at the end of each stage of a group
+//                       (JobOutput::CommitTiles) the log is synced, then the stage's tiles get
+//                       their rows in the job store (MarkTilesDone), so a restart resumes the
+//                       job with only its missing tiles. A tile found all lit (what the plan
+//                       alone makes again) has no record, its row says so (all_lit);
+//   pdsm.exr            the PDSM, written from the log when every light's tiles are stored:
+//                       for one light the single-part file, for several the multipart file
+//                       the local bake writes (PdsmLightsWriter), byte for byte.
+// Builds before 2026-12-06 kept a file per tile (tiles/<index>.tile); a job resumed from
+// them takes their tiles into its log first (ResumeTiles).
 // The job's states (RUNNING, SUCCEEDED, FAILED, CANCELLED) go to the job store as they come.
 // The job ends when every light's engine job has ended: SUCCEEDED when all succeeded, else
 // as the first that did not (a light that fails ends the others through `end_lights`).
@@ -20,6 +23,7 @@
 
 #include <atomic>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -34,15 +38,18 @@
 #include "pdsm/v1/scene.pb.h"
 #include "server/job_lights.h"
 #include "server/job_store.h"
+#include "server/tile_log.h"
 
 namespace pdsm {
 
 // Where a job's files are.
 struct JobPaths {
   JobPaths(const std::string& data_dir, const std::string& job_id);
-  std::string dir;    // DATA_DIR/jobs/<id>
-  std::string tiles;  // its tiles/
-  std::string pdsm;   // its pdsm.exr
+  std::string dir;   // DATA_DIR/jobs/<id>
+  std::string log;   // its tiles.log
+  std::string pdsm;  // its pdsm.exr
+  // The folder of a file per tile that earlier builds kept, and a tile's file there.
+  std::string tiles;
   std::string Tile(int tile_index) const;
 };
 
@@ -71,18 +78,26 @@ class StoredJob : public std::enable_shared_from_this<StoredJob> {
   // is owned by a shared_ptr, light < lights().size().
   std::shared_ptr<JobOutput> LightOutput(int light);
 
+  // Before the job's lights go to the engine: opens the tile log (creating it; taking in the
+  // tile files of an earlier build), and returns those of `done_tiles` (the store's, job
+  // indices, ascending) that the job really has: a done tile whose record is missing (a log
+  // cut short by damage) loses its row and is computed again, with a warning. Tiles the log
+  // holds without a row (a crash before their stage was committed, or withdrawn) are
+  // forgotten. Errors: the log's, the store's.
+  absl::StatusOr<std::vector<int>> ResumeTiles(const std::vector<int>& done_tiles);
+
   // Light `light`'s progress as its engine job ended; nullopt while it runs.
   std::optional<JobProgress> LightEndProgress(int light) const;
 
-  // Light `light`'s tiles (its own indices) that are finished, ascending: those whose files are
-  // complete (written under a temporary name, then renamed), those no caster reaches, which
-  // are never stored as files (core/pipeline/unreached_tile.h), and those stored all lit.
+  // Light `light`'s tiles (its own indices) that are finished, ascending: those in the log
+  // (stored, perhaps not yet committed), those no caster reaches, which are never stored
+  // (core/pipeline/unreached_tile.h), and those stored all lit.
   std::vector<int> FinishedTiles(int light) const;
 
-  // The file of finished tile `tile` of light `light`, for FetchTile: a tile no caster reaches,
-  // or stored all lit, is written on the first request (the bytes the file will hold).
-  // NOT_FOUND when the tile is not finished (yet).
-  absl::StatusOr<std::string> FinishedTileFile(int light, int tile) const;
+  // Finished tile `tile` of light `light` as a tile file (core/pipeline/tile_file.h), for
+  // FetchTile: a tile no caster reaches, or stored all lit, is made from the plan. NOT_FOUND
+  // when the tile is not finished (yet); the log's errors.
+  absl::StatusOr<std::string> FinishedTileBytes(int light, int tile) const;
 
   // Writes the job's end state to the store now, without waiting for the end of every light: a
   // cancel's answer then already says CANCELLED. The end writes it again (the same values).
@@ -97,6 +112,18 @@ class StoredJob : public std::enable_shared_from_this<StoredJob> {
   // a caster's box may reach are all lit, and a file each (three syncs) made the coordinator
   // the bottleneck (a 32768^2 sparse world: 413 s through the service, 36 s locally).
   absl::Status StoreTile(const JobLight& light, const PdsmTile& tile);
+  // Syncs the log and marks the tiles stored since the last call done, in two transactions
+  // (files, all lit). Serialized with WithdrawTiles (commit_mu_), so that a withdrawn tile is
+  // never marked done by a commit that had already taken it.
+  absl::Status CommitTiles();
+  void AddPending(int index, bool all_lit);
+  // The log, opened at the first use (ResumeTiles, or the first tile stored).
+  absl::StatusOr<TileLog*> Log() const;
+  // Appends the tile files of an earlier build (paths_.tiles) to `log`, syncs it and removes
+  // them; ResumeTiles then forgets those without a row.
+  absl::Status TakeInTileFiles(TileLog* log) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(log_mu_);
+  // The light whose tiles hold job tile `index` (the last for an index past them all).
+  const JobLight& LightOfTile(int index) const;
   static bool IsMadeFromThePlan(const BakePlan& plan, int tile_index, const PdsmTile& tile);
   // The job's tiles (job indices) stored all lit, read from the store at the first use.
   absl::StatusOr<std::vector<bool>> AllLitTiles() const;
@@ -126,6 +153,15 @@ class StoredJob : public std::enable_shared_from_this<StoredJob> {
   FileSystem* const fs_;
   std::atomic<bool> started_{false};
   std::atomic<bool> ended_{false};  // set by RecordEnd: tiles finishing later are not recorded
+
+  mutable absl::Mutex log_mu_;
+  mutable std::unique_ptr<TileLog> log_ ABSL_GUARDED_BY(log_mu_);
+
+  // Held through a commit and a withdrawal; taken before pending_mu_.
+  absl::Mutex commit_mu_;
+  absl::Mutex pending_mu_;
+  // Tiles stored since the last commit: index -> stored all lit. The last store decides.
+  std::map<int, bool> pending_ ABSL_GUARDED_BY(pending_mu_);
 
   mutable absl::Mutex all_lit_mu_;
   mutable std::optional<std::vector<bool>> all_lit_ ABSL_GUARDED_BY(all_lit_mu_);

@@ -9,6 +9,7 @@
 #include "core/pipeline/tile_file.h"
 #include "core/pipeline/unreached_tile.h"
 #include "core/scene/scene_loader.h"
+#include "core/util/fault_injecting_file_system.h"
 #include "tests/test_support.h"
 #include "tests/write_faults.h"
 
@@ -69,16 +70,57 @@ class StoredJobTest : public ::testing::Test {
   JobRecord record_;
 };
 
-TEST_F(StoredJobTest, TileFileIsWholeOrAsBefore) {
+// Every failure of the log's writes and syncs, at every call of a store and its commit, fails
+// the job's call, and leaves a log that reopens with every committed tile as it was: the tile
+// being stored is done only if its commit returned OK.
+TEST_F(StoredJobTest, AFailedStoreOrCommitLosesNoCommittedTile) {
   const JobPaths paths(dir_.path().string(), record_.job_id);
-  std::filesystem::create_directories(paths.tiles);
-  ASSERT_TRUE(Job(nullptr)->LightOutput(0)->StoreTile(Tile(*plan_, 1, 0.25f)).ok());
-  testing::ExpectWriteFailuresLeaveTargetIntact(paths.Tile(1), paths.tiles, [&](FileSystem* fs) {
-    return Job(fs)->LightOutput(0)->StoreTile(Tile(*plan_, 1, 0.75f));
-  });
-  absl::StatusOr<std::vector<int>> done = store_->DoneTiles(record_.job_id);
-  ASSERT_TRUE(done.ok());
-  EXPECT_EQ(*done, std::vector<int>{1});
+  {
+    std::shared_ptr<StoredJob> job = Job(nullptr);
+    ASSERT_TRUE(job->LightOutput(0)->StoreTile(Tile(*plan_, 0, 0.25f)).ok());
+    ASSERT_TRUE(job->LightOutput(0)->CommitTiles().ok());
+  }
+  const std::string committed = testing::ReadBytes(paths.log);
+  const auto store_and_commit = [&](FileSystem* fs) {
+    std::shared_ptr<StoredJob> job = Job(fs);
+    absl::StatusOr<std::vector<int>> resumed = job->ResumeTiles(*store_->DoneTiles(record_.job_id));
+    if (!resumed.ok()) return resumed.status();
+    if (absl::Status s = job->LightOutput(0)->StoreTile(Tile(*plan_, 1, 0.75f)); !s.ok()) return s;
+    return job->LightOutput(0)->CommitTiles();
+  };
+  FaultInjectingFileSystem counting;
+  ASSERT_TRUE(store_and_commit(&counting).ok());
+  const int writes = counting.op_count(FileOp::kWrite), syncs = counting.op_count(FileOp::kSync);
+  ASSERT_GT(writes, 0);
+  ASSERT_GT(syncs, 0);
+  for (const FileOp op : {FileOp::kCreate, FileOp::kWrite, FileOp::kSync}) {
+    const int calls = op == FileOp::kWrite ? writes : op == FileOp::kSync ? syncs : 1;
+    for (int n = 1; n <= calls; ++n) {
+      SCOPED_TRACE(absl::StrCat(FileOpName(op), " ", n));
+      ASSERT_TRUE(store_->MarkTileUndone(record_.job_id, 1).ok());
+      testing::WriteText(paths.log, committed);
+      FaultInjectingFileSystem fs;
+      fs.FailNth(op, n);
+      const absl::Status s = store_and_commit(&fs);
+      EXPECT_FALSE(s.ok());
+      EXPECT_EQ(*store_->DoneTiles(record_.job_id), std::vector<int>{0});
+      std::shared_ptr<StoredJob> reopened = Job(nullptr);
+      ASSERT_TRUE(reopened->ResumeTiles(*store_->DoneTiles(record_.job_id)).ok());
+      EXPECT_EQ(reopened->FinishedTiles(0), std::vector<int>{0});
+      absl::StatusOr<std::string> bytes = reopened->FinishedTileBytes(0, 0);
+      ASSERT_TRUE(bytes.ok()) << bytes.status();
+      EXPECT_EQ(DecodeTileFile(*bytes, "tile 0")->vertices, Tile(*plan_, 0, 0.25f).vertices);
+    }
+  }
+  // A full disk in the middle of the append.
+  ASSERT_TRUE(store_->MarkTileUndone(record_.job_id, 1).ok());
+  testing::WriteText(paths.log, committed);
+  FaultInjectingFileSystem full;
+  full.SetDiskFullAfter(100);
+  EXPECT_EQ(store_and_commit(&full).code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_EQ(testing::ReadBytes(paths.log), committed);  // the torn record was cut off again
+  EXPECT_TRUE(store_and_commit(nullptr).ok());
+  EXPECT_EQ(*store_->DoneTiles(record_.job_id), (std::vector<int>{0, 1}));
 }
 
 TEST_F(StoredJobTest, PdsmIsWholeOrAsBefore) {
@@ -97,15 +139,20 @@ TEST_F(StoredJobTest, EndStatesReachTheStoreAndTheTilesGo) {
   job->LightOutput(0)->Started();
   EXPECT_EQ(store_->GetJob(record_.job_id)->state, pdsm::v1::RUNNING);
   ASSERT_TRUE(job->LightOutput(0)->StoreTile(Tile(*plan_, 0, 1.0f)).ok());
-  EXPECT_EQ(job->FinishedTiles(0), std::vector<int>{0});
+  EXPECT_EQ(job->FinishedTiles(0), std::vector<int>{0});  // stored, not yet committed
+  EXPECT_TRUE(store_->DoneTiles(record_.job_id)->empty());
+  ASSERT_TRUE(job->LightOutput(0)->CommitTiles().ok());
+  EXPECT_EQ(*store_->DoneTiles(record_.job_id), std::vector<int>{0});
+  EXPECT_TRUE(std::filesystem::exists(paths.log));
   job->LightOutput(0)->Ended(JobEnd::kFailed, absl::InternalError("gl broke"), JobProgress{});
   absl::StatusOr<JobRecord> record = store_->GetJob(record_.job_id);
   EXPECT_EQ(record->state, pdsm::v1::FAILED);
   EXPECT_EQ(record->error, "gl broke");
-  EXPECT_FALSE(std::filesystem::exists(paths.tiles));
+  EXPECT_FALSE(std::filesystem::exists(paths.log));
   EXPECT_TRUE(job->ended());
   // A tile finishing after the end is not recorded as done.
   ASSERT_TRUE(job->LightOutput(0)->StoreTile(Tile(*plan_, 1, 1.0f)).ok());
+  ASSERT_TRUE(job->LightOutput(0)->CommitTiles().ok());
   EXPECT_EQ(*store_->DoneTiles(record_.job_id), std::vector<int>{0});
 }
 
@@ -118,20 +165,25 @@ TEST_F(StoredJobTest, AnAllLitTileIsARowNotAFile) {
   ASSERT_FALSE(IsUnreachedTile(*plan_, 1));  // else the plan alone would say so
   const PdsmTile lit = MakeUnreachedTile(*plan_, 1).tile;
   const PdsmTile shadowed = Tile(*plan_, 0, 0.5f);
-  ASSERT_TRUE(Job(nullptr)->LightOutput(0)->StoreTile(lit).ok());
-  EXPECT_FALSE(std::filesystem::exists(paths.Tile(1)));
+  {
+    std::shared_ptr<StoredJob> job = Job(nullptr);
+    ASSERT_TRUE(job->LightOutput(0)->StoreTile(lit).ok());
+    ASSERT_TRUE(job->LightOutput(0)->CommitTiles().ok());
+  }
   EXPECT_EQ(*store_->AllLitTiles(record_.job_id), std::vector<int>{1});
   EXPECT_EQ(*store_->DoneTiles(record_.job_id), std::vector<int>{1});
 
   std::shared_ptr<StoredJob> restarted = Job(nullptr);
+  ASSERT_EQ(*restarted->ResumeTiles({1}), std::vector<int>{1});
+  EXPECT_EQ(std::filesystem::file_size(paths.log), 16u) << "an all-lit tile got a record";
   EXPECT_EQ(restarted->FinishedTiles(0), std::vector<int>{1});
-  absl::StatusOr<std::string> served = restarted->FinishedTileFile(0, 1);
+  absl::StatusOr<std::string> served = restarted->FinishedTileBytes(0, 1);
   ASSERT_TRUE(served.ok()) << served.status();
-  absl::StatusOr<PdsmTile> read = ReadTileFile(*served);
+  absl::StatusOr<PdsmTile> read = DecodeTileFile(*served, "served");
   ASSERT_TRUE(read.ok()) << read.status();
   EXPECT_EQ(read->offsets, lit.offsets);
   EXPECT_TRUE(read->vertices.empty());
-  EXPECT_EQ(restarted->FinishedTileFile(0, 0).status().code(), absl::StatusCode::kNotFound);
+  EXPECT_EQ(restarted->FinishedTileBytes(0, 0).status().code(), absl::StatusCode::kNotFound);
 
   ASSERT_TRUE(restarted->LightOutput(0)->StoreTile(shadowed).ok());
   ASSERT_TRUE(restarted->LightOutput(0)->Finish().ok());
@@ -149,16 +201,89 @@ TEST_F(StoredJobTest, AnAllLitTileIsARowNotAFile) {
 TEST_F(StoredJobTest, TheLastStoreOfATileDecidesWhetherItIsAFile) {
   const JobPaths paths(dir_.path().string(), record_.job_id);
   std::shared_ptr<StoredJob> job = Job(nullptr);
-  ASSERT_TRUE(job->LightOutput(0)->StoreTile(MakeUnreachedTile(*plan_, 1).tile).ok());
-  ASSERT_TRUE(job->LightOutput(0)->WithdrawTiles({1}).ok());
+  const std::shared_ptr<JobOutput> output = job->LightOutput(0);
+  ASSERT_TRUE(output->StoreTile(MakeUnreachedTile(*plan_, 1).tile).ok());
+  ASSERT_TRUE(output->CommitTiles().ok());
+  ASSERT_TRUE(output->WithdrawTiles({1}).ok());
   EXPECT_TRUE(job->FinishedTiles(0).empty());
-  ASSERT_TRUE(job->LightOutput(0)->StoreTile(Tile(*plan_, 1, 0.25f)).ok());
-  EXPECT_TRUE(std::filesystem::exists(paths.Tile(1)));
+  EXPECT_TRUE(store_->DoneTiles(record_.job_id)->empty());
+  ASSERT_TRUE(output->StoreTile(Tile(*plan_, 1, 0.25f)).ok());
+  ASSERT_TRUE(output->CommitTiles().ok());
   EXPECT_TRUE(store_->AllLitTiles(record_.job_id)->empty());
-  ASSERT_TRUE(job->LightOutput(0)->StoreTile(MakeUnreachedTile(*plan_, 1).tile).ok());
-  EXPECT_FALSE(std::filesystem::exists(paths.Tile(1)));
+  EXPECT_EQ(DecodeTileFile(*job->FinishedTileBytes(0, 1), "tile 1")->vertices,
+            Tile(*plan_, 1, 0.25f).vertices);
+  ASSERT_TRUE(output->StoreTile(MakeUnreachedTile(*plan_, 1).tile).ok());
+  ASSERT_TRUE(output->CommitTiles().ok());
+  EXPECT_TRUE(DecodeTileFile(*job->FinishedTileBytes(0, 1), "tile 1")->vertices.empty());
   EXPECT_EQ(*store_->AllLitTiles(record_.job_id), std::vector<int>{1});
-  EXPECT_EQ(Job(nullptr)->FinishedTiles(0), std::vector<int>{1});
+  std::shared_ptr<StoredJob> restarted = Job(nullptr);
+  ASSERT_EQ(*restarted->ResumeTiles({1}), std::vector<int>{1});
+  EXPECT_EQ(restarted->FinishedTiles(0), std::vector<int>{1});
+  EXPECT_TRUE(DecodeTileFile(*restarted->FinishedTileBytes(0, 1), "tile 1")->vertices.empty());
+}
+
+// A withdrawn tile still pending (stored, its stage not committed) is not marked done by the
+// commit that follows.
+TEST_F(StoredJobTest, AWithdrawnTileIsNotCommitted) {
+  std::shared_ptr<StoredJob> job = Job(nullptr);
+  const std::shared_ptr<JobOutput> output = job->LightOutput(0);
+  ASSERT_TRUE(output->StoreTile(Tile(*plan_, 0, 0.5f)).ok());
+  ASSERT_TRUE(output->StoreTile(Tile(*plan_, 1, 0.5f)).ok());
+  ASSERT_TRUE(output->WithdrawTiles({1}).ok());
+  ASSERT_TRUE(output->CommitTiles().ok());
+  EXPECT_EQ(*store_->DoneTiles(record_.job_id), std::vector<int>{0});
+  EXPECT_EQ(job->FinishedTiles(0), std::vector<int>{0});
+}
+
+// A restart keeps what the store and the log agree on: a record without a row (its stage never
+// committed: the coordinator died first) is not a finished tile, and a done tile whose record
+// is gone (a log cut short) loses its row, to be computed again.
+TEST_F(StoredJobTest, AResumedJobKeepsWhatTheStoreAndTheLogAgreeOn) {
+  const JobPaths paths(dir_.path().string(), record_.job_id);
+  uint64_t committed_size = 0;
+  {
+    std::shared_ptr<StoredJob> job = Job(nullptr);
+    ASSERT_TRUE(job->LightOutput(0)->StoreTile(Tile(*plan_, 0, 0.5f)).ok());
+    ASSERT_TRUE(job->LightOutput(0)->CommitTiles().ok());
+    committed_size = std::filesystem::file_size(paths.log);
+    ASSERT_TRUE(job->LightOutput(0)->StoreTile(Tile(*plan_, 1, 0.5f)).ok());  // never committed
+  }
+  {
+    std::shared_ptr<StoredJob> restarted = Job(nullptr);
+    EXPECT_EQ(*restarted->ResumeTiles(*store_->DoneTiles(record_.job_id)), std::vector<int>{0});
+    EXPECT_EQ(restarted->FinishedTiles(0), std::vector<int>{0});
+    EXPECT_EQ(restarted->FinishedTileBytes(0, 1).status().code(), absl::StatusCode::kNotFound);
+  }
+  std::filesystem::resize_file(paths.log, committed_size - 5);  // tile 0's record torn
+  std::shared_ptr<StoredJob> restarted = Job(nullptr);
+  EXPECT_TRUE(restarted->ResumeTiles(*store_->DoneTiles(record_.job_id))->empty());
+  EXPECT_TRUE(store_->DoneTiles(record_.job_id)->empty());
+  EXPECT_TRUE(restarted->FinishedTiles(0).empty());
+}
+
+// A job an earlier build ran keeps the tile files it stored: they go into the log, and the
+// PDSM is the one its tiles give.
+TEST_F(StoredJobTest, TheTileFilesOfAnEarlierBuildAreTakenIn) {
+  const JobPaths paths(dir_.path().string(), record_.job_id);
+  std::filesystem::create_directories(paths.tiles);
+  const PdsmTile first = Tile(*plan_, 0, 0.5f), second = Tile(*plan_, 1, 0.25f);
+  ASSERT_TRUE(WriteTileFile(paths.Tile(0), first, plan_->header.tile_size).ok());
+  testing::WriteText(paths.Tile(1), EncodeEarlierTileFile(second));  // version 1
+  testing::WriteText(paths.Tile(1) + ".tmp-abcdef", "a writer that died");
+  ASSERT_TRUE(store_->MarkTilesDone(record_.job_id, {0, 1}, 1).ok());
+
+  std::shared_ptr<StoredJob> job = Job(nullptr);
+  ASSERT_EQ(*job->ResumeTiles({0, 1}), (std::vector<int>{0, 1}));
+  EXPECT_FALSE(std::filesystem::exists(paths.tiles));
+  EXPECT_EQ(job->FinishedTiles(0), (std::vector<int>{0, 1}));
+  ASSERT_TRUE(job->LightOutput(0)->Finish().ok());
+  const std::string direct = dir_.File("direct.exr");
+  absl::StatusOr<std::unique_ptr<PdsmWriter>> writer = PdsmWriter::Create(direct, plan_->header);
+  ASSERT_TRUE(writer.ok()) << writer.status();
+  ASSERT_TRUE((*writer)->WriteTile(first).ok());
+  ASSERT_TRUE((*writer)->WriteTile(second).ok());
+  ASSERT_TRUE((*writer)->Finish().ok());
+  EXPECT_TRUE(testing::ReadBytes(paths.pdsm) == testing::ReadBytes(direct));
 }
 
 }  // namespace

@@ -248,6 +248,7 @@ void BakeEngine::StoreUnreachedTiles(const JobPtr& job, const std::vector<int>& 
                               absl::StrCat("storing ", batch.size(),
                                            " tiles no caster reaches: ", stored.message())));
     }
+    if (!CommitTiles(job)) return;
     absl::MutexLock lock(&mu_);
     if (job->ended) return;
     const int n = static_cast<int>(batch.size());
@@ -592,6 +593,7 @@ void BakeEngine::CompleteStage(const JobPtr& job, int group_index, const OpenGro
   absl::Cleanup release_rest = [&] {
     event_memory_bytes_.fetch_sub(held, std::memory_order_relaxed);
   };
+  bool stored_any = false;
   for (auto& [tile, accumulator] : tiles) {
     TileStageState state;
     state.stage = group->stage;
@@ -605,12 +607,14 @@ void BakeEngine::CompleteStage(const JobPtr& job, int group_index, const OpenGro
     if (!verdict.ok()) return FailReadingBack(job, tile, verdict.status());
     if (verdict->done) {
       if (!StoreTile(job, tile, *std::move(verdict))) return;
+      stored_any = true;
     } else {
       next_tiles.push_back(tile);
       absl::MutexLock next_lock(&next->mu);
       next->states[tile] = std::move(verdict->next);
     }
   }
+  if (stored_any && !CommitTiles(job)) return;
   bool complete = false, queued = true;
   std::vector<int> withdrawn;  // stored above, but a quarantine tainted the group meanwhile
   {
@@ -655,6 +659,18 @@ void BakeEngine::FailReadingBack(const JobPtr& job, int tile_index, const absl::
       absl::Status(
           status.code(),
           absl::StrCat("tile ", tile_index, ": reading its event lists back: ", status.message())));
+}
+
+bool BakeEngine::CommitTiles(const JobPtr& job) {
+  if (!BeginOutputCall(job)) return false;
+  const absl::Status committed = job->spec.output->CommitTiles();
+  EndOutputCall(job);
+  if (!committed.ok()) {
+    End(job, JobEnd::kFailed,
+        absl::Status(committed.code(), absl::StrCat("storing tiles: ", committed.message())));
+    return false;
+  }
+  return true;
 }
 
 bool BakeEngine::StoreTile(const JobPtr& job, int tile_index, StageVerdict verdict) {

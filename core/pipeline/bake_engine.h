@@ -83,6 +83,12 @@ class JobOutput {
   // A finished tile. Once per tile, from the executor; different tiles may be stored at the
   // same time. An error fails the job.
   virtual absl::Status StoreTile(const PdsmTile& tile) = 0;
+  // The tiles stored so far (StoreTile) must be durable before this returns: called from the
+  // executor after each finished stage of a tile group has stored its tiles, before the group
+  // counts as assembled, so that an output may make a whole stage durable at once (one sync,
+  // one transaction) instead of each tile. Called as StoreTile is; an error fails the job. The
+  // default does nothing (StoreTile was durable).
+  virtual absl::Status CommitTiles() { return absl::OkStatus(); }
   // Tiles no caster reaches (core/pipeline/unreached_tile.h), in ascending batches, instead of
   // StoreTile for each: their content follows from `plan`. The default stores
   // MakeUnreachedTile of each through StoreTile; an output may record them without their
@@ -263,6 +269,8 @@ class BakeEngine {
   void FailReadingBack(const JobPtr& job, int tile_index, const absl::Status& status);
   // False when the job ended (the store failed, or it was ended meanwhile).
   bool StoreTile(const JobPtr& job, int tile_index, StageVerdict verdict);
+  // JobOutput::CommitTiles; false when the job ended (it failed, which ends the job).
+  bool CommitTiles(const JobPtr& job);
   // Stores the tiles no caster reaches (plan.tile_has_casters) all lit, without a task.
   void StoreUnreachedTiles(const JobPtr& job, const std::vector<int>& tiles);
   void FinishJob(const JobPtr& job);

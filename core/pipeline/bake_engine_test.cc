@@ -255,6 +255,34 @@ TEST(BakeEngine, StoreErrorFailsTheJobNamingTheTile) {
   EXPECT_EQ(output->ended(), 1);
 }
 
+// Each finished stage's tiles are committed before the group counts as assembled: one commit
+// per group here (RecordingOutput checks at Finish that none is left uncommitted), and a
+// commit that fails fails the job.
+TEST(BakeEngine, StoredTilesAreCommittedAStageAtATimeAndACommitErrorFailsTheJob) {
+  const auto plan = SmallPlan(3, 4);
+  {
+    auto output = std::make_shared<RecordingOutput>();
+    BakeEngine engine(InlineOptions());
+    ASSERT_TRUE(engine.AddJob(Job(plan, output, 2)).ok());
+    RunAll(engine, *plan);
+    EXPECT_EQ(output->end(), JobEnd::kSucceeded);
+    EXPECT_EQ(output->tiles().size(), 3u);
+    EXPECT_EQ(output->commits(), plan->group_count());
+  }
+  auto output = std::make_shared<RecordingOutput>();
+  output->commit_error_ = absl::ResourceExhaustedError("disk full");
+  BakeEngine engine(InlineOptions());
+  ASSERT_TRUE(engine.AddJob(Job(plan, output, 0)).ok());
+  while (std::optional<TaskLease> lease = engine.Lease("w")) {
+    engine.Report("w", lease->lease_id, LeaseEvents(*plan, *lease));  // false once it failed
+  }
+  EXPECT_EQ(output->end(), JobEnd::kFailed);
+  EXPECT_EQ(output->status().code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_EQ(output->status().message(), "storing tiles: disk full");
+  EXPECT_EQ(output->finished(), 0);
+  EXPECT_EQ(output->commits(), 1);  // the first commit ended the job
+}
+
 TEST(BakeEngine, TaskFailureEndsTheJobWithItsOwnStatusWhenAsked) {
   const auto plan = SmallPlan(2, 4);
   auto output = std::make_shared<RecordingOutput>();

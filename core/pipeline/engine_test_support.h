@@ -69,7 +69,15 @@ class RecordingOutput : public JobOutput {
     absl::MutexLock lock(&mu_);
     EXPECT_EQ(ended_, 0) << "StoreTile after Ended";
     tiles_[tile.x0 / 2] = tile;
+    ++uncommitted_;
     return store_error_;
+  }
+  absl::Status CommitTiles() override {
+    absl::MutexLock lock(&mu_);
+    EXPECT_EQ(ended_, 0) << "CommitTiles after Ended";
+    ++commits_;
+    if (commit_error_.ok()) uncommitted_ = 0;
+    return commit_error_;
   }
   absl::Status WithdrawTiles(const std::vector<int>& tile_indices) override {
     absl::MutexLock lock(&mu_);
@@ -83,6 +91,7 @@ class RecordingOutput : public JobOutput {
   absl::Status Finish() override {
     absl::MutexLock lock(&mu_);
     EXPECT_EQ(ended_, 0) << "Finish after Ended";
+    EXPECT_EQ(uncommitted_, 0) << "Finish before every stored tile was committed";
     ++finished_;
     return absl::OkStatus();
   }
@@ -129,14 +138,18 @@ class RecordingOutput : public JobOutput {
     absl::MutexLock lock(&mu_);
     return withdrawn_;
   }
+  int commits() {
+    absl::MutexLock lock(&mu_);
+    return commits_;
+  }
 
   bool hold_store_ = false;
   absl::Notification store_entered_, release_store_, ended_note_;
-  absl::Status store_error_;
+  absl::Status store_error_, commit_error_;
 
  private:
   absl::Mutex mu_;
-  int started_ = 0, finished_ = 0, ended_ = 0, withdrawn_ = 0;
+  int started_ = 0, finished_ = 0, ended_ = 0, withdrawn_ = 0, commits_ = 0, uncommitted_ = 0;
   JobEnd end_ = JobEnd::kFailed;
   absl::Status status_;
   JobProgress progress_;

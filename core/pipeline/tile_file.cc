@@ -18,6 +18,7 @@
 #include "core/pdsm/tile_chunk.h"
 #include "core/util/atomic_file.h"
 #include "core/util/file_system.h"
+#include "core/util/fnv1a.h"
 #include "core/util/little_endian.h"
 
 namespace pdsm {
@@ -36,16 +37,6 @@ constexpr size_t kVertexBytes = 8;  // float z, float a
 constexpr uint32_t kFixedSamplesVersion = 1;
 constexpr uint32_t kAdaptiveVersion = 2;
 constexpr size_t kSamplesBytes = 4;
-
-// FNV-1a, 64 bits.
-uint64_t Checksum(std::string_view bytes) {
-  uint64_t hash = 0xcbf29ce484222325ull;
-  for (const char c : bytes) {
-    hash ^= static_cast<unsigned char>(c);
-    hash *= 0x100000001b3ull;
-  }
-  return hash;
-}
 
 absl::Status CheckTileForWrite(const PdsmTile& tile, const std::string& path) {
   const auto bad = [&](absl::string_view what) {
@@ -93,7 +84,7 @@ std::string EncodeFunctions(const PdsmTile& tile) {
     out.F32(v.a);
   }
   if (adaptive) out.I32(tile.samples);
-  out.U64(Checksum(std::string_view(bytes).substr(0, size - kChecksumBytes)));
+  out.U64(Fnv1a64(std::string_view(bytes).substr(0, size - kChecksumBytes)));
   return bytes;
 }
 
@@ -143,7 +134,7 @@ std::string EncodeChunk(const EncodedTile& tile) {
   out.I32(tile.tile_size);
   out.U64(tile.chunk.size());
   out.Bytes(tile.chunk.data(), tile.chunk.size());
-  out.U64(Checksum(std::string_view(bytes).substr(0, size - kChecksumBytes)));
+  out.U64(Fnv1a64(std::string_view(bytes).substr(0, size - kChecksumBytes)));
   return bytes;
 }
 
@@ -170,7 +161,7 @@ absl::StatusOr<Contents> Parse(const std::string& bytes, const std::string& path
   const uint32_t version = ByteReader(bytes.data() + sizeof(kMagic)).U32();
   if (version > kTileFileVersion && size >= sizeof(kMagic) + 4 + kChecksumBytes &&
       ByteReader(bytes.data() + size - kChecksumBytes).U64() ==
-          Checksum(std::string_view(bytes).substr(0, size - kChecksumBytes))) {
+          Fnv1a64(std::string_view(bytes).substr(0, size - kChecksumBytes))) {
     return absl::FailedPreconditionError(
         absl::StrFormat("tile file %s: version %d is newer than this build reads (%d)", path,
                         version, kTileFileVersion));
@@ -207,7 +198,7 @@ absl::StatusOr<Contents> Parse(const std::string& bytes, const std::string& path
                                    size, chunk_bytes));
   }
   const uint64_t stored_checksum = ByteReader(bytes.data() + size - kChecksumBytes).U64();
-  if (stored_checksum != Checksum(std::string_view(bytes).substr(0, size - kChecksumBytes))) {
+  if (stored_checksum != Fnv1a64(std::string_view(bytes).substr(0, size - kChecksumBytes))) {
     return corrupt("checksum mismatch");
   }
   if (tile.x0 < 0 || tile.y0 < 0 || tile.width < 0 || tile.height < 0 || tile.samples < 0) {
@@ -262,7 +253,7 @@ absl::StatusOr<PdsmTile> DecodeFunctions(const std::string& bytes, const std::st
     }
   }
   const uint64_t stored_checksum = ByteReader(bytes.data() + size - kChecksumBytes).U64();
-  if (stored_checksum != Checksum(std::string_view(bytes).substr(0, size - kChecksumBytes))) {
+  if (stored_checksum != Fnv1a64(std::string_view(bytes).substr(0, size - kChecksumBytes))) {
     return corrupt("checksum mismatch");
   }
   if (version > kTileFileVersion) {
@@ -300,15 +291,22 @@ absl::StatusOr<PdsmTile> DecodeFunctions(const std::string& bytes, const std::st
 
 }  // namespace
 
-absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile, int tile_size,
-                           FileSystem* fs) {
-  if (absl::Status s = CheckTileForWrite(tile, path); !s.ok()) return s;
+absl::StatusOr<std::string> EncodeTileFile(const PdsmTile& tile, int tile_size,
+                                           const std::string& label) {
+  if (absl::Status s = CheckTileForWrite(tile, label); !s.ok()) return s;
   absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(tile, tile_size);
   if (!encoded.ok()) {
     return absl::Status(encoded.status().code(),
-                        absl::StrCat(path, ": ", encoded.status().message()));
+                        absl::StrCat(label, ": ", encoded.status().message()));
   }
-  return WriteFileAtomically(path, EncodeChunk(*encoded), fs);
+  return EncodeChunk(*encoded);
+}
+
+absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile, int tile_size,
+                           FileSystem* fs) {
+  absl::StatusOr<std::string> bytes = EncodeTileFile(tile, tile_size, path);
+  if (!bytes.ok()) return bytes.status();
+  return WriteFileAtomically(path, *bytes, fs);
 }
 
 absl::StatusOr<PdsmTile> ReadTileFile(const std::string& path) {
@@ -327,13 +325,22 @@ absl::StatusOr<PdsmTile> DecodeTileFile(const std::string& bytes, const std::str
 absl::StatusOr<EncodedTile> ReadTileChunk(const std::string& path, int tile_size) {
   absl::StatusOr<std::string> bytes = ReadWholeFile(path);
   if (!bytes.ok()) return bytes.status();
-  absl::StatusOr<Contents> contents = Parse(*bytes, path);
+  return DecodeTileChunkFile(*bytes, path, tile_size);
+}
+
+absl::Status CheckTileFileBytes(const std::string& bytes, const std::string& label) {
+  return Parse(bytes, label).status();
+}
+
+absl::StatusOr<EncodedTile> DecodeTileChunkFile(const std::string& bytes, const std::string& label,
+                                                int tile_size) {
+  absl::StatusOr<Contents> contents = Parse(bytes, label);
   if (!contents.ok()) return contents.status();
   if (!contents->functions) return std::move(contents->encoded);
   // A file of an earlier build: encoded now, as the file will hold it.
   absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(*contents->functions, tile_size);
   if (!encoded.ok()) {
-    return absl::DataLossError(absl::StrCat("tile file ", path, ": ", encoded.status().message()));
+    return absl::DataLossError(absl::StrCat("tile file ", label, ": ", encoded.status().message()));
   }
   return encoded;
 }

@@ -46,6 +46,11 @@ inline constexpr uint32_t kTileFileVersion = 3;
 absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile, int tile_size,
                            FileSystem* fs = nullptr);
 
+// The bytes WriteTileFile writes (version 3), for a store of its own (server/tile_log.h).
+// Errors as WriteTileFile's before it writes, naming `label`.
+absl::StatusOr<std::string> EncodeTileFile(const PdsmTile& tile, int tile_size,
+                                           const std::string& label);
+
 // Reads a tile written by WriteTileFile. Sizes in the file are checked against the file's
 // length before anything is allocated from them, so a corrupt file costs no more memory than
 // its own size. Errors: NOT_FOUND (no file); DATA_LOSS naming the file when it is not a tile
@@ -60,6 +65,14 @@ absl::StatusOr<PdsmTile> DecodeTileFile(const std::string& bytes, const std::str
 // The tile as the PDSM file will hold it, without decoding it (a file of version 1 or 2 is
 // encoded now, in tiles of `tile_size`). Errors as ReadTileFile's.
 absl::StatusOr<EncodedTile> ReadTileChunk(const std::string& path, int tile_size);
+
+// Whether `bytes` are a whole tile file this build reads: the errors ReadTileFile gives for
+// them, without decoding the tile.
+absl::Status CheckTileFileBytes(const std::string& bytes, const std::string& label);
+
+// ReadTileChunk from a tile file's bytes (of any version); `label` names them in errors.
+absl::StatusOr<EncodedTile> DecodeTileChunkFile(const std::string& bytes, const std::string& label,
+                                                int tile_size);
 
 // `tile` in the layout of versions 1 and 2, as earlier builds wrote it: for tests that this
 // build still reads them.

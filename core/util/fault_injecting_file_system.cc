@@ -78,6 +78,35 @@ class FaultInjectingFileSystem::Scratch final : public ScratchFile {
   std::unique_ptr<ScratchFile> file_;
 };
 
+// A real file written in place whose writes and syncs go through the owner's checks first
+// (reads are never broken).
+class FaultInjectingFileSystem::InPlace final : public RandomAccessFile {
+ public:
+  InPlace(FaultInjectingFileSystem* owner, std::unique_ptr<RandomAccessFile> file)
+      : owner_(owner), file_(std::move(file)) {}
+
+  absl::StatusOr<uint64_t> Size() override { return file_->Size(); }
+  absl::Status WriteAt(uint64_t offset, absl::string_view data) override {
+    return owner_->Write(*file_, path(), offset, data);
+  }
+  absl::Status ReadAt(uint64_t offset, size_t size, char* out) override {
+    return file_->ReadAt(offset, size, out);
+  }
+  absl::Status Truncate(uint64_t size) override {
+    if (absl::Status s = owner_->Check(FileOp::kWrite, path()); !s.ok()) return s;
+    return file_->Truncate(size);
+  }
+  absl::Status Sync() override {
+    if (absl::Status s = owner_->Check(FileOp::kSync, path()); !s.ok()) return s;
+    return file_->Sync();
+  }
+  const std::string& path() const override { return file_->path(); }
+
+ private:
+  FaultInjectingFileSystem* const owner_;
+  std::unique_ptr<RandomAccessFile> file_;
+};
+
 FaultInjectingFileSystem::FaultInjectingFileSystem(FileSystem* target)
     : FileSystemWrapper(target) {}
 
@@ -164,6 +193,14 @@ absl::StatusOr<std::unique_ptr<ScratchFile>> FaultInjectingFileSystem::NewScratc
   absl::StatusOr<std::unique_ptr<ScratchFile>> file = FileSystemWrapper::NewScratchFile(dir);
   if (!file.ok()) return file.status();
   return std::make_unique<Scratch>(this, *std::move(file));
+}
+
+absl::StatusOr<std::unique_ptr<RandomAccessFile>> FaultInjectingFileSystem::OpenFile(
+    const std::string& path) {
+  if (absl::Status s = Check(FileOp::kCreate, path); !s.ok()) return s;
+  absl::StatusOr<std::unique_ptr<RandomAccessFile>> file = FileSystemWrapper::OpenFile(path);
+  if (!file.ok()) return file.status();
+  return std::make_unique<InPlace>(this, *std::move(file));
 }
 
 absl::Status FaultInjectingFileSystem::RenameFile(const std::string& from, const std::string& to) {

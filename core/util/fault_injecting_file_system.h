@@ -26,10 +26,10 @@
 namespace pdsm {
 
 enum class FileOp {
-  kCreate,   // FileSystem::NewTempFile, FileSystem::NewScratchFile
-  kWrite,    // WritableFile::WriteAt, ScratchFile::WriteAt
+  kCreate,   // FileSystem::NewTempFile, NewScratchFile, OpenFile
+  kWrite,    // WritableFile::WriteAt, ScratchFile::WriteAt, RandomAccessFile::WriteAt, Truncate
   kFlush,    // WritableFile::Flush
-  kSync,     // WritableFile::Sync
+  kSync,     // WritableFile::Sync, RandomAccessFile::Sync
   kClose,    // WritableFile::Close
   kRename,   // FileSystem::RenameFile
   kSyncDir,  // FileSystem::SyncDir
@@ -62,12 +62,14 @@ class FaultInjectingFileSystem final : public FileSystemWrapper {
 
   absl::StatusOr<std::unique_ptr<WritableFile>> NewTempFile(const std::string& target) override;
   absl::StatusOr<std::unique_ptr<ScratchFile>> NewScratchFile(const std::string& dir) override;
+  absl::StatusOr<std::unique_ptr<RandomAccessFile>> OpenFile(const std::string& path) override;
   absl::Status RenameFile(const std::string& from, const std::string& to) override;
   absl::Status SyncDir(const std::string& dir) override;
 
  private:
   class File;
   class Scratch;
+  class InPlace;
 
   // A write of `data` through `file` (a WritableFile or a ScratchFile), failing as armed:
   // the injected error, or a full disk that takes what fits first.

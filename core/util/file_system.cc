@@ -38,6 +38,26 @@ absl::Status PwriteFully(int fd, uint64_t offset, absl::string_view data, const 
   return absl::OkStatus();
 }
 
+// pread(2) until `size` bytes are read, retrying on EINTR. DATA_LOSS when the file ends first;
+// errors name `name`.
+absl::Status PreadFully(int fd, uint64_t offset, size_t size, char* out, const std::string& name) {
+  while (size > 0) {
+    const ssize_t n = ::pread(fd, out, size, static_cast<off_t>(offset));
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return LastErrnoStatus("cannot read", name);
+    }
+    if (n == 0) {
+      return absl::DataLossError(absl::StrCat(name, ": ends at byte ", offset, ", ", size,
+                                              " bytes before the read's end"));
+    }
+    out += n;
+    size -= static_cast<size_t>(n);
+    offset += static_cast<uint64_t>(n);
+  }
+  return absl::OkStatus();
+}
+
 // Writes are gathered up to this size: OpenEXR writes a tile as several small pieces.
 constexpr size_t kBufferBytes = 64 * 1024;
 
@@ -110,21 +130,7 @@ class PosixScratchFile final : public ScratchFile {
   }
 
   absl::Status ReadAt(uint64_t offset, size_t size, char* out) override {
-    while (size > 0) {
-      const ssize_t n = ::pread(fd_, out, size, static_cast<off_t>(offset));
-      if (n < 0) {
-        if (errno == EINTR) continue;
-        return LastErrnoStatus("cannot read", label_);
-      }
-      if (n == 0) {
-        return absl::DataLossError(absl::StrCat(label_, ": ends at byte ", offset, ", ", size,
-                                                " bytes before what was written there"));
-      }
-      out += n;
-      size -= static_cast<size_t>(n);
-      offset += static_cast<uint64_t>(n);
-    }
-    return absl::OkStatus();
+    return PreadFully(fd_, offset, size, out, label_);
   }
 
   void Release(uint64_t offset, uint64_t size) override {
@@ -138,6 +144,39 @@ class PosixScratchFile final : public ScratchFile {
  private:
   const int fd_;
   const std::string label_;
+};
+
+class PosixRandomAccessFile final : public RandomAccessFile {
+ public:
+  PosixRandomAccessFile(int fd, std::string path) : fd_(fd), path_(std::move(path)) {}
+  ~PosixRandomAccessFile() override { ::close(fd_); }
+
+  absl::StatusOr<uint64_t> Size() override {
+    struct stat info;
+    if (::fstat(fd_, &info) != 0) return LastErrnoStatus("cannot inspect", path_);
+    return static_cast<uint64_t>(info.st_size);
+  }
+  absl::Status WriteAt(uint64_t offset, absl::string_view data) override {
+    return PwriteFully(fd_, offset, data, path_);
+  }
+  absl::Status ReadAt(uint64_t offset, size_t size, char* out) override {
+    return PreadFully(fd_, offset, size, out, path_);
+  }
+  absl::Status Truncate(uint64_t size) override {
+    while (::ftruncate(fd_, static_cast<off_t>(size)) != 0) {
+      if (errno != EINTR) return LastErrnoStatus("cannot truncate", path_);
+    }
+    return absl::OkStatus();
+  }
+  absl::Status Sync() override {
+    if (::fdatasync(fd_) != 0) return LastErrnoStatus("cannot sync", path_);
+    return absl::OkStatus();
+  }
+  const std::string& path() const override { return path_; }
+
+ private:
+  const int fd_;
+  const std::string path_;
 };
 
 // Six letters and digits, as mkstemp's XXXXXX.
@@ -252,6 +291,23 @@ class PosixFileSystem final : public FileSystem {
     }
     ::closedir(listing);
     return removed;
+  }
+
+  absl::StatusOr<std::unique_ptr<RandomAccessFile>> OpenFile(const std::string& path) override {
+    int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+    if (fd < 0 && errno == ENOENT) {
+      fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+      if (fd >= 0) {
+        if (absl::Status s = SyncDir(ParentDir(path)); !s.ok()) {
+          ::close(fd);
+          return s;
+        }
+      } else if (errno == EEXIST) {  // created meanwhile by another opener
+        fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+      }
+    }
+    if (fd < 0) return LastErrnoStatus("cannot open", path);
+    return std::make_unique<PosixRandomAccessFile>(fd, path);
   }
 
   absl::Status RenameFile(const std::string& from, const std::string& to) override {

@@ -70,6 +70,31 @@ class ScratchFile {
   virtual const std::string& label() const = 0;
 };
 
+// A named file kept open to be written in place and read back (the coordinator's tile log,
+// server/tile_log.h, which appends records and cuts off a torn one). Writes are unbuffered;
+// Sync makes them durable. Thread-safe: reads and writes at offsets (pread, pwrite) need no
+// lock; the owner orders its writes. Every error names the file.
+class RandomAccessFile {
+ public:
+  RandomAccessFile() = default;
+  RandomAccessFile(const RandomAccessFile&) = delete;
+  RandomAccessFile& operator=(const RandomAccessFile&) = delete;
+  virtual ~RandomAccessFile() = default;
+
+  // The file's length in bytes now.
+  virtual absl::StatusOr<uint64_t> Size() = 0;
+  // Writes `data` at byte `offset`.
+  virtual absl::Status WriteAt(uint64_t offset, absl::string_view data) = 0;
+  // Reads `size` bytes at `offset` into `out`. DATA_LOSS when the file ends first.
+  virtual absl::Status ReadAt(uint64_t offset, size_t size, char* out) = 0;
+  // Cuts the file to `size` bytes (ftruncate).
+  virtual absl::Status Truncate(uint64_t size) = 0;
+  // fdatasync: every byte written, and the length, are on the disk.
+  virtual absl::Status Sync() = 0;
+
+  virtual const std::string& path() const = 0;
+};
+
 // Thread-safe: every method may be called from any thread (the implementations hold no
 // mutable state, or lock it).
 class FileSystem {
@@ -104,6 +129,11 @@ class FileSystem {
   // PERMISSION_DENIED when it cannot be written), naming `dir`.
   virtual absl::StatusOr<std::unique_ptr<ScratchFile>> NewScratchFile(const std::string& dir) = 0;
 
+  // Opens `path` to read and write it in place, creating it empty (with the mode a new file
+  // gets) when there is none; a new file's folder is synced, so that its name is durable.
+  // Errors: the errno's status (NOT_FOUND when the folder does not exist), naming `path`.
+  virtual absl::StatusOr<std::unique_ptr<RandomAccessFile>> OpenFile(const std::string& path) = 0;
+
   // rename(2): replaces `to` atomically; a reader sees the old file or the new one.
   virtual absl::Status RenameFile(const std::string& from, const std::string& to) = 0;
   // fsync of the folder `dir` ("" is "."): makes the entries renamed or created in it durable.
@@ -125,6 +155,9 @@ class FileSystemWrapper : public FileSystem {
   }
   absl::StatusOr<std::unique_ptr<ScratchFile>> NewScratchFile(const std::string& dir) override {
     return target_->NewScratchFile(dir);
+  }
+  absl::StatusOr<std::unique_ptr<RandomAccessFile>> OpenFile(const std::string& path) override {
+    return target_->OpenFile(path);
   }
   absl::Status RenameFile(const std::string& from, const std::string& to) override {
     return target_->RenameFile(from, to);
