@@ -11,7 +11,7 @@
 
 namespace pdsm {
 
-// Fills `data` with the events' offsets and (z, count) columns.
+// Fills `data` with the events in the fixed-width encoding (fields 4-5).
 void TileEventsToProto(const TileEvents& events, pdsm::v1::TileEventsData* data);
 
 // What a correct result of one task can hold (the plan and the lease say it): each pixel's
@@ -24,7 +24,9 @@ struct ResultBounds {
   double z_min = 0;       // world units, light space
 };
 
-// INVALID_ARGUMENT naming the field when: offsets are not tile pixels + 1, do not start at 0,
+// Reads either encoding. INVALID_ARGUMENT naming the field when: both encodings are present;
+// event_counts is not empty or 4 bytes per tile pixel, or events is not 8 bytes per event it
+// counts; offsets are not tile pixels + 1, do not start at 0,
 // decrease or do not end at the event count; z and count differ in length; a depth is not
 // finite, is nearer than bounds.z_min, or a pixel's depths are not strictly increasing; a
 // count is 0 or takes the pixel's running sum outside [0, bounds.batch_samples]. The last two

@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -103,12 +105,81 @@ TEST(TileEventsFromProto, RefusesCountsAndDepthsNoBakeCanProduce) {
   EXPECT_TRUE(TileEventsFromProto(data, Tile(), Bounds()).ok());
 }
 
-TEST(TileEventsToProto, RoundTripsThroughTheDecoder) {
+// Valid() in the fixed-width encoding a worker sends (fields 4-5).
+pdsm::v1::TileEventsData ValidArrays() {
+  pdsm::v1::TileEventsData data;
+  data.set_event_counts(std::string("\2\0\0\0\0\0\0\0", 8));
+  const float z[2] = {1.5f, 2.5f};
+  const int32_t count[2] = {2, -2};
+  std::string events;
+  for (int e = 0; e < 2; ++e) {
+    events.append(reinterpret_cast<const char*>(&z[e]), 4);  // the test runs little-endian
+    events.append(reinterpret_cast<const char*>(&count[e]), 4);
+  }
+  data.set_events(events);
+  return data;
+}
+
+TEST(TileEventsToProto, WritesTheFixedWidthEncodingWhichDecodesToTheSameEvents) {
   absl::StatusOr<TileEvents> events = TileEventsFromProto(Valid(), Tile(), Bounds());
   ASSERT_TRUE(events.ok()) << events.status();
   pdsm::v1::TileEventsData encoded;
   TileEventsToProto(*events, &encoded);
-  EXPECT_EQ(encoded.SerializeAsString(), Valid().SerializeAsString());
+  EXPECT_EQ(encoded.SerializeAsString(), ValidArrays().SerializeAsString());
+  EXPECT_EQ(encoded.offsets_size() + encoded.z_size() + encoded.count_size(), 0);
+  absl::StatusOr<TileEvents> decoded = TileEventsFromProto(encoded, Tile(), Bounds());
+  ASSERT_TRUE(decoded.ok()) << decoded.status();
+  EXPECT_EQ(decoded->offsets, events->offsets);
+  EXPECT_EQ(decoded->events, events->events);
+
+  // A tile without events is two empty fields, and decodes to empty lists.
+  TileEvents empty = *events;
+  empty.events.clear();
+  empty.offsets.assign(3, 0);
+  pdsm::v1::TileEventsData none;
+  TileEventsToProto(empty, &none);
+  EXPECT_EQ(none.ByteSizeLong(), 0u);
+  absl::StatusOr<TileEvents> decoded_none = TileEventsFromProto(none, Tile(), Bounds());
+  ASSERT_TRUE(decoded_none.ok()) << decoded_none.status();
+  EXPECT_EQ(decoded_none->offsets, (std::vector<uint64_t>{0, 0, 0}));
+  EXPECT_TRUE(decoded_none->events.empty());
+}
+
+TEST(TileEventsFromProto, RefusesFixedWidthArraysThatDoNotFitTheTileOrTheirCounts) {
+  pdsm::v1::TileEventsData data = ValidArrays();
+  data.mutable_event_counts()->append(std::string(4, '\0'));  // one pixel too many
+  ExpectRefused(data, "event_counts: must be 8 bytes");
+
+  data = ValidArrays();
+  data.mutable_events()->pop_back();
+  ExpectRefused(data, "events: must be 16 bytes");
+
+  data = ValidArrays();
+  (*data.mutable_event_counts())[0] = 3;  // counts an event the bytes do not hold
+  ExpectRefused(data, "events: must be 24 bytes");
+
+  data = ValidArrays();
+  (*data.mutable_event_counts())[3] = '\x7f';  // 2^30 events: refused before allocating
+  ExpectRefused(data, "events: must be");
+
+  data = ValidArrays();
+  data.clear_event_counts();
+  ExpectRefused(data, "event_counts counts none");
+
+  data = ValidArrays();
+  data.add_offsets(0);
+  ExpectRefused(data, "not both");
+
+  // The checks on depths and counts hold in this encoding too.
+  data = ValidArrays();
+  const int32_t too_many = 3;
+  data.mutable_events()->replace(4, 4, reinterpret_cast<const char*>(&too_many), 4);
+  ExpectRefused(data, "count[0]: pixel 0 would have 3 shadowed samples");
+
+  data = ValidArrays();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  data.mutable_events()->replace(8, 4, reinterpret_cast<const char*>(&nan), 4);
+  ExpectRefused(data, "z[1]: must be finite");
 }
 
 }  // namespace
