@@ -104,6 +104,7 @@ absl::Status DecodeArrays(const pdsm::v1::TileEventsData& data, size_t pixels,
                             data.events().size(), ")"));
   }
   events->events.resize(total);
+  if (total == 0) return absl::OkStatus();  // memcpy takes no null pointer, even for 0 bytes
   if constexpr (kEventIsWireLayout) {
     std::memcpy(events->events.data(), data.events().data(), data.events().size());
   } else {

@@ -166,6 +166,15 @@ TEST(TileEventsFromProto, RefusesFixedWidthArraysThatDoNotFitTheTileOrTheirCount
   data.clear_event_counts();
   ExpectRefused(data, "event_counts counts none");
 
+  // Counts of zero only, and no events: an empty tile, however it was spelled (found by
+  // fuzz_task_result: it copied zero bytes to a null pointer).
+  data = ValidArrays();
+  data.set_event_counts(std::string(8, '\0'));
+  data.clear_events();
+  absl::StatusOr<TileEvents> zeros = TileEventsFromProto(data, Tile(), Bounds());
+  ASSERT_TRUE(zeros.ok()) << zeros.status();
+  EXPECT_TRUE(zeros->events.empty());
+
   data = ValidArrays();
   data.add_offsets(0);
   ExpectRefused(data, "not both");
