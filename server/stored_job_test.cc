@@ -267,7 +267,7 @@ TEST_F(StoredJobTest, TheTileFilesOfAnEarlierBuildAreTakenIn) {
   const JobPaths paths(dir_.path().string(), record_.job_id);
   std::filesystem::create_directories(paths.tiles);
   const PdsmTile first = Tile(*plan_, 0, 0.5f), second = Tile(*plan_, 1, 0.25f);
-  ASSERT_TRUE(WriteTileFile(paths.Tile(0), first, plan_->header.tile_size).ok());
+  testing::WriteText(paths.Tile(0), *EncodeTileFile(first, plan_->header.tile_size, "first"));
   testing::WriteText(paths.Tile(1), EncodeEarlierTileFile(second));  // version 1
   testing::WriteText(paths.Tile(1) + ".tmp-abcdef", "a writer that died");
   ASSERT_TRUE(store_->MarkTilesDone(record_.job_id, {0, 1}, 1).ok());

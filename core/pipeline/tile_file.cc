@@ -1,12 +1,8 @@
 #include "core/pipeline/tile_file.h"
 
-#include <sys/stat.h>
-
 #include <bit>
-#include <cerrno>
 #include <cstddef>
 #include <cstdint>
-#include <cstdio>
 #include <cstring>
 #include <optional>
 #include <string_view>
@@ -16,8 +12,6 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/string_view.h"
 #include "core/pdsm/tile_chunk.h"
-#include "core/util/atomic_file.h"
-#include "core/util/file_system.h"
 #include "core/util/fnv1a.h"
 #include "core/util/little_endian.h"
 
@@ -85,38 +79,6 @@ std::string EncodeFunctions(const PdsmTile& tile) {
   }
   if (adaptive) out.I32(tile.samples);
   out.U64(Fnv1a64(std::string_view(bytes).substr(0, size - kChecksumBytes)));
-  return bytes;
-}
-
-// The whole file. NOT_FOUND when there is none.
-absl::StatusOr<std::string> ReadWholeFile(const std::string& path) {
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) {
-    const int error_number = errno;
-    if (error_number == ENOENT) return absl::NotFoundError(absl::StrCat("no tile file ", path));
-    return ErrnoStatus(error_number, absl::StrCat("cannot open ", path));
-  }
-  struct stat info;
-  if (::fstat(::fileno(file), &info) != 0) {
-    const int error_number = errno;
-    std::fclose(file);
-    return ErrnoStatus(error_number, absl::StrCat("cannot stat ", path));
-  }
-  if (!S_ISREG(info.st_mode)) {
-    std::fclose(file);
-    return absl::DataLossError(absl::StrCat(path, ": not a regular file"));
-  }
-  // The file's real length bounds the allocation, whatever its header says.
-  std::string bytes(static_cast<size_t>(info.st_size), '\0');
-  const size_t read = std::fread(bytes.data(), 1, bytes.size(), file);
-  const bool failed = std::ferror(file) != 0;
-  const int error_number = errno;
-  std::fclose(file);
-  if (failed) return ErrnoStatus(error_number, absl::StrCat("cannot read ", path));
-  if (read != bytes.size()) {
-    return absl::DataLossError(absl::StrFormat("%s: file shrank while being read (%d of %d bytes)",
-                                               path, read, bytes.size()));
-  }
   return bytes;
 }
 
@@ -302,30 +264,11 @@ absl::StatusOr<std::string> EncodeTileFile(const PdsmTile& tile, int tile_size,
   return EncodeChunk(*encoded);
 }
 
-absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile, int tile_size,
-                           FileSystem* fs) {
-  absl::StatusOr<std::string> bytes = EncodeTileFile(tile, tile_size, path);
-  if (!bytes.ok()) return bytes.status();
-  return WriteFileAtomically(path, *bytes, fs);
-}
-
-absl::StatusOr<PdsmTile> ReadTileFile(const std::string& path) {
-  absl::StatusOr<std::string> bytes = ReadWholeFile(path);
-  if (!bytes.ok()) return bytes.status();
-  return DecodeTileFile(*bytes, path);
-}
-
 absl::StatusOr<PdsmTile> DecodeTileFile(const std::string& bytes, const std::string& label) {
   absl::StatusOr<Contents> contents = Parse(bytes, label);
   if (!contents.ok()) return contents.status();
   if (contents->functions) return *std::move(contents->functions);
   return DecodeTileChunk(contents->encoded, absl::StrCat("tile file ", label));
-}
-
-absl::StatusOr<EncodedTile> ReadTileChunk(const std::string& path, int tile_size) {
-  absl::StatusOr<std::string> bytes = ReadWholeFile(path);
-  if (!bytes.ok()) return bytes.status();
-  return DecodeTileChunkFile(*bytes, path, tile_size);
 }
 
 absl::Status CheckTileFileBytes(const std::string& bytes, const std::string& label) {

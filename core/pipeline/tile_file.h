@@ -1,5 +1,7 @@
-// One finished (assembled, compressed) tile on the coordinator's disk, so that a restarted
-// coordinator resumes a job without recomputing the tiles it had finished.
+// One finished (assembled, compressed) tile as bytes: how the coordinator's tile log keeps it
+// (server/tile_log.h), so that a restarted coordinator resumes a job without recomputing the
+// tiles it had finished, and how FetchTile sends it. (Until 2026-12-06 each was a file of its
+// own; the coordinator takes such files into the log when it resumes their job.)
 //
 // Layout, all integers little-endian (version 3):
 //   char[8]  magic "PDSMTILE"
@@ -26,51 +28,31 @@
 #include "absl/status/statusor.h"
 #include "core/pdsm/pdsm_image.h"
 #include "core/pdsm/tile_chunk.h"
-#include "core/util/file_system.h"
 
 namespace pdsm {
 
 inline constexpr uint32_t kTileFileVersion = 3;
 
-// Writes `tile` to `path`, crash-safe, through WriteFileAtomically (core/util/atomic_file.h):
-// the bytes go to a unique "<path>.tmp-XXXXXX", are synced, the file is renamed onto `path`
-// and the folder is synced. So `path` holds either its old content or the whole new tile,
-// never part of one, and concurrent writers of one tile never share a temporary file. On
-// error no temporary file is left; a crash can leave one, which no reader opens.
-// Errors: INVALID_ARGUMENT when the tile's offsets are not width * height + 1 nondecreasing
-// values from 0 to the vertex count, width or height is negative, or a function is not one a
-// PDSM holds (CheckTileFunctions); otherwise the errno
-// status of the failing step (e.g. RESOURCE_EXHAUSTED for a full disk), naming the path.
-// `fs` null means FileSystem::Default().
-// `tile_size`: the grid's (tile_chunk.h).
-absl::Status WriteTileFile(const std::string& path, const PdsmTile& tile, int tile_size,
-                           FileSystem* fs = nullptr);
-
-// The bytes WriteTileFile writes (version 3), for a store of its own (server/tile_log.h).
-// Errors as WriteTileFile's before it writes, naming `label`.
+// `tile` as a tile file (version 3). `tile_size`: the grid's (tile_chunk.h). INVALID_ARGUMENT
+// naming `label` when the tile's offsets are not width * height + 1 nondecreasing values from
+// 0 to the vertex count, width or height is negative, or a function is not one a PDSM holds
+// (CheckTileFunctions).
 absl::StatusOr<std::string> EncodeTileFile(const PdsmTile& tile, int tile_size,
                                            const std::string& label);
 
-// Reads a tile written by WriteTileFile. Sizes in the file are checked against the file's
-// length before anything is allocated from them, so a corrupt file costs no more memory than
-// its own size. Errors: NOT_FOUND (no file); DATA_LOSS naming the file when it is not a tile
-// file, truncated, inconsistent (offsets) or fails its checksum; FAILED_PRECONDITION for a
-// version newer than this build reads.
-absl::StatusOr<PdsmTile> ReadTileFile(const std::string& path);
-
-// The same from the file's bytes (received over the network: FetchTile); `label` names them
-// in errors.
+// The tile of a tile file's bytes (from the tile log, or received over the network:
+// FetchTile); `label` names them in errors. Sizes are checked against the bytes' length before
+// anything is allocated from them, so corrupt bytes cost no more memory than their own size.
+// DATA_LOSS naming `label` when they are not a tile file, truncated, inconsistent (offsets) or
+// fail their checksum; FAILED_PRECONDITION for a version newer than this build reads.
 absl::StatusOr<PdsmTile> DecodeTileFile(const std::string& bytes, const std::string& label);
 
-// The tile as the PDSM file will hold it, without decoding it (a file of version 1 or 2 is
-// encoded now, in tiles of `tile_size`). Errors as ReadTileFile's.
-absl::StatusOr<EncodedTile> ReadTileChunk(const std::string& path, int tile_size);
-
-// Whether `bytes` are a whole tile file this build reads: the errors ReadTileFile gives for
-// them, without decoding the tile.
+// Whether `bytes` are a whole tile file this build reads: DecodeTileFile's errors, without
+// decoding the tile.
 absl::Status CheckTileFileBytes(const std::string& bytes, const std::string& label);
 
-// ReadTileChunk from a tile file's bytes (of any version); `label` names them in errors.
+// The tile as the PDSM file will hold it, without decoding it (bytes of version 1 or 2 are
+// encoded now, in tiles of `tile_size`). Errors as DecodeTileFile's.
 absl::StatusOr<EncodedTile> DecodeTileChunkFile(const std::string& bytes, const std::string& label,
                                                 int tile_size);
 

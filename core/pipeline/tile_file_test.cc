@@ -14,7 +14,6 @@
 #include "core/pdsm/pdsm_test_images.h"
 #include "core/pdsm/tile_chunk.h"
 #include "tests/test_support.h"
-#include "tests/write_faults.h"
 
 namespace pdsm {
 
@@ -77,6 +76,24 @@ void Reseal(std::string* bytes) {
   PutU64(bytes, bytes->size() - 8, Fnv1a64(bytes->substr(0, bytes->size() - 8)));
 }
 
+// A tile file on disk, as the tests below keep them: its bytes (EncodeTileFile) written as
+// they are. The coordinator keeps them in its tile log (server/tile_log.h), whose own tests
+// cover durability.
+absl::Status WriteTileBytes(const std::string& path, const PdsmTile& tile, int tile_size) {
+  absl::StatusOr<std::string> bytes = EncodeTileFile(tile, tile_size, path);
+  if (!bytes.ok()) return bytes.status();
+  WriteText(path, *bytes);
+  return absl::OkStatus();
+}
+
+absl::StatusOr<PdsmTile> ReadTileBytes(const std::string& path) {
+  return DecodeTileFile(ReadBytes(path), path);
+}
+
+absl::StatusOr<EncodedTile> ReadChunkBytes(const std::string& path, int tile_size) {
+  return DecodeTileChunkFile(ReadBytes(path), path, tile_size);
+}
+
 std::vector<std::string> FilesIn(const fs::path& dir) {
   std::vector<std::string> names;
   for (const auto& entry : fs::directory_iterator(dir)) {
@@ -89,8 +106,8 @@ TEST(TileFileTest, RoundTripIsExact) {
   TempDir dir;
   const std::string path = dir.File("tile_7.bin");
   const PdsmTile tile = SmallTile();
-  ASSERT_TRUE(WriteTileFile(path, tile, kTileSize).ok());
-  absl::StatusOr<PdsmTile> read = ReadTileFile(path);
+  ASSERT_TRUE(WriteTileBytes(path, tile, kTileSize).ok());
+  absl::StatusOr<PdsmTile> read = ReadTileBytes(path);
   ASSERT_TRUE(read.ok()) << read.status();
   ExpectSameTile(*read, tile);
   // The file holds the tile as the PDSM will: its chunk, not its vertices.
@@ -100,7 +117,7 @@ TEST(TileFileTest, RoundTripIsExact) {
   EXPECT_EQ(bytes[kVersionAt], 3);
   EXPECT_EQ(bytes.size(), kChunkAt + encoded->chunk.size() + 8u);
   EXPECT_EQ(bytes.substr(kChunkAt, encoded->chunk.size()), encoded->chunk);
-  absl::StatusOr<EncodedTile> chunk = ReadTileChunk(path, kTileSize);
+  absl::StatusOr<EncodedTile> chunk = ReadChunkBytes(path, kTileSize);
   ASSERT_TRUE(chunk.ok()) << chunk.status();
   EXPECT_EQ(chunk->chunk, encoded->chunk);
   EXPECT_EQ(chunk->x0, 64);
@@ -111,15 +128,15 @@ TEST(TileFileTest, AdaptiveTileKeepsItsSampleCount) {
   TempDir dir;
   PdsmTile tile = SmallTile();
   tile.samples = 48;
-  ASSERT_TRUE(WriteTileFile(dir.File("a"), tile, kTileSize).ok());
-  absl::StatusOr<PdsmTile> read = ReadTileFile(dir.File("a"));
+  ASSERT_TRUE(WriteTileBytes(dir.File("a"), tile, kTileSize).ok());
+  absl::StatusOr<PdsmTile> read = ReadTileBytes(dir.File("a"));
   ASSERT_TRUE(read.ok()) << read.status();
   ExpectSameTile(*read, tile);
   EXPECT_EQ(read->samples, 48);
-  EXPECT_EQ(ReadTileChunk(dir.File("a"), kTileSize)->samples, 48);
+  EXPECT_EQ(ReadChunkBytes(dir.File("a"), kTileSize)->samples, 48);
   tile.samples = 0;
-  ASSERT_TRUE(WriteTileFile(dir.File("f"), tile, kTileSize).ok());
-  EXPECT_EQ(ReadTileFile(dir.File("f"))->samples, 0);
+  ASSERT_TRUE(WriteTileBytes(dir.File("f"), tile, kTileSize).ok());
+  EXPECT_EQ(ReadTileBytes(dir.File("f"))->samples, 0);
 }
 
 // Files of earlier builds (versions 1 and 2: the vertices themselves) are still read, so a job
@@ -133,16 +150,16 @@ TEST(TileFileTest, EarlierVersionsAreStillRead) {
     EXPECT_EQ(bytes[kVersionAt], samples == 0 ? 1 : 2);
     EXPECT_EQ(bytes.size(), 44 + 7 * 8 + 8 * 8 + (samples == 0 ? 0 : 4) + 8u);
     WriteText(dir.File("old"), bytes);
-    absl::StatusOr<PdsmTile> read = ReadTileFile(dir.File("old"));
+    absl::StatusOr<PdsmTile> read = ReadTileBytes(dir.File("old"));
     ASSERT_TRUE(read.ok()) << read.status();
     ExpectSameTile(*read, tile);
-    absl::StatusOr<EncodedTile> chunk = ReadTileChunk(dir.File("old"), kTileSize);
+    absl::StatusOr<EncodedTile> chunk = ReadChunkBytes(dir.File("old"), kTileSize);
     ASSERT_TRUE(chunk.ok()) << chunk.status();
     EXPECT_EQ(chunk->chunk, EncodeTileChunk(tile, kTileSize)->chunk);
     EXPECT_EQ(chunk->samples, samples);
     for (size_t cut = 1; cut < 12; ++cut) {
       WriteText(dir.File("cut"), bytes.substr(0, bytes.size() - cut));
-      EXPECT_EQ(ReadTileFile(dir.File("cut")).status().code(), absl::StatusCode::kDataLoss);
+      EXPECT_EQ(ReadTileBytes(dir.File("cut")).status().code(), absl::StatusCode::kDataLoss);
     }
   }
 }
@@ -155,8 +172,8 @@ TEST(TileFileTest, RoundTripOfTileWithoutVertices) {
   tile.width = 4;
   tile.height = 3;
   tile.offsets.assign(13, 0);
-  ASSERT_TRUE(WriteTileFile(dir.File("empty"), tile, kTileSize).ok());
-  absl::StatusOr<PdsmTile> read = ReadTileFile(dir.File("empty"));
+  ASSERT_TRUE(WriteTileBytes(dir.File("empty"), tile, kTileSize).ok());
+  absl::StatusOr<PdsmTile> read = ReadTileBytes(dir.File("empty"));
   ASSERT_TRUE(read.ok()) << read.status();
   ExpectSameTile(*read, tile);
   EXPECT_TRUE(read->vertices.empty());
@@ -166,8 +183,8 @@ TEST(TileFileTest, RoundTripOfZeroPixelTile) {
   TempDir dir;
   PdsmTile tile;
   tile.offsets = {0};
-  ASSERT_TRUE(WriteTileFile(dir.File("zero"), tile, kTileSize).ok());
-  absl::StatusOr<PdsmTile> read = ReadTileFile(dir.File("zero"));
+  ASSERT_TRUE(WriteTileBytes(dir.File("zero"), tile, kTileSize).ok());
+  absl::StatusOr<PdsmTile> read = ReadTileBytes(dir.File("zero"));
   ASSERT_TRUE(read.ok()) << read.status();
   ExpectSameTile(*read, tile);
 }
@@ -186,68 +203,10 @@ TEST(TileFileTest, RoundTripOfLargerTile) {
     }
     tile.offsets.push_back(tile.vertices.size());
   }
-  ASSERT_TRUE(WriteTileFile(dir.File("big"), tile, kTileSize).ok());
-  absl::StatusOr<PdsmTile> read = ReadTileFile(dir.File("big"));
+  ASSERT_TRUE(WriteTileBytes(dir.File("big"), tile, kTileSize).ok());
+  absl::StatusOr<PdsmTile> read = ReadTileBytes(dir.File("big"));
   ASSERT_TRUE(read.ok()) << read.status();
   ExpectSameTile(*read, tile);
-}
-
-TEST(TileFileTest, OverwritesAndLeavesNoTemporaryFile) {
-  TempDir dir;
-  const std::string path = dir.File("tile");
-  PdsmTile first = SmallTile();
-  ASSERT_TRUE(WriteTileFile(path, first, kTileSize).ok());
-  PdsmTile second = SmallTile();
-  second.vertices[0].a = 0.5f;
-  ASSERT_TRUE(WriteTileFile(path, second, kTileSize).ok());
-  EXPECT_THAT(FilesIn(dir.path()), ::testing::ElementsAre("tile"));
-  absl::StatusOr<PdsmTile> read = ReadTileFile(path);
-  ASSERT_TRUE(read.ok()) << read.status();
-  ExpectSameTile(*read, second);
-}
-
-// A temporary file a crash left behind is another name: never read as the tile, never
-// written into by the next write (which makes its own).
-TEST(TileFileTest, TemporaryFileLeftByACrashIsNotTheTile) {
-  TempDir dir;
-  const std::string path = dir.File("tile");
-  const std::string crashed = path + ".tmp-AbC123";
-  WriteText(crashed, "left over by a crash");
-  EXPECT_EQ(ReadTileFile(path).status().code(), absl::StatusCode::kNotFound);
-  ASSERT_TRUE(WriteTileFile(path, SmallTile(), kTileSize).ok());
-  // Unlocked, so its writer is gone: the first write in the folder sweeps it (atomic_file.h).
-  EXPECT_FALSE(std::filesystem::exists(crashed));
-  absl::StatusOr<PdsmTile> read = ReadTileFile(path);
-  ASSERT_TRUE(read.ok()) << read.status();
-  ExpectSameTile(*read, SmallTile());
-}
-
-TEST(TileFileTest, EveryFileSystemFailureLeavesThePreviousTile) {
-  TempDir dir;
-  const std::string path = dir.File("tile_3.tile");
-  ASSERT_TRUE(WriteTileFile(path, SmallTile(), kTileSize).ok());
-  PdsmTile next = SmallTile();
-  next.vertices[1].a = 0.125f;
-  next.samples = 12;
-  ::pdsm::testing::ExpectWriteFailuresLeaveTargetIntact(
-      path, dir.path(), [&](FileSystem* fs) { return WriteTileFile(path, next, kTileSize, fs); });
-  absl::StatusOr<PdsmTile> read = ReadTileFile(path);
-  ASSERT_TRUE(read.ok()) << read.status();
-  ExpectSameTile(*read, SmallTile());
-}
-
-TEST(TileFileTest, MissingFileIsNotFound) {
-  TempDir dir;
-  absl::StatusOr<PdsmTile> read = ReadTileFile(dir.File("nope"));
-  EXPECT_EQ(read.status().code(), absl::StatusCode::kNotFound);
-  EXPECT_THAT(read.status().message(), HasSubstr(dir.File("nope")));
-}
-
-TEST(TileFileTest, WriteIntoMissingFolderFailsCleanly) {
-  TempDir dir;
-  const absl::Status s = WriteTileFile(dir.File("no/such/folder/tile"), SmallTile(), kTileSize);
-  EXPECT_EQ(s.code(), absl::StatusCode::kNotFound) << s;
-  EXPECT_THAT(s.message(), HasSubstr("no/such/folder/tile"));
 }
 
 TEST(TileFileTest, RejectsInconsistentTileOnWrite) {
@@ -262,7 +221,7 @@ TEST(TileFileTest, RejectsInconsistentTileOnWrite) {
   PdsmTile negative = SmallTile();
   negative.width = -3;
   for (const PdsmTile& tile : {wrong_count, not_spanning, decreasing, negative}) {
-    EXPECT_EQ(WriteTileFile(path, tile, kTileSize).code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_EQ(WriteTileBytes(path, tile, kTileSize).code(), absl::StatusCode::kInvalidArgument);
   }
   EXPECT_TRUE(FilesIn(dir.path()).empty());
 }
@@ -270,12 +229,12 @@ TEST(TileFileTest, RejectsInconsistentTileOnWrite) {
 TEST(TileFileTest, TruncationAtEveryByteIsDataLoss) {
   TempDir dir;
   const std::string good = dir.File("good");
-  ASSERT_TRUE(WriteTileFile(good, SmallTile(), kTileSize).ok());
+  ASSERT_TRUE(WriteTileBytes(good, SmallTile(), kTileSize).ok());
   const std::string bytes = ReadBytes(good);
   const std::string path = dir.File("cut");
   for (size_t n = 0; n < bytes.size(); ++n) {
     WriteText(path, bytes.substr(0, n));
-    absl::StatusOr<PdsmTile> read = ReadTileFile(path);
+    absl::StatusOr<PdsmTile> read = ReadTileBytes(path);
     EXPECT_EQ(read.status().code(), absl::StatusCode::kDataLoss) << n << " bytes";
     EXPECT_THAT(read.status().message(), HasSubstr(path)) << n << " bytes";
   }
@@ -284,15 +243,15 @@ TEST(TileFileTest, TruncationAtEveryByteIsDataLoss) {
 TEST(TileFileTest, TrailingBytesAreDataLoss) {
   TempDir dir;
   const std::string path = dir.File("tile");
-  ASSERT_TRUE(WriteTileFile(path, SmallTile(), kTileSize).ok());
+  ASSERT_TRUE(WriteTileBytes(path, SmallTile(), kTileSize).ok());
   WriteText(path, ReadBytes(path) + std::string(8, '\0'));
-  EXPECT_EQ(ReadTileFile(path).status().code(), absl::StatusCode::kDataLoss);
+  EXPECT_EQ(ReadTileBytes(path).status().code(), absl::StatusCode::kDataLoss);
 }
 
 TEST(TileFileTest, FlippedBitAnywhereIsDataLoss) {
   TempDir dir;
   const std::string good = dir.File("good");
-  ASSERT_TRUE(WriteTileFile(good, SmallTile(), kTileSize).ok());
+  ASSERT_TRUE(WriteTileBytes(good, SmallTile(), kTileSize).ok());
   const std::string bytes = ReadBytes(good);
   const std::string path = dir.File("flipped");
   for (size_t i = 0; i < bytes.size(); ++i) {
@@ -300,7 +259,7 @@ TEST(TileFileTest, FlippedBitAnywhereIsDataLoss) {
       std::string corrupt = bytes;
       corrupt[i] = static_cast<char>(corrupt[i] ^ (1 << bit));
       WriteText(path, corrupt);
-      absl::StatusOr<PdsmTile> read = ReadTileFile(path);
+      absl::StatusOr<PdsmTile> read = ReadTileBytes(path);
       EXPECT_EQ(read.status().code(), absl::StatusCode::kDataLoss) << "byte " << i;
       EXPECT_THAT(read.status().message(), HasSubstr(path)) << "byte " << i;
     }
@@ -310,18 +269,18 @@ TEST(TileFileTest, FlippedBitAnywhereIsDataLoss) {
 TEST(TileFileTest, ChecksumMismatchIsNamed) {
   TempDir dir;
   const std::string path = dir.File("tile");
-  ASSERT_TRUE(WriteTileFile(path, SmallTile(), kTileSize).ok());
+  ASSERT_TRUE(WriteTileBytes(path, SmallTile(), kTileSize).ok());
   std::string bytes = ReadBytes(path);
   bytes[kChunkAt + 20] ^= 0x10;  // in the chunk
   WriteText(path, bytes);
-  EXPECT_THAT(ReadTileFile(path).status().message(), HasSubstr("checksum"));
+  EXPECT_THAT(ReadTileBytes(path).status().message(), HasSubstr("checksum"));
 }
 
 TEST(TileFileTest, NotATileFile) {
   TempDir dir;
   const std::string path = dir.File("tile");
   WriteText(path, std::string(200, 'x'));
-  absl::StatusOr<PdsmTile> read = ReadTileFile(path);
+  absl::StatusOr<PdsmTile> read = ReadTileBytes(path);
   EXPECT_EQ(read.status().code(), absl::StatusCode::kDataLoss);
   EXPECT_THAT(read.status().message(), HasSubstr("magic"));
 }
@@ -331,26 +290,26 @@ TEST(TileFileTest, NotATileFile) {
 TEST(TileFileTest, HugeSizesUnderValidChecksumAreDataLoss) {
   TempDir dir;
   const std::string good = dir.File("good");
-  ASSERT_TRUE(WriteTileFile(good, SmallTile(), kTileSize).ok());
+  ASSERT_TRUE(WriteTileBytes(good, SmallTile(), kTileSize).ok());
   const std::string path = dir.File("huge");
   for (const uint64_t count : {uint64_t{1} << 40, uint64_t{1} << 61, ~uint64_t{0}}) {
     std::string bytes = ReadBytes(good);
     PutU64(&bytes, kChunkBytesAt, count);
     Reseal(&bytes);
     WriteText(path, bytes);
-    EXPECT_EQ(ReadTileFile(path).status().code(), absl::StatusCode::kDataLoss) << count;
+    EXPECT_EQ(ReadTileBytes(path).status().code(), absl::StatusCode::kDataLoss) << count;
 
     bytes = EncodeEarlierTileFile(SmallTile());
     PutU64(&bytes, kVertexCountAt, count);
     Reseal(&bytes);
     WriteText(path, bytes);
-    EXPECT_EQ(ReadTileFile(path).status().code(), absl::StatusCode::kDataLoss) << count;
+    EXPECT_EQ(ReadTileBytes(path).status().code(), absl::StatusCode::kDataLoss) << count;
 
     bytes = EncodeEarlierTileFile(SmallTile());
     PutU64(&bytes, kOffsetCountAt, count);
     Reseal(&bytes);
     WriteText(path, bytes);
-    EXPECT_EQ(ReadTileFile(path).status().code(), absl::StatusCode::kDataLoss) << count;
+    EXPECT_EQ(ReadTileBytes(path).status().code(), absl::StatusCode::kDataLoss) << count;
   }
   // Width and height as large as int32 allows.
   for (std::string bytes : {ReadBytes(good), EncodeEarlierTileFile(SmallTile())}) {
@@ -359,7 +318,7 @@ TEST(TileFileTest, HugeSizesUnderValidChecksumAreDataLoss) {
     }
     Reseal(&bytes);
     WriteText(path, bytes);
-    EXPECT_EQ(ReadTileFile(path).status().code(), absl::StatusCode::kDataLoss);
+    EXPECT_EQ(ReadTileBytes(path).status().code(), absl::StatusCode::kDataLoss);
   }
 }
 
@@ -377,7 +336,7 @@ TEST(TileFileTest, BadOffsetsOfAnEarlierVersionUnderValidChecksumAreDataLoss) {
     PutU64(&bytes, kOffsetsAt + 8 * c.index, c.value);
     Reseal(&bytes);
     WriteText(path, bytes);
-    absl::StatusOr<PdsmTile> read = ReadTileFile(path);
+    absl::StatusOr<PdsmTile> read = ReadTileBytes(path);
     EXPECT_EQ(read.status().code(), absl::StatusCode::kDataLoss) << c.message;
     EXPECT_THAT(read.status().message(), HasSubstr(c.message));
   }
@@ -386,12 +345,12 @@ TEST(TileFileTest, BadOffsetsOfAnEarlierVersionUnderValidChecksumAreDataLoss) {
 TEST(TileFileTest, NewerVersionIsFailedPrecondition) {
   TempDir dir;
   const std::string path = dir.File("tile");
-  ASSERT_TRUE(WriteTileFile(path, SmallTile(), kTileSize).ok());
+  ASSERT_TRUE(WriteTileBytes(path, SmallTile(), kTileSize).ok());
   std::string bytes = ReadBytes(path);
   bytes[kVersionAt] = static_cast<char>(kTileFileVersion + 1);
   Reseal(&bytes);
   WriteText(path, bytes);
-  EXPECT_EQ(ReadTileFile(path).status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_EQ(ReadTileBytes(path).status().code(), absl::StatusCode::kFailedPrecondition);
 }
 
 }  // namespace

@@ -5,8 +5,8 @@
 //
 //   FaultInjectingFileSystem fs;
 //   fs.FailNth(FileOp::kRename, 1);              // the next rename fails with EIO
-//   EXPECT_FALSE(WriteTileFile(path, tile, &fs).ok());
-//   // `path` still holds the previous tile; no "<path>.tmp-*" is left.
+//   EXPECT_FALSE(WriteFileAtomically(path, bytes, &fs).ok());
+//   // `path` still holds its previous bytes; no "<path>.tmp-*" is left.
 //
 // Tests that sweep every call first run the write once and read op_count(), then fail
 // calls 1 .. op_count() in turn.

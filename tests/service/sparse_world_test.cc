@@ -67,9 +67,7 @@ TEST(SparseWorld, TilesNoCasterReachesAreNeverStoredYetServedAndBakedExactly) {
   {
     std::string bytes;
     ASSERT_TRUE(FetchTileBytes(cluster, job_id, unreached, &bytes).ok());
-    const std::string copy = cluster.dir().File("fetched.tile");
-    WriteText(copy, bytes);
-    absl::StatusOr<PdsmTile> tile = ReadTileFile(copy);
+    absl::StatusOr<PdsmTile> tile = DecodeTileFile(bytes, "the fetched tile");
     ASSERT_TRUE(tile.ok()) << tile.status();
     EXPECT_TRUE(tile->vertices.empty());
     EXPECT_EQ(tile->width * tile->height + 1, static_cast<int>(tile->offsets.size()));
