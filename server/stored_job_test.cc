@@ -1,6 +1,8 @@
 #include "server/stored_job.h"
 
 #include <filesystem>
+#include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -18,10 +20,10 @@ namespace {
 
 using testing::TempDir;
 
-std::shared_ptr<const BakePlan> TinyPlan() {
+std::shared_ptr<const BakePlan> TinyPlan(int width = 16, int height = 8) {
   pdsm::v1::BakeParams overrides;
-  overrides.add_resolution(16);
-  overrides.add_resolution(8);
+  overrides.add_resolution(width);
+  overrides.add_resolution(height);
   overrides.set_samples(2);
   overrides.set_tile_size(8);
   absl::StatusOr<Scene> scene = LoadSceneFile(testing::ExamplePath("plates"), overrides);
@@ -46,11 +48,12 @@ PdsmTile Tile(const BakePlan& plan, int index, float a) {
 
 class StoredJobTest : public ::testing::Test {
  protected:
-  void SetUp() override {
+  void SetUp() override { Init(TinyPlan()); }
+  void Init(std::shared_ptr<const BakePlan> plan) {
     absl::StatusOr<std::unique_ptr<JobStore>> store = JobStore::Open(dir_.path().string());
     ASSERT_TRUE(store.ok()) << store.status();
     store_ = *std::move(store);
-    plan_ = TinyPlan();
+    plan_ = std::move(plan);
     JobRecord record;
     record.job_id = "0123456789abcdef";
     record.idempotency_key = "k";
@@ -284,6 +287,70 @@ TEST_F(StoredJobTest, TheTileFilesOfAnEarlierBuildAreTakenIn) {
   ASSERT_TRUE((*writer)->WriteTile(second).ok());
   ASSERT_TRUE((*writer)->Finish().ok());
   EXPECT_TRUE(testing::ReadBytes(paths.pdsm) == testing::ReadBytes(direct));
+}
+
+// Stores, commits and withdrawals from several threads at once, as the coordinator's executor
+// and its verification make them: every tile ends done exactly when its last word was a store
+// followed by a commit, and a restart finds the same tiles with the same bytes.
+class StoredJobThreadsTest : public StoredJobTest {
+ protected:
+  void SetUp() override {}
+};
+
+TEST_F(StoredJobThreadsTest, ConcurrentStoresCommitsAndWithdrawalsKeepTheStoreAndLogInStep) {
+  Init(TinyPlan(64, 64));  // 64 tiles of 8 x 8
+  const int tiles = plan_->tile_count();
+  // Every third tile is all lit (a row without a record), and so is every tile no caster
+  // reaches (the plan makes those, whatever was stored).
+  const auto tile_of = [&](int tile) {
+    return tile % 3 == 0 || IsUnreachedTile(*plan_, tile)
+               ? MakeUnreachedTile(*plan_, tile).tile
+               : Tile(*plan_, tile, 0.25f + 0.01f * tile);
+  };
+  int shadowed = 0;
+  for (int tile = 0; tile < tiles; ++tile) shadowed += tile_of(tile).vertices.empty() ? 0 : 1;
+  ASSERT_GE(shadowed, 16) << "the test needs tiles stored as records";
+  ASSERT_EQ(tiles, 64);
+  std::shared_ptr<StoredJob> job = Job(nullptr);
+  ASSERT_TRUE(job->ResumeTiles({}).ok());
+  const std::shared_ptr<JobOutput> output = job->LightOutput(0);
+  constexpr int kThreads = 4;
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t) {
+    threads.emplace_back([&, t] {
+      for (int tile = t; tile < tiles; tile += kThreads) {
+        EXPECT_TRUE(output->StoreTile(tile_of(tile)).ok());
+        if (tile % 2 == 0) EXPECT_TRUE(output->CommitTiles().ok());
+      }
+      EXPECT_TRUE(output->CommitTiles().ok());
+    });
+  }
+  // Verification taking tiles back meanwhile: those of 5 mod 8, whenever it gets to them.
+  threads.emplace_back([&] {
+    for (int tile = 5; tile < tiles; tile += 8) EXPECT_TRUE(output->WithdrawTiles({tile}).ok());
+  });
+  for (std::thread& thread : threads) thread.join();
+  // A withdrawal can come before or after its tile's store and commit; the withdrawn tiles are
+  // stored and committed once more, as the engine would recompute them.
+  for (int tile = 5; tile < tiles; tile += 8) {
+    ASSERT_TRUE(output->StoreTile(tile_of(tile)).ok());
+  }
+  ASSERT_TRUE(output->CommitTiles().ok());
+  std::vector<int> all(tiles);
+  for (int tile = 0; tile < tiles; ++tile) all[tile] = tile;
+  EXPECT_EQ(*store_->DoneTiles(record_.job_id), all);
+  EXPECT_EQ(store_->GetJob(record_.job_id)->tiles_done, tiles);
+
+  std::shared_ptr<StoredJob> restarted = Job(nullptr);
+  ASSERT_EQ(*restarted->ResumeTiles(all), all);
+  EXPECT_EQ(restarted->FinishedTiles(0), all);
+  for (int tile = 0; tile < tiles; ++tile) {
+    absl::StatusOr<std::string> bytes = restarted->FinishedTileBytes(0, tile);
+    ASSERT_TRUE(bytes.ok()) << bytes.status();
+    absl::StatusOr<PdsmTile> read = DecodeTileFile(*bytes, "tile");
+    ASSERT_TRUE(read.ok()) << read.status();
+    EXPECT_EQ(read->vertices, tile_of(tile).vertices) << "tile " << tile;
+  }
 }
 
 }  // namespace
