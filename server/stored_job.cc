@@ -398,12 +398,7 @@ absl::Status StoredJob::WriteFile() {
       // engine made it.
       if (!unreached_samples) unreached_samples = UnreachedTileSamples(*light.plan);
       const TileRect rect = light.plan->tile(tile);
-      absl::StatusOr<std::string> chunk = empty_chunks.Chunk(rect.width, rect.height);
-      if (!chunk.ok()) return chunk.status();
-      EncodedTile made{rect.x0, rect.y0, rect.width, rect.height, *unreached_samples, 0, {}};
-      made.tile_size = light.plan->header.tile_size;
-      made.chunk = *std::move(chunk);
-      return made;
+      return empty_chunks.Tile(rect.x0, rect.y0, rect.width, rect.height, *unreached_samples);
     };
     if (absl::Status s = writer->WriteEncodedTiles(tile_of); !s.ok()) return s;
     return writer->Finish();

@@ -107,19 +107,20 @@ absl::Status EncodedTileStore::WriteTo(PdsmWriter* writer) {
     const Place& place = places.at(static_cast<size_t>(index));
     const int x0 = static_cast<int>(index % grid.TilesX()) * grid.tile_size;
     const int y0 = static_cast<int>(index / grid.TilesX()) * grid.tile_size;
-    EncodedTile tile{x0, y0, grid.TileWidth(x0), grid.TileHeight(y0), place.samples, grid.tile_size,
-                     {}};
     if (!place.present) {
       return absl::FailedPreconditionError(
           absl::StrFormat("tile at (%d, %d) was never stored", x0, y0));
     }
     if (place.size == 0) {
-      absl::StatusOr<std::string> empty = empty_.Chunk(tile.width, tile.height);
-      if (!empty.ok()) return empty.status();
-      tile.chunk = *std::move(empty);
-      return tile;
+      return empty_.Tile(x0, y0, grid.TileWidth(x0), grid.TileHeight(y0), place.samples);
     }
-    tile.chunk.resize(place.size);
+    EncodedTile tile{x0,
+                     y0,
+                     grid.TileWidth(x0),
+                     grid.TileHeight(y0),
+                     place.samples,
+                     grid.tile_size,
+                     std::string(place.size, '\0')};
     if (absl::Status s = scratch->ReadAt(place.offset, place.size, tile.chunk.data()); !s.ok()) {
       return ForOutput(s);
     }

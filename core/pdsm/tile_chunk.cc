@@ -173,4 +173,11 @@ absl::StatusOr<std::string> EmptyTileChunks::Chunk(int width, int height) {
   return std::move(encoded->chunk);
 }
 
+absl::StatusOr<EncodedTile> EmptyTileChunks::Tile(int x0, int y0, int width, int height,
+                                                  int samples) {
+  absl::StatusOr<std::string> chunk = Chunk(width, height);
+  if (!chunk.ok()) return chunk.status();
+  return EncodedTile{x0, y0, width, height, samples, tile_size_, *std::move(chunk)};
+}
+
 }  // namespace pdsm

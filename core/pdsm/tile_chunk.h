@@ -57,6 +57,9 @@ class EmptyTileChunks {
   // The chunk of a width x height tile without a vertex, in tiles of the tile size. Errors as
   // EncodeTileChunk's.
   absl::StatusOr<std::string> Chunk(int width, int height);
+  // The whole encoded tile at (x0, y0) of that size, holding `samples` (EncodedTile::samples):
+  // what a writer copies for a tile without a vertex. Errors as Chunk's.
+  absl::StatusOr<EncodedTile> Tile(int x0, int y0, int width, int height, int samples);
 
  private:
   const int tile_size_;
