@@ -9,17 +9,20 @@ gaps between definitions are measured on the same rays.
 
   /usr/bin/python3 bench/weighting_gap.py [--pdsm build/client/pdsm] [--out DIR]
       [--shared ../shared] [--scenes plates,large_light,sun_pillars,dragon] [--grid N]
+    [--repeat 3]
 
 Points: cycles_compare.py's grids (texel centres over the ground at the PDSM's density; the
 dragon a 10x10 crop, skipped without SHARED/scenes/dragon.json); large_light is plates with its
 3x3 light grown to 10x10 (written to OUT/large_light/scene.json). Penumbra: the unweighted
-reference strictly between 0.01 and 0.99. pdsm: `pdsm bake` at the scene's settings, then
-`pdsm query`, measured against each definition. Output: a markdown table on stdout and in
-OUT/summary.md.
+reference strictly between 0.01 and 0.99. pdsm: `pdsm bake --weighting unweighted` and
+`pdsm bake --weighting emitter` at the scene's settings (their CPU seconds interleaved,
+--repeat times, medians), then `pdsm query`, each measured against each definition. Output: two
+markdown tables on stdout and in OUT/summary.md.
 """
 import argparse
 import json
 import os
+import statistics
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -60,15 +63,28 @@ def measure(args, name, scene, grid, crop):
                            + method + extra, out)
         refs[w] = read_values(out)
     penumbra = [i for i, a in enumerate(refs["unweighted"]) if 0.01 < a < 0.99]
-    exr = os.path.join(folder, "pdsm.exr")
-    bake_cpu = run_timed([args.pdsm, "bake", scene, "-o", exr, "--no-preview"])
-    run_timed([args.pdsm, "query", exr, "--points", points], os.path.join(folder, "pdsm.csv"))
-    baked = read_values(os.path.join(folder, "pdsm.csv"))
+    bakes = ("unweighted", "emitter")
+    bake_cpu = {b: [] for b in bakes}
+    for _ in range(args.repeat):  # interleaved: the machine's load hits both alike
+        for b in bakes:
+            exr = os.path.join(folder, f"pdsm_{b}.exr")
+            bake_cpu[b].append(run_timed([args.pdsm, "bake", scene, "-o", exr, "--no-preview",
+                                          "--weighting", b]))
+    pdsm = {}
+    for b in bakes:
+        exr = os.path.join(folder, f"pdsm_{b}.exr")
+        csv = os.path.join(folder, f"pdsm_{b}.csv")
+        run_timed([args.pdsm, "query", exr, "--points", points], csv)
+        baked = read_values(csv)
+        pdsm[b] = {w: errors(baked, refs[w], penumbra) for w in WEIGHTINGS}
+        pdsm[b]["bytes"] = os.path.getsize(exr)
     row = {"name": name, "points": len(refs["unweighted"]), "penumbra": len(penumbra),
-           "method": method[1], "reference_cpu": cpu, "bake_cpu": bake_cpu,
+           "method": method[1], "reference_cpu": cpu,
+           "bake_cpu": {b: statistics.median(v) for b, v in bake_cpu.items()},
+           "bake_cpu_runs": bake_cpu,
            "gap_unweighted": errors(refs["unweighted"], refs["irradiance"], penumbra),
            "gap_emitter": errors(refs["emitter"], refs["irradiance"], penumbra),
-           "pdsm": {w: errors(baked, refs[w], penumbra) for w in WEIGHTINGS}}
+           "pdsm": pdsm}
     print(f"{name}: {json.dumps(row)}", file=sys.stderr, flush=True)
     return row
 
@@ -84,6 +100,7 @@ def main():
     p.add_argument("--shared", default=os.environ.get("PDSM_SHARED", "../shared"))
     p.add_argument("--scenes", default="plates,large_light,sun_pillars,dragon")
     p.add_argument("--grid", type=int, help="an NxN grid for every scene (quick checks)")
+    p.add_argument("--repeat", type=int, default=3, help="bakes of each weighting, interleaved")
     args = p.parse_args()
     os.makedirs(args.out, exist_ok=True)
     table = {name: (path, grid, crop) for name, path, grid, crop, _ in SCENES}
@@ -97,15 +114,21 @@ def main():
                 print(f"{name}: skipped ({path} is absent)", file=sys.stderr)
                 continue
         rows.append(measure(args, name, path, grid, crop))
-    lines = ["| scene (penumbra points) | unweighted vs irradiance: MAE / P95 / P99 / max "
-             "| emitter vs irradiance | pdsm bake vs unweighted: MAE / P99 "
-             "| pdsm vs emitter | pdsm vs irradiance |", "|---|---|---|---|---|---|"]
+    lines = ["Definitions, exactly (references): MAE / P95 / P99 / max on penumbra points", "",
+             "| scene (penumbra points) | unweighted vs irradiance | emitter vs irradiance |",
+             "|---|---|---|"]
     for r in rows:
-        pd = r["pdsm"]
         lines.append(f"| {r['name']} ({r['penumbra']}) | {fmt(r['gap_unweighted'])} "
-                     f"| {fmt(r['gap_emitter'])} "
-                     + " ".join(f"| {pd[w]['mae']:.4f} / {pd[w]['p99']:.4f}" for w in WEIGHTINGS)
-                     + " |")
+                     f"| {fmt(r['gap_emitter'])} |")
+    lines += ["", "Bakes: MAE / P99 against each reference; CPU-s (median), file bytes", "",
+              "| scene | bake | vs unweighted | vs emitter | vs irradiance | CPU-s | bytes |",
+              "|---|---|---|---|---|---|---|"]
+    for r in rows:
+        for b, pd in r["pdsm"].items():
+            lines.append(f"| {r['name']} | {b} "
+                         + " ".join(f"| {pd[w]['mae']:.4f} / {pd[w]['p99']:.4f}"
+                                    for w in WEIGHTINGS)
+                         + f" | {r['bake_cpu'][b]:.2f} | {pd['bytes']:,} |")
     text = "\n".join(lines) + "\n"
     print(text)
     open(os.path.join(args.out, "summary.md"), "w").write(text)

@@ -26,6 +26,10 @@ void AddOverrideFlags(CLI::App* cmd, OverrideFlags* flags) {
   cmd->add_flag("--surfaces-only", flags->surfaces_only,
                 "Keep A(z) only near receiver surfaces (static receivers; elsewhere NaN)");
   cmd->add_option("--depth-bias", flags->depth_bias, "Constant depth bias, world units");
+  cmd->add_option("--weighting", flags->weighting,
+                  "What a light sample counts for: unweighted (the fraction of the light's area "
+                  "hidden) or emitter (its power toward the point, cos/r^2: the fraction of the "
+                  "light's solid angle hidden)");
 }
 
 absl::StatusOr<pdsm::v1::Sampling> ParseSamplingName(const std::string& name,
@@ -88,6 +92,14 @@ absl::StatusOr<pdsm::v1::BakeParams> ToBakeParams(const OverrideFlags& flags) {
   if (flags.adaptive_tolerance) params.set_adaptive_tolerance(*flags.adaptive_tolerance);
   if (flags.surfaces_only) params.set_surfaces_only(true);
   if (flags.depth_bias) params.set_depth_bias(*flags.depth_bias);
+  if (flags.weighting == "unweighted") {
+    params.set_weighting(pdsm::v1::UNWEIGHTED);
+  } else if (flags.weighting == "emitter") {
+    params.set_weighting(pdsm::v1::EMITTER);
+  } else if (!flags.weighting.empty()) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--weighting: unknown weighting \"%s\" (one of unweighted, emitter)", flags.weighting));
+  }
   if (!flags.sampling.empty()) {
     absl::StatusOr<pdsm::v1::Sampling> sampling = ParseSamplingName(flags.sampling, "--sampling");
     if (!sampling.ok()) return sampling.status();

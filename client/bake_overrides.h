@@ -1,6 +1,7 @@
 // The bake-parameter flags shared by `pdsm bake` and `pdsm submit` (--resolution, --samples,
 // --sm-resolution, --epsilon, --tile-size, --depth-bias, --sampling, --adaptive-tolerance,
-// --adaptive-min-samples, --surfaces-only): they override the scene file's bake fields.
+// --adaptive-min-samples, --surfaces-only, --weighting): they override the scene file's bake
+// fields.
 #ifndef PDSM_CLIENT_BAKE_OVERRIDES_H_
 #define PDSM_CLIENT_BAKE_OVERRIDES_H_
 
@@ -23,6 +24,7 @@ struct OverrideFlags {
   std::optional<double> adaptive_tolerance;
   std::optional<int64_t> adaptive_min_samples;
   bool surfaces_only = false;  // --surfaces-only
+  std::string weighting;       // --weighting: unweighted or emitter (bake.weighting)
 };
 
 void AddOverrideFlags(CLI::App* command, OverrideFlags* flags);

@@ -28,6 +28,7 @@ absl::Status CheckEvents(const TileEvents& events, const ResultBounds& bounds,
   // Events are stored as float: a depth rounded from z_min may sit just below it.
   const float z_min = std::nextafter(static_cast<float>(bounds.z_min), -1.0f);
   const size_t pixels = events.PixelCount();
+  const bool keyed = bounds.keying == EventKeying::kSampleKeys;
   for (size_t p = 0; p < pixels; ++p) {
     const uint64_t begin = events.offsets[p], end = events.offsets[p + 1];
     int64_t shadowed = 0;
@@ -39,11 +40,22 @@ absl::Status CheckEvents(const TileEvents& events, const ResultBounds& bounds,
         return bad(absl::StrCat("z[", e, "]: nearer than the plan's rays start (", z, " < ",
                                 bounds.z_min, ")"));
       }
-      if (e > begin && !(z > events.events[e - 1].z)) {
+      if (count == 0) return bad(absl::StrCat("count[", e, "]: must not be 0"));
+      if (!keyed && e > begin && !(z > events.events[e - 1].z)) {
         return bad(absl::StrCat("z[", e, "]: depths of pixel ", p, " must increase"));
       }
-      if (count == 0) return bad(absl::StrCat("count[", e, "]: must not be 0"));
-      shadowed += count;
+      if (keyed) {
+        if (e > begin && !KeyedBefore(events.events[e - 1], events.events[e])) {
+          return bad(absl::StrCat("z[", e, "]: (depth, key) of pixel ", p, " must increase"));
+        }
+        const int64_t sample = SampleOfEvent(events.events[e]);
+        if (sample < bounds.sample_begin || sample >= bounds.sample_begin + bounds.batch_samples) {
+          return bad(absl::StrCat("count[", e, "]: sample ", sample, " is not of the batch [",
+                                  bounds.sample_begin, ", ",
+                                  bounds.sample_begin + bounds.batch_samples, ")"));
+        }
+      }
+      shadowed += ShadowChange(events.events[e], bounds.keying);
       if (shadowed < 0 || shadowed > bounds.batch_samples) {
         return bad(absl::StrCat("count[", e, "]: pixel ", p, " would have ", shadowed,
                                 " shadowed samples of a batch of ", bounds.batch_samples));

@@ -105,6 +105,39 @@ TEST(TileEventsFromProto, RefusesCountsAndDepthsNoBakeCanProduce) {
   EXPECT_TRUE(TileEventsFromProto(data, Tile(), Bounds()).ok());
 }
 
+// Sample-keyed results (an emitter-weighted plan): a batch of samples 4 and 5 (keys 5, 6).
+TEST(TileEventsFromProto, SampleKeyedResultsAreOrderedByDepthAndKeyAndOfTheBatch) {
+  const ResultBounds keyed{
+      .batch_samples = 2, .z_min = 1.0, .keying = EventKeying::kSampleKeys, .sample_begin = 4};
+  pdsm::v1::TileEventsData data;
+  for (uint64_t o : {0, 4, 4}) data.add_offsets(o);
+  // Both samples enter at one depth (two events there), then leave.
+  data.add_z(1.5f), data.add_count(5);
+  data.add_z(1.5f), data.add_count(6);
+  data.add_z(2.5f), data.add_count(-6);
+  data.add_z(3.5f), data.add_count(-5);
+  absl::StatusOr<TileEvents> events = TileEventsFromProto(data, Tile(), keyed);
+  ASSERT_TRUE(events.ok()) << events.status();
+  EXPECT_EQ(events->Pixel(0)[1], (Event{1.5f, 6}));
+  // Counted, two events at one depth are malformed.
+  EXPECT_FALSE(TileEventsFromProto(data, Tile(), Bounds()).ok());
+
+  auto refused = [&](const pdsm::v1::TileEventsData& bad, const std::string& field) {
+    absl::StatusOr<TileEvents> r = TileEventsFromProto(bad, Tile(), keyed);
+    ASSERT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_NE(r.status().message().find(field), std::string::npos) << r.status();
+  };
+  pdsm::v1::TileEventsData swapped = data;  // keys at one depth out of order
+  swapped.set_count(0, 6), swapped.set_count(1, 5);
+  refused(swapped, "(depth, key) of pixel 0 must increase");
+  pdsm::v1::TileEventsData foreign = data;  // sample 3 is another batch's
+  foreign.set_count(0, 4), foreign.set_count(3, -4);
+  refused(foreign, "sample 3 is not of the batch [4, 6)");
+  pdsm::v1::TileEventsData lowest = data;  // a key no sample has, whose negation overflows
+  lowest.set_count(3, std::numeric_limits<int32_t>::min());
+  refused(lowest, "count[3]");
+}
+
 // Valid() in the fixed-width encoding a worker sends (fields 4-5).
 pdsm::v1::TileEventsData ValidArrays() {
   pdsm::v1::TileEventsData data;

@@ -683,7 +683,9 @@ absl::StatusOr<bool> Coordinator::ReportResult(
   std::vector<TileEvents> events;
   events.reserve(lease->tiles.size());
   const ResultBounds bounds{.batch_samples = lease->sample_end - lease->sample_begin,
-                            .z_min = plan->z_clip_near};
+                            .z_min = plan->z_clip_near,
+                            .keying = KeyingOf(plan->header),
+                            .sample_begin = lease->sample_begin};
   for (size_t i = 0; i < lease->tiles.size(); ++i) {
     absl::StatusOr<TileEvents> decoded =
         TileEventsFromProto(tiles[static_cast<int>(i)], plan->tile(lease->tiles[i]), bounds);

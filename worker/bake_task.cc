@@ -27,6 +27,7 @@ constexpr int64_t kScanMapTexels = int64_t{1} << 22;
 // A rendered shadow map of the task's current chunk of samples.
 struct ChunkMap {
   glm::dvec2 sample;
+  int32_t key = 1;  // its events' key: 1, or SampleEventKey of its sample (sample-keyed bakes)
   std::vector<float> depth;
   std::vector<uint32_t> occupancy;  // BuildOccupancySums(depth): skips rays that meet no caster
   ShadowMapWindow window;
@@ -57,6 +58,7 @@ TileEvents ScanTile(const BakePlan& plan, const PreparedTile& tile,
   const TileRect& rect = tile.rect;
   const std::vector<int> block_of = BlockOfPixel(tile);
   const TileWindows* windows = tile.windows ? &*tile.windows : nullptr;
+  const EventKeying keying = KeyingOf(plan.header);
   TileEvents out = NoShadowEvents(rect);
   std::vector<ShadowMapView> views;
   for (size_t m = 0; m < map_count; ++m) {
@@ -77,7 +79,7 @@ TileEvents ScanTile(const BakePlan& plan, const PreparedTile& tile,
           if (windows == nullptr) {
             const int64_t n =
                 ScanConvertRay(views[m], RayForSample(plan, s, t, sample, block.z_begin),
-                               g.projection, &out.events);
+                               g.projection, &out.events, SegmentEnd::kOpen, maps[m].key);
             walked += n;
             without_caster += n == 0 ? 1 : 0;
             ++segments;
@@ -88,15 +90,16 @@ TileEvents ScanTile(const BakePlan& plan, const PreparedTile& tile,
             const double lo = std::max(w.lo, block.z_begin);
             const double hi = std::min(w.hi, block.z_end);
             if (!(lo < hi)) continue;
-            const int64_t n = ScanConvertRay(views[m], RayForSample(plan, s, t, sample, lo, hi),
-                                             g.projection, &out.events, SegmentEnd::kClose);
+            const int64_t n =
+                ScanConvertRay(views[m], RayForSample(plan, s, t, sample, lo, hi), g.projection,
+                               &out.events, SegmentEnd::kClose, maps[m].key);
             walked += n;
             without_caster += n == 0 ? 1 : 0;
             ++segments;
           }
         }
         stats->events += static_cast<int64_t>(out.events.size() - first);
-        NormalizeEventsFrom(&out.events, first);
+        NormalizeEventsFrom(&out.events, first, keying);
       }
       out.offsets[p + 1] = out.events.size();
     }
@@ -253,6 +256,7 @@ absl::StatusOr<std::vector<TileEvents>> TaskRunner::Run(const BakeTask& task, Ta
       if (maps.size() <= map_count) maps.emplace_back();
       ChunkMap& map = maps[map_count];
       map.sample = sample;
+      map.key = KeyingOf(plan_->header) == EventKeying::kSampleKeys ? SampleEventKey(k) : 1;
       map.window = window;
       camera.sample = sample;
       camera.window = window;
@@ -277,7 +281,7 @@ absl::StatusOr<std::vector<TileEvents>> TaskRunner::Run(const BakeTask& task, Ta
         results[i] = std::move(chunk);
       } else {
         const TileEvents parts[2] = {std::move(results[i]), std::move(chunk)};
-        results[i] = MergeTileEvents(parts);
+        results[i] = MergeTileEvents(parts, KeyingOf(plan_->header));
       }
     }
     stats->scan_seconds += SecondsSince(scan_start);

@@ -32,12 +32,12 @@ class DepthAlongRay {
 // Follows the ray's shadow state through successive texel pieces and emits its events.
 class EventEmitter {
  public:
-  explicit EventEmitter(std::vector<Event>* events) : events_(events) {}
+  EventEmitter(std::vector<Event>* events, int32_t key) : events_(events), key_(key) {}
 
   // Ends a segment that stops short of the ray's end: a shadowed ray leaves at z, so that
   // another segment of the same ray can start from the lit state.
   void Close(double z) {
-    if (shadowed_) Emit(z, -1);
+    if (shadowed_) Emit(z, -key_);
     shadowed_ = false;
   }
 
@@ -45,14 +45,14 @@ class EventEmitter {
 
   void Piece(double z_in, double z_out, double z_sm) {
     if (z_sm <= z_in) {
-      if (!shadowed_) Emit(z_in, +1);
+      if (!shadowed_) Emit(z_in, key_);
       shadowed_ = true;
     } else if (z_sm < z_out) {
-      if (shadowed_) Emit(z_in, -1);
-      Emit(z_sm, +1);
+      if (shadowed_) Emit(z_in, -key_);
+      Emit(z_sm, key_);
       shadowed_ = true;
     } else if (shadowed_) {
-      Emit(z_in, -1);
+      Emit(z_in, -key_);
       shadowed_ = false;
     }
   }
@@ -61,6 +61,7 @@ class EventEmitter {
   void Emit(double z, int32_t count) { events_->push_back(Event{static_cast<float>(z), count}); }
 
   std::vector<Event>* events_;
+  int32_t key_;
   bool shadowed_ = false;
 };
 
@@ -97,7 +98,7 @@ void BuildOccupancySums(const float* depth, int width, int height, std::vector<u
 }
 
 int64_t ScanConvertRay(const ShadowMapView& sm, const RayInShadowMap& ray, Projection projection,
-                       std::vector<Event>* events, SegmentEnd end) {
+                       std::vector<Event>* events, SegmentEnd end, int32_t key) {
   const ShadowMapLattice& lat = sm.lattice;
   const ShadowMapWindow& win = sm.window;
   // Window-relative continuous texel coordinates of the segment's ends.
@@ -130,7 +131,7 @@ int64_t ScanConvertRay(const ShadowMapView& sm, const RayInShadowMap& ray, Proje
   double next_y = d.y != 0 ? ((d.y > 0 ? iy + 1 : iy) - p0.y) / d.y : kInf;
 
   const DepthAlongRay depth_at(ray, projection);
-  EventEmitter emitter(events);
+  EventEmitter emitter(events, key);
   // A piece's depths are computed only when its texel holds a caster, or when a shadowed ray
   // leaves at z_in: most texels a ray crosses are empty, and each depth is a division. The
   // depth at a fraction is a pure function of it, so the events are the same.

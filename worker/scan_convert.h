@@ -46,14 +46,15 @@ void BuildOccupancySums(const float* depth, int width, int height, std::vector<u
 enum class SegmentEnd { kOpen, kClose };
 
 // Appends the ray's events for this sample between ray.z_near and ray.z_far, in increasing
-// depth, to `events`. Starting mid-ray is exact from the start on: a texel's state depends
-// only on its own depth (enter at z_near when the first texel is already behind a caster).
-// REQUIRES: the ray's segment lies inside the view's window (ShadowMapWindowFor).
-// Returns the number of texels walked (0 for a ray the occupancy table skips: it has no events,
-// as its walk would have found none).
+// depth, to `events`: counts of +key entering shadow and -key leaving it (key 1 for a counted
+// bake, SampleEventKey(k) for a sample-keyed one: core/events/event.h). Starting mid-ray is exact
+// from the start on: a texel's state depends only on its own depth (enter at z_near when the first
+// texel is already behind a caster). REQUIRES: the ray's segment lies inside the view's window
+// (ShadowMapWindowFor). Returns the number of texels walked (0 for a ray the occupancy table skips:
+// it has no events, as its walk would have found none).
 int64_t ScanConvertRay(const ShadowMapView& shadow_map, const RayInShadowMap& ray,
                        Projection projection, std::vector<Event>* events,
-                       SegmentEnd end = SegmentEnd::kOpen);
+                       SegmentEnd end = SegmentEnd::kOpen, int32_t key = 1);
 
 }  // namespace pdsm
 

@@ -231,6 +231,9 @@ int RunTargetErrorBake(const BakeFlags& flags, const pdsm::v1::BakeParams& overr
       {overrides.has_adaptive_tolerance(), "--adaptive-tolerance"},
       {overrides.has_adaptive_min_samples(), "--adaptive-min-samples"},
       {overrides.surfaces_only(), "--surfaces-only"},
+      // The scene file's bake.weighting is measured and kept; the flag would not reach the
+      // chooser's bakes.
+      {overrides.weighting() != pdsm::v1::WEIGHTING_DEFAULT, "--weighting"},
       {flags.samples_per_task != 0, "--samples-per-task"},
       {!flags.preview_path.empty(), "--preview"}};
   for (const auto& [given, flag] : unsupported) {

@@ -88,6 +88,9 @@ void Describe(const InfoFlags& flags, const std::string& title, const PdsmImage*
         "max %d\n",
         h.adaptive_tolerance, h.adaptive_min_samples, tiles.min, tiles.mean, tiles.max);
   }
+  if (h.weighting == LightWeighting::kEmitter) {
+    std::printf("  weighting   emitter (each sample by cos/r^2 toward the point)\n");
+  }
   if (h.surfaces_only || g.z_valid_min != 0) {
     std::printf(
         "  defined     %s%s%s\n",

@@ -56,8 +56,9 @@ int RunCompare(const CompareFlags& flags) {
     if (!flags.allow_mismatch) return ReportError(s);
     std::fprintf(stderr, "pdsm: warning: %s\n", std::string(s.message()).c_str());
   }
-  absl::StatusOr<ErrorMap> map =
-      MeasureErrorMap(*pdsm, *scene, ReferenceOptions{*method, flags.samples, 1}, flags.step);
+  absl::StatusOr<ErrorMap> map = MeasureErrorMap(
+      *pdsm, *scene, ReferenceOptions{*method, flags.samples, 1, {pdsm->header.weighting}},
+      flags.step);
   if (!map.ok()) return ReportError(map.status());
   const ErrorMapSummary summary = SummarizeErrorMap(*map);
   const std::string title = ErrorMapTitle(*map);

@@ -195,8 +195,9 @@ void DrawBestErrorMap(const SweepFlags& flags, const Scene& scene, ReferenceMeth
     if (!pdsm.ok()) return pdsm.status();
     const int longest = std::max(pdsm->header.geometry.width, pdsm->header.geometry.height);
     const int step = (longest + kSweepErrorMapRays - 1) / kSweepErrorMapRays;
-    absl::StatusOr<ErrorMap> map =
-        MeasureErrorMap(*pdsm, scene, ReferenceOptions{method, flags.reference_samples, 1}, step);
+    absl::StatusOr<ErrorMap> map = MeasureErrorMap(
+        *pdsm, scene,
+        ReferenceOptions{method, flags.reference_samples, 1, {pdsm->header.weighting}}, step);
     if (!map.ok()) return map.status();
     const ErrorMapSummary summary = SummarizeErrorMap(*map);
     const std::string title = absl::StrCat(best.knobs.Label(), ": ", ErrorMapTitle(*map));
@@ -269,7 +270,8 @@ int RunSweep(const SweepFlags& flags) {
   const std::filesystem::path dir(flags.out_dir);
   absl::StatusOr<AccuracyProbe> probe = AccuracyProbe::Create(
       *scene, AccuracyPointCounts{flags.surface_points, flags.free_space_points}, flags.points_seed,
-      ReferenceOptions{*method, flags.reference_samples, 1});
+      // The definition the scene bakes (bake.weighting).
+      ReferenceOptions{*method, flags.reference_samples, 1, {scene->bake.weighting}});
   if (!probe.ok()) return ReportError(probe.status());
   std::fprintf(stderr,
                "sweep: %zu configurations; reference (%s) on %zu + %zu points "

@@ -219,11 +219,14 @@ absl::StatusOr<TargetErrorResult> BakeToTargetError(const TargetErrorOptions& op
   BakeKnobs base = KnobsFromScene(*scene, sampling);
   const AccuracyPointCounts counts{options.surface_points, 0, options.band_points,
                                    options.band_height};
+  // The reference of the definition the bakes store (bake.weighting).
+  ReferenceOptions reference;
+  reference.weighting.kind = scene->bake.weighting;
   absl::StatusOr<AccuracyProbe> probe =
-      AccuracyProbe::Create(*scene, counts, kPointsSeed, ReferenceOptions{});
+      AccuracyProbe::Create(*scene, counts, kPointsSeed, reference);
   if (!probe.ok()) return probe.status();
   absl::StatusOr<AccuracyProbe> held_out =
-      AccuracyProbe::Create(*scene, counts, kHeldOutSeed, ReferenceOptions{});
+      AccuracyProbe::Create(*scene, counts, kHeldOutSeed, reference);
   if (!held_out.ok()) return held_out.status();
   std::fprintf(stderr,
                "target-error %g: reference (%s) on %zu receiver + %zu band points (band %.4g "

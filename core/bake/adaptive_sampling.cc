@@ -24,7 +24,7 @@ std::vector<SampleRange> AdaptiveStageRanges(int stage, int min_samples, int max
 }
 
 double SplitHalfPixelError(std::span<const Event> first, int n1, std::span<const Event> second,
-                           int n2, double min_interval) {
+                           int n2, double min_interval, EventKeying keying) {
   const double weight = static_cast<double>(n2) / (n1 + n2);
   int64_t c1 = 0, c2 = 0;  // samples in shadow at the current depth, per half
   size_t i = 0, j = 0;
@@ -33,8 +33,8 @@ double SplitHalfPixelError(std::span<const Event> first, int n1, std::span<const
     // Next depth of either list; apply every event at it.
     const float z = std::min(i < first.size() ? first[i].z : std::numeric_limits<float>::max(),
                              j < second.size() ? second[j].z : std::numeric_limits<float>::max());
-    while (i < first.size() && first[i].z == z) c1 += first[i++].count;
-    while (j < second.size() && second[j].z == z) c2 += second[j++].count;
+    while (i < first.size() && first[i].z == z) c1 += ShadowChange(first[i++], keying);
+    while (j < second.size() && second[j].z == z) c2 += ShadowChange(second[j++], keying);
     const float next =
         std::min(i < first.size() ? first[i].z : std::numeric_limits<float>::infinity(),
                  j < second.size() ? second[j].z : std::numeric_limits<float>::infinity());
@@ -46,11 +46,11 @@ double SplitHalfPixelError(std::span<const Event> first, int n1, std::span<const
 }
 
 double SplitHalfError(const TileEvents& first, int n1, const TileEvents& second, int n2,
-                      double min_interval) {
+                      double min_interval, EventKeying keying) {
   double worst = 0;
   for (size_t p = 0; p < first.PixelCount(); ++p) {
-    worst =
-        std::max(worst, SplitHalfPixelError(first.Pixel(p), n1, second.Pixel(p), n2, min_interval));
+    worst = std::max(
+        worst, SplitHalfPixelError(first.Pixel(p), n1, second.Pixel(p), n2, min_interval, keying));
   }
   return worst;
 }
@@ -63,18 +63,18 @@ bool JudgeAdaptiveStage(const PdsmHeader& header, const std::vector<SampleRange>
   TileEvents last = std::move(stage_results.back());
   const int n1 = ranges.back().begin, n2 = ranges.back().end - ranges.back().begin;
   bool done = ranges.back().end >= header.samples;
+  const EventKeying keying = KeyingOf(header);
   if (!done) {
     const PdsmGeometry& g = header.geometry;
-    TileEvents first = MergeTileEvents(*earlier);
-    done =
-        SplitHalfError(first, n1, last, n2, kAdaptiveSurfaceDepthFraction * (g.z_far - g.z_near)) <=
-        header.adaptive_tolerance;
+    TileEvents first = MergeTileEvents(*earlier, keying);
+    done = SplitHalfError(first, n1, last, n2, kAdaptiveSurfaceDepthFraction * (g.z_far - g.z_near),
+                          keying) <= header.adaptive_tolerance;
     earlier->clear();
     earlier->push_back(std::move(first));
   }
   earlier->push_back(std::move(last));
   if (earlier->size() > 1) {  // keep one merged list, not one per range
-    TileEvents all = MergeTileEvents(*earlier);
+    TileEvents all = MergeTileEvents(*earlier, keying);
     earlier->clear();
     earlier->push_back(std::move(all));
   }

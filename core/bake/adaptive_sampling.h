@@ -39,9 +39,11 @@ inline constexpr double kAdaptiveSurfaceDepthFraction = 1.0 / 256.0;
 // `second` those of [n1, n1 + n2). Returns the largest |A_{n1+n2}(z) - A_{n1}(z)|
 // = n2 / (n1 + n2) * |A_second(z) - A_first(z)| over every pixel and every depth interval
 // between events at least `min_interval` long (the last interval, to infinity, always counts).
+// Sample-keyed events (an emitter-weighted bake) are judged by their unweighted counts: the
+// weights only tilt shares the samples already resolve.
 // REQUIRES: both have the same tile geometry; n1, n2 >= 1.
 double SplitHalfError(const TileEvents& first, int n1, const TileEvents& second, int n2,
-                      double min_interval);
+                      double min_interval, EventKeying keying);
 
 // Judges a tile after one stage: the one decision the local bake and the service share, so
 // their files stay byte-identical. `ranges`: the stage's AdaptiveStageRanges; `stage_results`:
@@ -55,7 +57,7 @@ bool JudgeAdaptiveStage(const PdsmHeader& header, const std::vector<SampleRange>
 
 // The per-pixel part of SplitHalfError.
 double SplitHalfPixelError(std::span<const Event> first, int n1, std::span<const Event> second,
-                           int n2, double min_interval);
+                           int n2, double min_interval, EventKeying keying);
 
 }  // namespace pdsm
 

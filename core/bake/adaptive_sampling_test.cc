@@ -39,8 +39,8 @@ std::vector<Event> Events(std::initializer_list<Event> e) { return e; }
 
 TEST(SplitHalfErrorTest, AgreeingHalvesGiveZero) {
   const auto a = Events({{5.0f, 4}, {8.0f, -4}});
-  EXPECT_EQ(SplitHalfPixelError(a, 8, a, 8, 0.0), 0.0);
-  EXPECT_EQ(SplitHalfPixelError({}, 8, {}, 8, 0.0), 0.0);
+  EXPECT_EQ(SplitHalfPixelError(a, 8, a, 8, 0.0, EventKeying::kCounts), 0.0);
+  EXPECT_EQ(SplitHalfPixelError({}, 8, {}, 8, 0.0, EventKeying::kCounts), 0.0);
 }
 
 TEST(SplitHalfErrorTest, DisagreementIsWeightedDifference) {
@@ -48,9 +48,11 @@ TEST(SplitHalfErrorTest, DisagreementIsWeightedDifference) {
   // |A_16 - A_8| = 0.25 = (8 / 16) * |6/8 - 2/8|.
   const auto first = Events({{5.0f, 2}});
   const auto second = Events({{5.0f, 6}});
-  EXPECT_DOUBLE_EQ(SplitHalfPixelError(first, 8, second, 8, 0.0), 0.25);
+  EXPECT_DOUBLE_EQ(SplitHalfPixelError(first, 8, second, 8, 0.0, EventKeying::kCounts), 0.25);
   // Unequal halves: n1 = 8, n2 = 24, both 50% in shadow -> no difference.
-  EXPECT_DOUBLE_EQ(SplitHalfPixelError(Events({{5.0f, 4}}), 8, Events({{5.0f, 12}}), 24, 0.0), 0.0);
+  EXPECT_DOUBLE_EQ(SplitHalfPixelError(Events({{5.0f, 4}}), 8, Events({{5.0f, 12}}), 24, 0.0,
+                                       EventKeying::kCounts),
+                   0.0);
 }
 
 // Events of the two halves at slightly different depths (one surface seen through different
@@ -58,11 +60,11 @@ TEST(SplitHalfErrorTest, DisagreementIsWeightedDifference) {
 TEST(SplitHalfErrorTest, SurfaceThicknessIsSkipped) {
   const auto first = Events({{5.000f, 8}});
   const auto second = Events({{5.001f, 8}});
-  EXPECT_DOUBLE_EQ(SplitHalfPixelError(first, 8, second, 8, 0.0), 0.5);
-  EXPECT_EQ(SplitHalfPixelError(first, 8, second, 8, 0.01), 0.0);
+  EXPECT_DOUBLE_EQ(SplitHalfPixelError(first, 8, second, 8, 0.0, EventKeying::kCounts), 0.5);
+  EXPECT_EQ(SplitHalfPixelError(first, 8, second, 8, 0.01, EventKeying::kCounts), 0.0);
   // A long disagreement still counts.
   const auto late = Events({{6.0f, 8}});
-  EXPECT_DOUBLE_EQ(SplitHalfPixelError(first, 8, late, 8, 0.01), 0.5);
+  EXPECT_DOUBLE_EQ(SplitHalfPixelError(first, 8, late, 8, 0.01, EventKeying::kCounts), 0.5);
 }
 
 TEST(SplitHalfErrorTest, TileErrorIsTheWorstPixel) {
@@ -74,7 +76,7 @@ TEST(SplitHalfErrorTest, TileErrorIsTheWorstPixel) {
   b.events = {{5.0f, 4}, {5.0f, 1}};
   b.offsets = {0, 1, 2};
   // Pixel 0: 0 vs 4/8 -> 0.25; pixel 1: 4/8 vs 1/8 -> 0.1875.
-  EXPECT_DOUBLE_EQ(SplitHalfError(a, 8, b, 8, 0.0), 0.25);
+  EXPECT_DOUBLE_EQ(SplitHalfError(a, 8, b, 8, 0.0, EventKeying::kCounts), 0.25);
 }
 
 // One pixel whose `count` samples are all hidden from depth 5 on.

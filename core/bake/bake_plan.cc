@@ -62,6 +62,7 @@ void FillHeader(const PlanInput& scene, BakePlan* plan) {
   h.shadow_map_resolution = scene.bake.shadow_map_resolution;
   h.epsilon = scene.bake.epsilon;
   h.compression_metric = scene.bake.compression_metric;
+  h.weighting = scene.bake.weighting;
   h.slope_bias = scene.bake.slope_bias;
   h.sampling = scene.bake.sampling;
   h.seed = scene.bake.seed;

@@ -42,6 +42,8 @@ void AddHeader(const PdsmHeader& h, Feeder* f) {
   f->Add(h.seed), f->Add(h.tile_size);
   f->Add(h.adaptive_tolerance), f->Add(h.adaptive_min_samples);
   f->Add(g.z_valid_min), f->Add(h.surfaces_only), f->Add(h.format_version);
+  // Fed only when weighted, so that unweighted plans keep the fingerprints they had.
+  if (h.weighting != LightWeighting::kUnweighted) f->Add(h.weighting);
 }
 
 }  // namespace

@@ -36,4 +36,23 @@ std::vector<Vertex> SurfaceFunction(std::span<const Event> events,
   return out;
 }
 
+std::vector<Vertex> EmitterSurfaceFunction(std::span<const Event> events,
+                                           std::span<const DepthWindow> windows, EmitterRay* ray,
+                                           double tolerance, double epsilon,
+                                           CompressionMetric metric, double depth_scale) {
+  if (events.empty()) return {};
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  std::vector<Vertex> out = {Vertex{kUndefinedFrom, kNaN}};
+  for (const DepthWindow& window : windows) {
+    // The window's ends as the counted function places them: float depths.
+    const float lo = static_cast<float>(window.lo);
+    const float hi = static_cast<float>(window.hi);
+    const std::vector<Vertex> piece = EmitterWeightedPiece(events, ray, lo, hi, tolerance);
+    const std::vector<Vertex> compressed = CompressFunction(piece, epsilon, metric, depth_scale);
+    out.insert(out.end(), compressed.begin(), compressed.end());
+    out.push_back(Vertex{hi, kNaN});
+  }
+  return out;
+}
+
 }  // namespace pdsm

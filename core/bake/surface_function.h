@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/bake/receiver_windows.h"
+#include "core/events/emitter_weighting.h"
 #include "core/events/event.h"
 #include "core/pdsm/attenuation_function.h"
 #include "core/scene/scene.h"
@@ -28,6 +29,13 @@ inline constexpr float kUndefinedFrom = -3.40282347e+38f;
 std::vector<Vertex> SurfaceFunction(std::span<const Event> events,
                                     std::span<const DepthWindow> windows, int total_samples,
                                     double epsilon, CompressionMetric metric, double depth_scale);
+
+// The same for an emitter-weighted bake (consolidated kSampleKeys events): each window's piece
+// is EmitterWeightedPiece's, within `tolerance`, then compressed. `ray` points at the pixel.
+std::vector<Vertex> EmitterSurfaceFunction(std::span<const Event> events,
+                                           std::span<const DepthWindow> windows, EmitterRay* ray,
+                                           double tolerance, double epsilon,
+                                           CompressionMetric metric, double depth_scale);
 
 }  // namespace pdsm
 

@@ -1,16 +1,25 @@
 #include "core/events/consolidation.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
 namespace pdsm {
 
-std::vector<Event> ConsolidateEvents(std::span<const Event> events) {
+std::vector<Event> ConsolidateEvents(std::span<const Event> events, EventKeying keying) {
   std::vector<Event> out;
   out.reserve(events.size());
+  std::vector<Event> run;
   for (size_t i = 0; i < events.size();) {
     const float z = events[i].z;
     const double limit = z + kConsolidationRelativeDepth * std::abs(static_cast<double>(z));
+    if (keying == EventKeying::kSampleKeys) {
+      run.clear();
+      for (; i < events.size() && events[i].z <= limit; ++i) run.push_back({z, events[i].count});
+      if (run.size() > 1) std::sort(run.begin(), run.end(), KeyedBefore);
+      AppendUncancelledKeys(run, &out);
+      continue;
+    }
     int64_t sum = 0;
     for (; i < events.size() && events[i].z <= limit; ++i) sum += events[i].count;
     if (sum != 0) out.push_back(Event{z, static_cast<int32_t>(sum)});

@@ -17,12 +17,14 @@ namespace pdsm {
 inline constexpr double kConsolidationRelativeDepth = 0x1.0p-19;
 
 // Groups each run of events within kConsolidationRelativeDepth * |z| of the run's first event
-// into one event at that first depth with the summed count; zero sums vanish.
-// REQUIRES: `events` normalized (sorted, distinct depths).
-std::vector<Event> ConsolidateEvents(std::span<const Event> events);
+// into one event at that first depth with the summed count; zero sums vanish. kSampleKeys:
+// the run's events all move to that depth, each sample with its net change (sorted by key).
+// REQUIRES: `events` normalized as `keying` says.
+std::vector<Event> ConsolidateEvents(std::span<const Event> events, EventKeying keying);
 
-// The attenuation function of a consolidated event list: A jumps by count / total_samples at
-// each event (two vertices at the event depth), and is 0 before the first.
+// The attenuation function of a consolidated kCounts event list: A jumps by count /
+// total_samples at each event (two vertices at the event depth), and is 0 before the first.
+// (Sample-keyed lists: core/events/emitter_weighting.h.)
 std::vector<Vertex> FunctionFromEvents(std::span<const Event> events, int total_samples);
 
 }  // namespace pdsm

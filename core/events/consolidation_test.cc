@@ -22,21 +22,21 @@ TEST(ConsolidateEventsTest, EventsWithinToleranceMergeAtFirstDepth) {
   ASSERT_GT(near, z);
   const std::vector<Event> events = {{z, 1}, {near, 2}, {200.0f, -1}};
   const std::vector<Event> expected = {{z, 3}, {200.0f, -1}};
-  EXPECT_EQ(ConsolidateEvents(events), expected);
+  EXPECT_EQ(ConsolidateEvents(events, EventKeying::kCounts), expected);
 }
 
 TEST(ConsolidateEventsTest, EventsBeyondToleranceStayApart) {
   const float z = 100.0f;
   const float far = Beyond(z, 1.5);
   const std::vector<Event> events = {{z, 1}, {far, 2}};
-  EXPECT_EQ(ConsolidateEvents(events), events);
+  EXPECT_EQ(ConsolidateEvents(events, EventKeying::kCounts), events);
 }
 
 TEST(ConsolidateEventsTest, ToleranceScalesWithDepth) {
   // At depth 1 the same absolute gap as above is far beyond the tolerance.
   const float gap = static_cast<float>(0.5 * kConsolidationRelativeDepth * 100.0);
   const std::vector<Event> events = {{1.0f, 1}, {1.0f + gap, 1}};
-  EXPECT_EQ(ConsolidateEvents(events), events);
+  EXPECT_EQ(ConsolidateEvents(events, EventKeying::kCounts), events);
 }
 
 TEST(ConsolidateEventsTest, GroupsAreMeasuredFromTheirFirstEvent) {
@@ -52,17 +52,19 @@ TEST(ConsolidateEventsTest, GroupsAreMeasuredFromTheirFirstEvent) {
   ASSERT_LE(z3 - z2, kConsolidationRelativeDepth * z2);  // z3 within tolerance of z2
   const std::vector<Event> events = {{z0, 1}, {z1, 1}, {z2, 1}, {z3, 1}};
   const std::vector<Event> expected = {{z0, 2}, {z2, 2}};
-  EXPECT_EQ(ConsolidateEvents(events), expected);
+  EXPECT_EQ(ConsolidateEvents(events, EventKeying::kCounts), expected);
 }
 
 TEST(ConsolidateEventsTest, CancellingPairsWithinToleranceVanish) {
   const float z = 7.0f;
   const std::vector<Event> events = {{1.0f, 1}, {z, 1}, {Beyond(z, 0.9), -1}, {9.0f, -1}};
   const std::vector<Event> expected = {{1.0f, 1}, {9.0f, -1}};
-  EXPECT_EQ(ConsolidateEvents(events), expected);
+  EXPECT_EQ(ConsolidateEvents(events, EventKeying::kCounts), expected);
 }
 
-TEST(ConsolidateEventsTest, EmptyStaysEmpty) { EXPECT_TRUE(ConsolidateEvents({}).empty()); }
+TEST(ConsolidateEventsTest, EmptyStaysEmpty) {
+  EXPECT_TRUE(ConsolidateEvents({}, EventKeying::kCounts).empty());
+}
 
 TEST(ConsolidateEventsTest, RandomListsKeepTotalsAndSpacing) {
   std::mt19937_64 rng(2024);
@@ -79,7 +81,7 @@ TEST(ConsolidateEventsTest, RandomListsKeepTotalsAndSpacing) {
       events.push_back({z, sign(rng) ? 1 : -1});
       total += events.back().count;
     }
-    const std::vector<Event> out = ConsolidateEvents(events);
+    const std::vector<Event> out = ConsolidateEvents(events, EventKeying::kCounts);
     int64_t out_total = 0;
     for (size_t i = 0; i < out.size(); ++i) {
       out_total += out[i].count;
@@ -121,7 +123,7 @@ std::vector<Event> RandomEventList(std::mt19937_64& rng, int total_samples, int 
     hidden += count;
     events.push_back({static_cast<float>(z), count});
   }
-  return ConsolidateEvents(events);
+  return ConsolidateEvents(events, EventKeying::kCounts);
 }
 
 float CountFraction(const std::vector<Event>& events, double z, int n) {
@@ -162,6 +164,22 @@ TEST(FunctionFromEventsTest, EvaluatesToCountFractionEverywhere) {
           << "trial " << trial << " z " << z;
     }
   }
+}
+
+TEST(ConsolidateEventsTest, SampleKeyedRunsKeepEachSamplesNetChange) {
+  const float z = 7.0f;
+  // Within one run: sample 0 enters and leaves (nothing), sample 1 leaves, sample 2 enters,
+  // leaves and enters again (enters), sample 3 enters; all at the run's first depth, by key.
+  const std::vector<Event> events = {{z, 1},
+                                     {z, 3},
+                                     {Beyond(z, 0.2), -2},
+                                     {Beyond(z, 0.3), -1},
+                                     {Beyond(z, 0.4), -3},
+                                     {Beyond(z, 0.5), 4},
+                                     {Beyond(z, 0.6), 3},
+                                     {9.0f, -4}};
+  const std::vector<Event> expected = {{z, -2}, {z, 3}, {z, 4}, {9.0f, -4}};
+  EXPECT_EQ(ConsolidateEvents(events, EventKeying::kSampleKeys), expected);
 }
 
 }  // namespace

@@ -9,8 +9,19 @@ namespace {
 
 // Appends the merge of normalized lists `a` and `b` to `out`: one linear pass, equal depths
 // summed, zero sums dropped, so the result is normalized (and the same in either order).
+// kSampleKeys lists hold different samples (the merge's REQUIRES), so nothing combines: the
+// pass only interleaves them by (depth, key).
+template <EventKeying kKeying>
 void AppendMergeOfTwo(std::span<const Event> a, std::span<const Event> b, std::vector<Event>* out) {
   size_t i = 0, j = 0;
+  if constexpr (kKeying == EventKeying::kSampleKeys) {
+    while (i < a.size() && j < b.size()) {
+      out->push_back(KeyedBefore(b[j], a[i]) ? b[j++] : a[i++]);
+    }
+    out->insert(out->end(), a.begin() + i, a.end());
+    out->insert(out->end(), b.begin() + j, b.end());
+    return;
+  }
   while (i < a.size() && j < b.size()) {
     if (a[i].z < b[j].z) {
       out->push_back(a[i++]);
@@ -28,6 +39,7 @@ void AppendMergeOfTwo(std::span<const Event> a, std::span<const Event> b, std::v
 
 // Appends the merge of normalized `lists` to `out`: pairwise rounds of linear merges
 // (O(n log k) for k lists of n events in all, where sorting the concatenation was O(n log n)).
+template <EventKeying kKeying>
 void AppendMerge(std::span<const std::span<const Event>> lists, std::vector<Event>* out) {
   // One or two lists with events (the usual case: a running list and a batch) take no
   // allocation.
@@ -43,7 +55,7 @@ void AppendMerge(std::span<const std::span<const Event>> lists, std::vector<Even
     out->insert(out->end(), first.begin(), first.end());
     return;
   }
-  if (non_empty == 2) return AppendMergeOfTwo(first, second, out);
+  if (non_empty == 2) return AppendMergeOfTwo<kKeying>(first, second, out);
   std::vector<std::span<const Event>> round;
   for (const auto& list : lists) {
     if (!list.empty()) round.push_back(list);
@@ -61,7 +73,7 @@ void AppendMerge(std::span<const std::span<const Event>> lists, std::vector<Even
     std::vector<std::pair<size_t, size_t>> pieces;  // [begin, end) in buffer
     for (size_t k = 0; k + 1 < round.size(); k += 2) {
       const size_t begin = buffer.size();
-      AppendMergeOfTwo(round[k], round[k + 1], &buffer);
+      AppendMergeOfTwo<kKeying>(round[k], round[k + 1], &buffer);
       pieces.emplace_back(begin, buffer.size());
     }
     if (round.size() % 2 == 1) {
@@ -75,7 +87,36 @@ void AppendMerge(std::span<const std::span<const Event>> lists, std::vector<Even
     }
     current = 1 - current;
   }
-  AppendMergeOfTwo(round[0], round[1], out);
+  AppendMergeOfTwo<kKeying>(round[0], round[1], out);
+}
+
+void AppendMerge(std::span<const std::span<const Event>> lists, EventKeying keying,
+                 std::vector<Event>* out) {
+  if (keying == EventKeying::kSampleKeys) return AppendMerge<EventKeying::kSampleKeys>(lists, out);
+  AppendMerge<EventKeying::kCounts>(lists, out);
+}
+
+// kSampleKeys normalization: sorted by (depth, key); at each depth a sample that both leaves
+// and enters (two pieces of a ray meeting there) changes nothing and is dropped.
+void NormalizeKeyedFrom(std::vector<Event>* events, size_t first) {
+  std::sort(events->begin() + static_cast<ptrdiff_t>(first), events->end(),
+            [](const Event& a, const Event& b) { return KeyedBefore(a, b); });
+  size_t out = first;
+  std::vector<Event> kept;
+  for (size_t i = first; i < events->size();) {
+    const float z = (*events)[i].z;
+    size_t end = i + 1;
+    while (end < events->size() && (*events)[end].z == z) ++end;
+    if (end == i + 1) {  // the usual case: one sample changes at this depth
+      (*events)[out++] = (*events)[i];
+    } else {
+      kept.clear();
+      AppendUncancelledKeys({events->data() + i, end - i}, &kept);
+      for (const Event& e : kept) (*events)[out++] = e;
+    }
+    i = end;
+  }
+  events->resize(out);
 }
 
 }  // namespace
@@ -90,9 +131,27 @@ TileEvents TileShape(const TileEvents& events) {
                     .events = {}};
 }
 
-void NormalizeEvents(std::vector<Event>* events) { NormalizeEventsFrom(events, 0); }
+void AppendUncancelledKeys(std::span<const Event> group, std::vector<Event>* out) {
+  // Sorted by key, so equal keys are adjacent: a sample's net change is its entries less its
+  // exits (each run of one key against the run of its opposite).
+  for (size_t i = 0; i < group.size();) {
+    size_t end = i + 1;
+    while (end < group.size() && group[end].count == group[i].count) ++end;
+    const Event opposite{group[i].z, -group[i].count};
+    const auto [lo, hi] = std::equal_range(group.begin(), group.end(), opposite, KeyedBefore);
+    for (ptrdiff_t net = static_cast<ptrdiff_t>(end - i) - (hi - lo); net > 0; --net) {
+      out->push_back(group[i]);
+    }
+    i = end;
+  }
+}
 
-void NormalizeEventsFrom(std::vector<Event>* events, size_t first) {
+void NormalizeEvents(std::vector<Event>* events, EventKeying keying) {
+  NormalizeEventsFrom(events, 0, keying);
+}
+
+void NormalizeEventsFrom(std::vector<Event>* events, size_t first, EventKeying keying) {
+  if (keying == EventKeying::kSampleKeys) return NormalizeKeyedFrom(events, first);
   // A lambda, not a function pointer: std::sort inlines it (a pointer comparator cost 10 % of
   // a bake's CPU in calls). Any order of equal depths gives the same sums below.
   std::sort(events->begin() + static_cast<ptrdiff_t>(first), events->end(),
@@ -107,13 +166,14 @@ void NormalizeEventsFrom(std::vector<Event>* events, size_t first) {
   events->resize(out);
 }
 
-std::vector<Event> MergeEventLists(std::span<const std::span<const Event>> lists) {
+std::vector<Event> MergeEventLists(std::span<const std::span<const Event>> lists,
+                                   EventKeying keying) {
   std::vector<Event> merged;
-  AppendMerge(lists, &merged);
+  AppendMerge(lists, keying, &merged);
   return merged;
 }
 
-TileEvents MergeTileEvents(std::span<const TileEvents> parts) {
+TileEvents MergeTileEvents(std::span<const TileEvents> parts, EventKeying keying) {
   if (parts.empty()) return TileEvents{};
   const TileEvents& first = parts.front();
   TileEvents merged = TileShape(first);
@@ -137,7 +197,7 @@ TileEvents MergeTileEvents(std::span<const TileEvents> parts) {
       assert(parts[k].PixelCount() == pixels);
       lists[k] = parts[k].Pixel(p);
     }
-    AppendMerge(lists, &merged.events);
+    AppendMerge(lists, keying, &merged.events);
     merged.offsets[p + 1] = merged.events.size();
   }
   merged.events.shrink_to_fit();

@@ -54,8 +54,8 @@ std::vector<Vertex> RandomEventFunction(std::mt19937_64& rng) {
     hidden += count;
     events.push_back({static_cast<float>(z), count});
   }
-  NormalizeEvents(&events);
-  return FunctionFromEvents(ConsolidateEvents(events), n);
+  NormalizeEvents(&events, EventKeying::kCounts);
+  return FunctionFromEvents(ConsolidateEvents(events, EventKeying::kCounts), n);
 }
 
 // Random piecewise-linear functions with values in [0, 1] and nondecreasing depths, jumps

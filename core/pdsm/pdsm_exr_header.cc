@@ -88,6 +88,7 @@ constexpr char kAttrZValidMin[] = "pdsmZValidMin";
 constexpr char kAttrSurfacesOnly[] = "pdsmSurfacesOnly";
 constexpr char kAttrConeHalfAngle[] = "pdsmConeHalfAngleDeg";
 constexpr char kAttrSphereFaceTangent[] = "pdsmSphereFaceTangent";
+constexpr char kAttrWeighting[] = "pdsmWeighting";
 
 constexpr char kAttenuationNote[] =
     "channel 'attenuation' = A(z), the fraction of the light hidden from the point at depth "
@@ -110,6 +111,8 @@ constexpr EnumName<LightShape> kLightShapeNames[] = {
 constexpr EnumName<CompressionMetric> kMetricNames[] = {
     {CompressionMetric::kVertical, "vertical"},
     {CompressionMetric::kPerpendicular, "perpendicular"}};
+constexpr EnumName<LightWeighting> kWeightingNames[] = {{LightWeighting::kUnweighted, "unweighted"},
+                                                        {LightWeighting::kEmitter, "emitter"}};
 constexpr EnumName<SamplingPattern> kSamplingNames[] = {
     {SamplingPattern::kStratified, "stratified"},
     {SamplingPattern::kUniform, "uniform"},
@@ -297,6 +300,9 @@ void ReadBakeSettings(AttributeReader& in, const Imf::Header& exr, PdsmHeader* h
   }
   h->tile_size = in.Get<int>(kAttrTileSize);
   h->surfaces_only = in.GetOptional<int>(kAttrSurfacesOnly, 0) != 0;
+  if (exr.find(kAttrWeighting) != exr.end()) {
+    h->weighting = in.GetEnum(kAttrWeighting, kWeightingNames);
+  }
   if (in.status().ok() && h->tile_size != static_cast<int>(exr.tileDescription().xSize)) {
     in.Fail(absl::StrFormat("attribute %s = %d disagrees with the EXR tile size %d", kAttrTileSize,
                             h->tile_size, exr.tileDescription().xSize));
@@ -402,6 +408,9 @@ Imf::Header ExrHeaderFromPdsm(const PdsmHeader& h,
   }
   if (g.z_valid_min != 0) exr.insert(kAttrZValidMin, Imf::DoubleAttribute(g.z_valid_min));
   if (h.surfaces_only) exr.insert(kAttrSurfacesOnly, Imf::IntAttribute(1));
+  if (h.weighting != LightWeighting::kUnweighted) {
+    exr.insert(kAttrWeighting, Imf::StringAttribute(NameOf(kWeightingNames, h.weighting)));
+  }
   if (h.cone_half_angle_deg > 0) {
     exr.insert(kAttrConeHalfAngle, Imf::DoubleAttribute(h.cone_half_angle_deg));
   }

@@ -39,7 +39,7 @@ TileSampleCounts CountTileSamples(const PdsmHeader& header);
 // 64 bits), the light's size (lightSize, lightRadius [+ coneHalfAngleDeg] or
 // angularDiameterDeg), then `extra_members` (", \"key\": value" pairs, or ""), then the
 // adaptive members (adaptiveTolerance, adaptiveMinSamples, tileSamples {min, mean, max}) when
-// adaptive, surfacesOnly and zValidMin.
+// adaptive, surfacesOnly, zValidMin and weighting ("unweighted" or "emitter").
 std::string PdsmHeaderJson(const PdsmHeader& header, std::string_view extra_members = {});
 
 }  // namespace pdsm

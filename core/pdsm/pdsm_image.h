@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/events/event.h"
 #include "core/pdsm/attenuation_function.h"
 #include "core/pdsm/pdsm_geometry.h"
 #include "core/scene/scene.h"
@@ -42,6 +43,9 @@ struct PdsmHeader {
   int shadow_map_resolution = 0;
   double epsilon = 0;
   CompressionMetric compression_metric = CompressionMetric::kVertical;
+  // What each sample counted for (kUnweighted or kEmitter, core/events/emitter_weighting.h):
+  // the definition of the stored A. Readers evaluate either the same way.
+  LightWeighting weighting = LightWeighting::kUnweighted;
   // Bias of the stored shadow-map depths, applied when the maps are rendered (one bias
   // function: shaders/shadow_map.frag BiasedDepth):
   //   z + depth_bias + slope_bias * footprint * (|dz/dx| + |dz/dy|)
@@ -77,6 +81,15 @@ struct PdsmHeader {
 // opens them and their bytes did not change.
 inline int MinimumFormatVersion(const PdsmHeader& h) {
   return h.surfaces_only || h.geometry.z_valid_min != 0 ? 2 : 1;
+}
+
+// Whether the bake's events are keyed by sample (core/events/event.h): emitter weighting of a
+// planar light, the only case where samples weigh differently. A sun's sample directions and a
+// sphere face's samples (spread by solid angle) weigh the same, so their bakes count.
+inline EventKeying KeyingOf(const PdsmHeader& h) {
+  const bool planar = h.geometry.projection == Projection::kPerspective && h.face_tangent == 0;
+  return h.weighting == LightWeighting::kEmitter && planar ? EventKeying::kSampleKeys
+                                                           : EventKeying::kCounts;
 }
 
 // One rectangle of pixels with their functions: the unit of writing and of assembling.

@@ -48,7 +48,7 @@ inline TileEvents BatchEvents(const BakePlan& plan, int tile, int begin, int end
     pixel.push_back({static_cast<float>(2 + k % 3 + tile), +1});
     pixel.push_back({8.0f, -1});
   }
-  NormalizeEvents(&pixel);
+  NormalizeEvents(&pixel, EventKeying::kCounts);
   out.events = pixel;
   out.offsets = {0, pixel.size(), pixel.size()};
   return out;

@@ -14,7 +14,7 @@ std::vector<SampleRange> StageRanges(const PdsmHeader& header, int stage) {
 }
 
 StageAccumulator::StageAccumulator(const PdsmHeader& header, int stage)
-    : ranges_(StageRanges(header, stage)), merged_(ranges_.size()) {}
+    : ranges_(StageRanges(header, stage)), merged_(ranges_.size()), keying_(KeyingOf(header)) {}
 
 int64_t StageAccumulator::Add(int sample_begin, TileEvents events) {
   for (size_t r = 0; r < ranges_.size(); ++r) {
@@ -27,7 +27,7 @@ int64_t StageAccumulator::Add(int sample_begin, TileEvents events) {
       merged = std::move(events);
     } else {
       const TileEvents parts[2] = {*std::move(merged), std::move(events)};
-      merged = MergeTileEvents(parts);
+      merged = MergeTileEvents(parts, keying_);
     }
     const int64_t change = TileEventsBytes(*merged) - before;
     memory_bytes_ += change;
@@ -90,7 +90,7 @@ absl::StatusOr<StageVerdict> JudgeStage(const PdsmHeader& header, TileStageState
     } else if (parts.in_memory.size() == 1) {
       range_results.push_back(std::move(parts.in_memory.front()));
     } else {
-      range_results.push_back(MergeTileEvents(parts.in_memory));
+      range_results.push_back(MergeTileEvents(parts.in_memory, KeyingOf(header)));
     }
   }
   const std::vector<SampleRange> stage_ranges = StageRanges(header, state.stage);

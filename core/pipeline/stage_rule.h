@@ -27,8 +27,9 @@ namespace pdsm {
 std::vector<SampleRange> StageRanges(const PdsmHeader& header, int stage);
 
 // One tile's batches of its current stage, merged as they arrive: one merged list per range of
-// the stage, whatever the number of batches. The merge is exact integer addition, so the lists
-// do not depend on the batches or their order. The lists grow with the samples (nearly every
+// the stage, whatever the number of batches. The merge is exact integer addition (or, for
+// sample-keyed events, an interleaving by depth and key), so the lists do not depend on the
+// batches or their order. The lists grow with the samples (nearly every
 // event of a penumbra has a depth of its own): the engine moves them to an EventSpill as runs
 // when its memory budget is spent, and TakeRanges merges the runs back, to the same lists.
 // Not thread-safe.
@@ -60,6 +61,7 @@ class StageAccumulator {
   std::vector<SampleRange> ranges_;
   std::vector<Range> merged_;
   TileEvents shape_;  // the tile's index and rectangle, without lists
+  EventKeying keying_;
   int64_t memory_bytes_ = 0;
 };
 

@@ -38,7 +38,7 @@ std::vector<TileEvents> Merged(std::vector<TileParts> ranges, EventSpill* spill 
       EXPECT_TRUE(read.ok()) << read.status();
       if (read.ok()) parts.in_memory.push_back(*std::move(read));
     }
-    out.push_back(MergeTileEvents(parts.in_memory));
+    out.push_back(MergeTileEvents(parts.in_memory, EventKeying::kCounts));
   }
   return out;
 }
@@ -142,7 +142,7 @@ TileEvents RandomBatch(std::mt19937_64& rng, int width, int height) {
   for (int p = 0; p < width * height; ++p) {
     std::vector<Event> pixel;
     for (int k = count(rng); k > 0; --k) pixel.push_back({depth(rng), k % 2 ? 1 : -1});
-    NormalizeEvents(&pixel);
+    NormalizeEvents(&pixel, EventKeying::kCounts);
     out.events.insert(out.events.end(), pixel.begin(), pixel.end());
     out.offsets.push_back(out.events.size());
   }

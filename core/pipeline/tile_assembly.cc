@@ -1,12 +1,14 @@
 #include "core/pipeline/tile_assembly.h"
 
 #include <algorithm>
+#include <cassert>
 #include <chrono>
 #include <optional>
 #include <vector>
 
 #include "core/bake/surface_function.h"
 #include "core/events/consolidation.h"
+#include "core/events/emitter_weighting.h"
 #include "core/pdsm/compression.h"
 
 namespace pdsm {
@@ -31,8 +33,9 @@ namespace {
 // consolidated, turned into attenuation and compressed pixel by pixel, so a tile's merged
 // lists (tens of MiB at thousands of samples) are never all in memory.
 template <typename PartsOf>
-PdsmTile Assemble(const PdsmHeader& header, const TileEvents& shape, int tile_samples,
-                  AssemblyStats* stats, const TileWindows* windows, PartsOf&& parts_of) {
+PdsmTile Assemble(const PdsmHeader& header, std::span<const glm::dvec2> samples,
+                  const TileEvents& shape, int tile_samples, AssemblyStats* stats,
+                  const TileWindows* windows, PartsOf&& parts_of) {
   const auto start = std::chrono::steady_clock::now();
   PdsmTile tile;
   tile.x0 = shape.x0;
@@ -44,6 +47,11 @@ PdsmTile Assemble(const PdsmHeader& header, const TileEvents& shape, int tile_sa
   // Compression's perpendicular metric measures depth in units of the baked depth range.
   const PdsmGeometry& g = header.geometry;
   const double depth_scale = std::max(g.z_far - g.z_near, 1e-30);
+  const EventKeying keying = KeyingOf(header);
+  // Sample-keyed events: each pixel's shares come from its ray (emitter weighting).
+  std::optional<EmitterRay> emitter;
+  if (keying == EventKeying::kSampleKeys) emitter.emplace(samples, tile_samples);
+  const double tolerance = EmitterTolerance(header.epsilon);
   std::vector<std::span<const Event>> lists;
   for (size_t p = 0; p < shape.PixelCount(); ++p) {
     parts_of(p, &lists);
@@ -54,10 +62,23 @@ PdsmTile Assemble(const PdsmHeader& header, const TileEvents& shape, int tile_sa
       tile.offsets[p + 1] = tile.vertices.size();
       continue;
     }
-    const std::vector<Event> merged = MergeEventLists(lists);
-    const std::vector<Event> events = ConsolidateEvents(merged);
+    const std::vector<Event> merged = MergeEventLists(lists, keying);
+    const std::vector<Event> events = ConsolidateEvents(merged, keying);
     std::vector<Vertex> compressed;
-    if (windows != nullptr) {
+    if (emitter) {
+      const int x = shape.x0 + static_cast<int>(p % shape.width);
+      const int y = shape.y0 + static_cast<int>(p / shape.width);
+      emitter->SetRay(g.PixelCenterS(x), g.PixelCenterT(y));
+      if (windows != nullptr) {
+        compressed = EmitterSurfaceFunction(events, windows->Pixel(p), &*emitter, tolerance,
+                                            header.epsilon, header.compression_metric, depth_scale);
+      } else {
+        const std::vector<Vertex> function =
+            EmitterWeightedFunction(events, &*emitter, g.z_far, tolerance);
+        compressed =
+            CompressFunction(function, header.epsilon, header.compression_metric, depth_scale);
+      }
+    } else if (windows != nullptr) {
       compressed = SurfaceFunction(events, windows->Pixel(p), tile_samples, header.epsilon,
                                    header.compression_metric, depth_scale);
     } else {
@@ -81,7 +102,8 @@ PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> part
                       AssemblyStats* stats, const TileWindows* windows) {
   static const TileEvents kNoTile;
   const TileEvents& shape = parts.empty() ? kNoTile : parts.front();
-  return Assemble(header, shape, tile_samples, stats, windows,
+  assert(KeyingOf(header) == EventKeying::kCounts);  // sample-keyed: AssemblePlanTile
+  return Assemble(header, {}, shape, tile_samples, stats, windows,
                   [&](size_t p, std::vector<std::span<const Event>>* lists) {
                     lists->clear();
                     for (const TileEvents& part : parts) lists->push_back(part.Pixel(p));
@@ -112,7 +134,8 @@ absl::StatusOr<PdsmTile> AssemblePlanTile(const BakePlan& plan, const TileParts&
   readers.reserve(parts.spilled.size());
   for (const SpilledRun& run : parts.spilled) readers.emplace_back(spill, run);
   const int samples = tile_samples > 0 ? tile_samples : plan.header.samples;
-  PdsmTile tile = Assemble(plan.header, parts.shape, samples, stats, windows ? &*windows : nullptr,
+  PdsmTile tile = Assemble(plan.header, plan.samples, parts.shape, samples, stats,
+                           windows ? &*windows : nullptr,
                            [&](size_t p, std::vector<std::span<const Event>>* lists) {
                              lists->clear();
                              for (const TileEvents& part : parts.in_memory) {

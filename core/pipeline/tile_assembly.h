@@ -25,7 +25,8 @@ struct AssemblyStats {
 };
 
 // REQUIRES: `parts` are results for the same tile whose batches together cover every sample
-// of the bake exactly once. `windows`: the tile's receiver windows
+// of the bake exactly once; a counted bake (KeyingOf(header) == kCounts: a sample-keyed one
+// needs the plan's samples, AssemblePlanTile). `windows`: the tile's receiver windows
 // (ComputeReceiverWindows) when header.surfaces_only, else null.
 PdsmTile AssembleTile(const PdsmHeader& header, std::span<const TileEvents> parts,
                       AssemblyStats* stats, const TileWindows* windows = nullptr);

@@ -20,10 +20,9 @@
 
 #include "absl/status/statusor.h"
 #include "core/geometry/light_frame.h"
+#include "core/scene/scene.h"  // LightWeighting
 
 namespace pdsm {
-
-enum class LightWeighting { kUnweighted, kEmitter, kIrradiance };
 
 struct WeightingSpec {
   LightWeighting kind = LightWeighting::kUnweighted;

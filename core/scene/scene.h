@@ -79,6 +79,10 @@ struct LightSpec {
 
 enum class SamplingPattern { kStratified, kUniform, kSobol, kHalton, kBlueNoise };
 enum class CompressionMetric { kVertical, kPerpendicular };
+// What each light sample counts for at a point (core/reference/light_weighting.h): a bake
+// takes kUnweighted or kEmitter (core/events/emitter_weighting.h); kIrradiance needs the
+// receiver's normal and exists only in the references.
+enum class LightWeighting { kUnweighted, kEmitter, kIrradiance };
 
 struct FrustumOverride {
   double s_min, s_max, t_min, t_max;
@@ -98,6 +102,7 @@ struct BakeSettings {
   uint64_t seed = 1;
   SamplingPattern sampling = SamplingPattern::kSobol;  // the measured best (docs/accuracy.md)
   CompressionMetric compression_metric = CompressionMetric::kVertical;
+  LightWeighting weighting = LightWeighting::kUnweighted;  // kUnweighted or kEmitter
   std::optional<FrustumOverride> frustum;
   // Adaptive sampling: 0 is off (every tile uses `samples`); > 0 lets a tile stop once its
   // estimated error is at most this, `samples` being the maximum (docs/algorithms.md).

@@ -133,7 +133,7 @@ absl::Status BuildScalars(const FieldChecker& checks, const pdsm::v1::BakeParams
   return absl::OkStatus();
 }
 
-// The enums: sampling and compressionMetric.
+// The enums: sampling, compressionMetric and weighting.
 absl::Status BuildEnums(const FieldChecker& checks, const pdsm::v1::BakeParams& bake,
                         BakeSettings* out) {
   switch (bake.sampling()) {
@@ -168,6 +168,18 @@ absl::Status BuildEnums(const FieldChecker& checks, const pdsm::v1::BakeParams& 
     default:
       return checks.Error("bake.compressionMetric",
                           absl::StrCat("unknown value (got ", bake.compression_metric(), ")"));
+  }
+  switch (bake.weighting()) {
+    case pdsm::v1::WEIGHTING_DEFAULT:
+    case pdsm::v1::UNWEIGHTED:
+      out->weighting = LightWeighting::kUnweighted;
+      break;
+    case pdsm::v1::EMITTER:
+      out->weighting = LightWeighting::kEmitter;
+      break;
+    default:
+      return checks.Error("bake.weighting",
+                          absl::StrCat("unknown value (got ", bake.weighting(), ")"));
   }
   return absl::OkStatus();
 }
@@ -273,6 +285,8 @@ pdsm::v1::BakeParams BakeParamsOf(const BakeSettings& b) {
   out.set_compression_metric(b.compression_metric == CompressionMetric::kVertical
                                  ? pdsm::v1::VERTICAL
                                  : pdsm::v1::PERPENDICULAR);
+  out.set_weighting(b.weighting == LightWeighting::kEmitter ? pdsm::v1::EMITTER
+                                                            : pdsm::v1::UNWEIGHTED);
   if (b.frustum) {
     pdsm::v1::Frustum* f = out.mutable_frustum();
     for (double x : {b.frustum->s_min, b.frustum->s_max, b.frustum->t_min, b.frustum->t_max}) {

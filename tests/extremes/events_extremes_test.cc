@@ -49,7 +49,7 @@ Walk MakeWalk() {
     part.width = part.height = 1;
     part.offsets = {0, batches[b].size()};
     part.events = batches[b];
-    NormalizeEvents(&part.events);
+    NormalizeEvents(&part.events, EventKeying::kCounts);
     walk.parts.push_back(part);
   }
   return walk;
