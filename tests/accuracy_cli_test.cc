@@ -141,6 +141,28 @@ TEST(ReferenceCli, WeightingsAgreeOutsidePenumbraeAndDifferInThem) {
   EXPECT_NE(r.err.find("normal"), std::string::npos) << r.err;
 }
 
+// Without --weighting the reference measures what the scene bakes (bake.weighting), so that
+// `pdsm query` on its bake and `pdsm reference` compare line by line.
+TEST(ReferenceCli, TheDefaultWeightingIsTheScenesBake) {
+  TempDir dir;
+  const std::string points = dir.File("pts.csv");
+  WriteText(points, "1.0,0,1.2\n");
+  std::string scene = ReadBytes(ExamplePath("plates"));
+  const size_t bake = scene.find("\"bake\": {");
+  ASSERT_NE(bake, std::string::npos) << scene;
+  scene.insert(bake + 9, "\"weighting\": \"EMITTER\", ");
+  WriteText(dir.File("scene.json"), scene);
+  const std::string base = kPdsm + " reference " + dir.File("scene.json") + " --points " + points;
+  const CommandResult by_default = RunCommand(base, dir);
+  const CommandResult emitter = RunCommand(base + " --weighting emitter", dir);
+  const CommandResult unweighted = RunCommand(base + " --weighting unweighted", dir);
+  for (const CommandResult* r : {&by_default, &emitter, &unweighted}) {
+    ASSERT_EQ(r->exit_code, 0) << r->err;
+  }
+  EXPECT_EQ(by_default.out, emitter.out);
+  EXPECT_NE(by_default.out, unweighted.out);
+}
+
 // column name -> value, for each data row.
 std::vector<std::map<std::string, std::string>> ReadCsv(const std::string& path,
                                                         std::string* header) {

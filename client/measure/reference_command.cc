@@ -23,27 +23,31 @@ struct ReferenceFlags {
   std::string method = "auto";
   int samples = kDefaultReferenceSamples;
   uint64_t seed = 1;
-  std::string weighting = "unweighted";
+  std::string weighting;  // empty: the scene's bake.weighting (what its bake stores)
   std::vector<double> normal;
 };
 
 int RunReference(const ReferenceFlags& flags) {
   absl::StatusOr<ReferenceMethod> method = ParseReferenceMethod(flags.method, "--method");
   if (!method.ok()) return ReportError(method.status());
-  absl::StatusOr<LightWeighting> weighting = ParseLightWeighting(flags.weighting, "--weighting");
+  absl::StatusOr<LightWeighting> weighting =
+      flags.weighting.empty() ? LightWeighting::kUnweighted
+                              : ParseLightWeighting(flags.weighting, "--weighting");
   if (!weighting.ok()) return ReportError(weighting.status());
-  WeightingSpec spec{*weighting, glm::dvec3(0.0)};
   const bool irradiance = *weighting == LightWeighting::kIrradiance;
   if (irradiance != !flags.normal.empty()) {
     return ReportError(absl::InvalidArgumentError(
         "--normal: given exactly when --weighting is irradiance (the receiver's normal, world "
         "space, facing the light)"));
   }
-  if (!flags.normal.empty())
-    spec.normal_world = {flags.normal[0], flags.normal[1], flags.normal[2]};
   absl::StatusOr<Scene> scene = LoadSceneFile(flags.scene_path);
   if (scene.ok()) scene = OneLight(*std::move(scene), "", "pdsm reference");
   if (!scene.ok()) return ReportError(scene.status());
+  // By default the definition the scene bakes, so that `pdsm query` and this compare line by
+  // line.
+  WeightingSpec spec{flags.weighting.empty() ? scene->bake.weighting : *weighting, glm::dvec3(0.0)};
+  if (!flags.normal.empty())
+    spec.normal_world = {flags.normal[0], flags.normal[1], flags.normal[2]};
   absl::StatusOr<std::vector<QueryPoint>> points = ReadPointsCsv(flags.points_path);
   if (!points.ok()) return ReportError(points.status());
   const ReferenceMethod resolved = ResolveReferenceMethod(*method, *scene);
@@ -91,10 +95,11 @@ void RegisterReferenceCommand(CLI::App& app, int* exit_code) {
       ->check(CLI::Range(1, 1 << 20))
       ->capture_default_str();
   cmd->add_option("--seed", flags->seed, "Embree: sample seed")->capture_default_str();
-  cmd->add_option("--weighting", flags->weighting,
-                  "unweighted (pdsm's attenuation), emitter (share of the light's solid angle), "
-                  "irradiance (a renderer's shadow ratio on a surface of --normal)")
-      ->capture_default_str();
+  cmd->add_option(
+      "--weighting", flags->weighting,
+      "unweighted (the share of the light's area hidden), emitter (of its solid angle), "
+      "irradiance (a renderer's shadow ratio on a surface of --normal); default: the "
+      "scene's bake.weighting, what its bake stores");
   cmd->add_option("--normal", flags->normal,
                   "irradiance: the receiver's normal X,Y,Z (world space, facing the light)")
       ->delimiter(',')
