@@ -1,17 +1,17 @@
 #include "core/events/emitter_weighting.h"
 
-#include "core/events/emitter_shares.h"
-
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+
+#include "core/events/emitter_shares.h"
 
 namespace pdsm {
 
 double EmitterTolerance(double epsilon) { return std::clamp(epsilon / 4, 0x1.0p-14, 0x1.0p-8); }
 
 EmitterRay::EmitterRay(std::span<const glm::dvec2> samples, int total_samples)
-    : samples_(samples), total_(total_samples) {
+    : total_(total_samples) {
   assert(total_samples >= 1 && static_cast<size_t>(total_samples) <= samples.size());
   a_.resize(total_);
   b_.resize(total_);
@@ -32,7 +32,7 @@ void EmitterRay::ClearHidden() {
 
 bool EmitterRay::Apply(const Event& e) {
   const int k = SampleOfEvent(e);
-  assert(k < total_);
+  if (k < 0 || k >= total_) return false;  // not this ray's samples: never written out of bounds
   const double now = e.count > 0 ? 1.0 : 0.0;
   if (hidden_[k] == now) return false;  // not for alternating events; keeps the count true
   hidden_[k] = now;

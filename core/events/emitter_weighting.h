@@ -48,8 +48,8 @@ double EmitterTolerance(double epsilon);
 class EmitterRay {
  public:
   // `samples`: the light's samples (a_k, b_k), light-space units, the bake's order; the
-  // first `total_samples` of them weigh (adaptive tiles use a prefix). REQUIRES:
-  // 1 <= total_samples <= samples.size(); `samples` outlives the ray.
+  // first `total_samples` of them weigh (adaptive tiles use a prefix); they are copied.
+  // REQUIRES: 1 <= total_samples <= samples.size().
   EmitterRay(std::span<const glm::dvec2> samples, int total_samples);
 
   // Points the ray at direction (s, t, 1) and clears the hidden set.
@@ -58,8 +58,8 @@ class EmitterRay {
   // Clears the hidden set (every sample lit), keeping the ray.
   void ClearHidden();
 
-  // Applies one kSampleKeys event of a sample below total_samples. Returns whether the
-  // sample's state changed (a repeated entry or exit changes nothing).
+  // Applies one kSampleKeys event. Returns whether the sample's state changed: a repeated
+  // entry or exit changes nothing, nor does an event of a sample past total_samples.
   bool Apply(const Event& e);
 
   // A at depth z (> 0) with the current hidden set, summed over every sample: O(samples).
@@ -73,7 +73,6 @@ class EmitterRay {
   int total() const { return total_; }
 
  private:
-  std::span<const glm::dvec2> samples_;
   int total_;
   double s_ = 0, t_ = 0;
   std::vector<double> a_, b_;   // the samples' coordinates, apart (the sums vectorize)

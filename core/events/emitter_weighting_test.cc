@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -69,6 +70,22 @@ TEST(EmitterRayTest, PlateausAreExactAndATinyLightIsTheCount) {
   small.SetRay(0.3, -0.2);
   for (int k = 0; k < 16; ++k) small.Apply(Event{1.0f, SampleEventKey(k)});
   EXPECT_NEAR(small.Attenuation(1.0), 0.25, 1e-6);
+}
+
+// An adaptive tile weighs a prefix of the samples: an event of a later one changes nothing and
+// writes nowhere, nor does a repeated entry.
+TEST(EmitterRayTest, EventsOfOtherSamplesAndRepeatsChangeNothing) {
+  const std::vector<glm::dvec2> samples = {{-1, 0}, {1, 0}, {0, 1}, {0, -1}};
+  EmitterRay ray(samples, 2);
+  ray.SetRay(0.0, 0.0);
+  EXPECT_FALSE(ray.Apply(Event{1.0f, SampleEventKey(2)}));
+  EXPECT_FALSE(ray.Apply(Event{1.0f, -SampleEventKey(3)}));
+  EXPECT_FALSE(ray.Apply(Event{1.0f, std::numeric_limits<int32_t>::min()}));
+  EXPECT_EQ(ray.hidden(), 0);
+  EXPECT_TRUE(ray.Apply(Event{1.0f, SampleEventKey(1)}));
+  EXPECT_FALSE(ray.Apply(Event{2.0f, SampleEventKey(1)}));
+  EXPECT_EQ(ray.hidden(), 1);
+  EXPECT_NEAR(ray.Attenuation(1.0), 0.5, 1e-12);  // the two samples mirror each other
 }
 
 // A ray through random casters: each sample hidden on random depth intervals.
