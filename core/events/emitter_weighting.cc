@@ -10,6 +10,14 @@ namespace pdsm {
 
 double EmitterTolerance(double epsilon) { return std::clamp(epsilon / 4, 0x1.0p-14, 0x1.0p-8); }
 
+double EmitterQuantum(double tolerance) { return std::exp2(std::floor(std::log2(tolerance / 4))); }
+
+void RoundAttenuation(double quantum, std::vector<Vertex>* vertices) {
+  for (Vertex& v : *vertices) {
+    v.a = static_cast<float>(std::nearbyint(v.a / quantum) * quantum);  // NaN stays NaN
+  }
+}
+
 EmitterRay::EmitterRay(std::span<const glm::dvec2> samples, int total_samples)
     : total_(total_samples) {
   assert(total_samples >= 1 && static_cast<size_t>(total_samples) <= samples.size());

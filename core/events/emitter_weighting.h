@@ -44,6 +44,17 @@ inline constexpr int kMaxBisections = 10;
 // one keeps the weighting's own effect (differences of 0.01-0.06 from unweighted).
 double EmitterTolerance(double epsilon);
 
+// The step an emitter-weighted function's values are rounded to once compressed: the largest
+// power of two at most tolerance / 4, so that rounding errs by at most tolerance / 8 (within
+// the tolerance's budget: the stored function stays within epsilon + tolerance of A). Weighted
+// values are not multiples of 1/N: their low mantissa bits are noise the file's ZIP cannot
+// pack (plates at ε 0.01: 2.60 MB unrounded, 1.59 MB rounded; unweighted 1.77 MB).
+double EmitterQuantum(double tolerance);
+
+// Rounds every finite attenuation to a multiple of `quantum` (0 and 1 stay exact, NaN stays
+// NaN). REQUIRES: quantum a power of two.
+void RoundAttenuation(double quantum, std::vector<Vertex>* vertices);
+
 // One ray's weights. Not thread-safe (it keeps the hidden set); one per thread.
 class EmitterRay {
  public:

@@ -88,6 +88,32 @@ TEST(EmitterRayTest, EventsOfOtherSamplesAndRepeatsChangeNothing) {
   EXPECT_NEAR(ray.Attenuation(1.0), 0.5, 1e-12);  // the two samples mirror each other
 }
 
+TEST(RoundAttenuationTest, MultiplesOfTheQuantumWithinHalfOfItPlateausAndNaNKept) {
+  const double tolerance = EmitterTolerance(0.01);
+  const double quantum = EmitterQuantum(tolerance);
+  EXPECT_LE(quantum, tolerance / 4);
+  EXPECT_GT(quantum, tolerance / 8);
+  EXPECT_EQ(std::exp2(std::round(std::log2(quantum))), quantum);  // a power of two
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::vector<Vertex> vertices = {{1.0f, 0.0f},
+                                  {2.0f, 1.0f},
+                                  {3.0f, std::numeric_limits<float>::quiet_NaN()},
+                                  {4.0f, static_cast<float>(quantum / 3)}};
+  for (int k = 0; k < 1000; ++k) vertices.push_back({5.0f, u(rng)});
+  const std::vector<Vertex> original = vertices;
+  RoundAttenuation(quantum, &vertices);
+  EXPECT_EQ(vertices[0].a, 0.0f);
+  EXPECT_EQ(vertices[1].a, 1.0f);
+  EXPECT_TRUE(std::isnan(vertices[2].a));
+  EXPECT_EQ(vertices[3].a, 0.0f);
+  for (size_t k = 4; k < vertices.size(); ++k) {
+    EXPECT_LE(std::abs(vertices[k].a - original[k].a), quantum / 2 + 1e-7);
+    EXPECT_EQ(std::fmod(vertices[k].a, quantum), 0.0);
+    EXPECT_EQ(vertices[k].z, original[k].z);
+  }
+}
+
 // A ray through random casters: each sample hidden on random depth intervals.
 std::vector<Event> RandomRayEvents(std::mt19937_64& rng, int samples, double z_lo, double z_hi) {
   std::uniform_real_distribution<double> u(z_lo, z_hi);

@@ -52,6 +52,7 @@ PdsmTile Assemble(const PdsmHeader& header, std::span<const glm::dvec2> samples,
   std::optional<EmitterRay> emitter;
   if (keying == EventKeying::kSampleKeys) emitter.emplace(samples, tile_samples);
   const double tolerance = EmitterTolerance(header.epsilon);
+  const double quantum = EmitterQuantum(tolerance);
   std::vector<std::span<const Event>> lists;
   for (size_t p = 0; p < shape.PixelCount(); ++p) {
     parts_of(p, &lists);
@@ -78,6 +79,7 @@ PdsmTile Assemble(const PdsmHeader& header, std::span<const glm::dvec2> samples,
         compressed =
             CompressFunction(function, header.epsilon, header.compression_metric, depth_scale);
       }
+      RoundAttenuation(quantum, &compressed);
     } else if (windows != nullptr) {
       compressed = SurfaceFunction(events, windows->Pixel(p), tile_samples, header.epsilon,
                                    header.compression_metric, depth_scale);
