@@ -137,26 +137,15 @@ TEST(SurfacesOnly, SameBytesForAnyThreadsAndBatches) {
 TEST(SurfacesOnly, ServiceMatchesTheLocalBakeByteForByte) {
   testing::ServiceCluster cluster(testing::CoordinatorArgs({"--samples-per-task", "8"}));
   ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
-  cluster.AddWorker();
-  cluster.AddWorker();
   const std::string scene = testing::WriteServiceScene(cluster.dir(), 64, 16, 32);
-  const std::string local = cluster.dir().File("local.exr");
-  const testing::CommandResult r = testing::RunCommand(
-      std::string(PDSM_CLI) + " bake " + scene + " -o " + local + " --no-preview --surfaces-only",
+  testing::ExpectServiceBakesAsLocal(cluster, scene, 2, "--surfaces-only");
+  // `pdsm info` says where the local bake's file is defined (format 2).
+  const testing::CommandResult info = testing::RunCommand(
+      std::string(PDSM_CLI) + " info " + cluster.dir().File("local.exr") + " --json",
       cluster.dir());
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  // `pdsm info` says where the file is defined (format 2).
-  const testing::CommandResult info =
-      testing::RunCommand(std::string(PDSM_CLI) + " info " + local + " --json", cluster.dir());
   ASSERT_EQ(info.exit_code, 0) << info.err;
   EXPECT_NE(info.out.find("\"formatVersion\": 2"), std::string::npos) << info.out;
   EXPECT_NE(info.out.find("\"surfacesOnly\": true"), std::string::npos) << info.out;
-  const std::string job_id = cluster.Submit(scene, "--surfaces-only");
-  const pdsm::v1::Job job = cluster.WaitForEnd(job_id);
-  ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED) << job.error();
-  const std::string fetched = cluster.dir().File("fetched.exr");
-  ASSERT_EQ(cluster.Pdsm("fetch " + job_id + " -o " + fetched).exit_code, 0);
-  EXPECT_TRUE(ReadBytes(fetched) == ReadBytes(local)) << "fetched PDSM differs from local bake";
 }
 
 }  // namespace

@@ -412,23 +412,26 @@ inline std::string FetchBytes(ServiceCluster& cluster, const std::string& job_id
   return ReadBytes(out);
 }
 
-// The local bake of a scene, as bytes: what every distributed bake must equal.
-inline std::string LocalBakeBytes(const TempDir& dir, const std::string& scene_path) {
+// The local bake of a scene (written to DIR/local.exr), as bytes: what every distributed bake
+// must equal. `flags`: bake flags both bakes take (`--surfaces-only`, `--weighting emitter`).
+inline std::string LocalBakeBytes(const TempDir& dir, const std::string& scene_path,
+                                  const std::string& flags = "") {
   const std::string out = dir.File("local.exr");
   CommandResult r = RunCommand(
-      std::string(PDSM_CLI) + " bake " + scene_path + " -o " + out + " --no-preview", dir);
+      std::string(PDSM_CLI) + " bake " + scene_path + " -o " + out + " --no-preview " + flags, dir);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   return ReadBytes(out);
 }
 
 // Submits `scene_path` to the cluster's coordinator, adds `workers` workers, waits for the job
-// to end and expects it to succeed with `pdsm bake`'s bytes. Returns the job (its id empty when
-// it could not be submitted).
+// to end and expects it to succeed with `pdsm bake`'s bytes (LocalBakeBytes), both with bake
+// `flags`. Returns the job (its id empty when it could not be submitted).
 inline pdsm::v1::Job ExpectServiceBakesAsLocal(ServiceCluster& cluster,
-                                               const std::string& scene_path, int workers = 2) {
-  const std::string expected = LocalBakeBytes(cluster.dir(), scene_path);
+                                               const std::string& scene_path, int workers = 2,
+                                               const std::string& flags = "") {
+  const std::string expected = LocalBakeBytes(cluster.dir(), scene_path, flags);
   EXPECT_FALSE(expected.empty());
-  const std::string job_id = cluster.Submit(scene_path);
+  const std::string job_id = cluster.Submit(scene_path, flags);
   EXPECT_FALSE(job_id.empty());
   if (job_id.empty()) return {};
   for (int i = 0; i < workers; ++i) cluster.AddWorker();
