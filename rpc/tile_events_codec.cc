@@ -41,13 +41,14 @@ absl::Status CheckEvents(const TileEvents& events, const ResultBounds& bounds,
                                 bounds.z_min, ")"));
       }
       if (count == 0) return bad(absl::StrCat("count[", e, "]: must not be 0"));
-      if (!keyed && e > begin && !(z > events.events[e - 1].z)) {
-        return bad(absl::StrCat("z[", e, "]: depths of pixel ", p, " must increase"));
+      if (e > begin) {
+        const Event& before = events.events[e - 1];
+        if (keyed ? !KeyedBefore(before, events.events[e]) : !(z > before.z)) {
+          return bad(absl::StrCat("z[", e, "]: ", keyed ? "(depth, key)" : "depths", " of pixel ",
+                                  p, " must increase"));
+        }
       }
       if (keyed) {
-        if (e > begin && !KeyedBefore(events.events[e - 1], events.events[e])) {
-          return bad(absl::StrCat("z[", e, "]: (depth, key) of pixel ", p, " must increase"));
-        }
         const int64_t sample = SampleOfEvent(events.events[e]);
         if (sample < bounds.sample_begin || sample >= bounds.sample_begin + bounds.batch_samples) {
           return bad(absl::StrCat("count[", e, "]: sample ", sample, " is not of the batch [",
