@@ -37,7 +37,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "cycles"))
 sys.path.insert(0, HERE)
 import pdsm_scene  # noqa: E402
-from cycles_compare import read_values, run_timed  # noqa: E402
+from cycles_compare import errors, read_values, run_timed  # noqa: E402
 
 # The bundled and shared scenes whose casters stand on their ground (plates' hover above it).
 SCENES = {"sun_pillars": "examples/sun_pillars/scene.json", "dragon": None}
@@ -89,14 +89,6 @@ def contact_points(model, radius, band, step):
         points.append(tuple(centre))
         under.append((int(u), int(w)) in covered)
     return points, under
-
-
-def errors(baked, exact, keep):
-    d = sorted(abs(baked[i] - exact[i]) for i in keep if not math.isnan(baked[i]))
-    if not d:
-        return {"n": 0}
-    q = lambda f: d[min(len(d) - 1, int(f * len(d)))]  # noqa: E731
-    return {"n": len(d), "mae": sum(d) / len(d), "p95": q(0.95), "p99": q(0.99), "max": d[-1]}
 
 
 def measure(args, name, scene):

@@ -85,9 +85,12 @@ def percentile(sorted_values, q):
 
 
 def errors(values, truth, subset):
-    """MAE, P95, P99, max of |values - truth| over the subset's indices (NaNs skipped)."""
+    """MAE, P95, P99, max of |values - truth| over the subset's indices (NaNs skipped); only
+    n = 0 for an empty subset."""
     e = sorted(abs(values[i] - truth[i]) for i in subset
                if not math.isnan(values[i]) and not math.isnan(truth[i]))
+    if not e:
+        return {"n": 0}
     return {"n": len(e), "mae": sum(e) / len(e), "p95": percentile(e, 0.95),
             "p99": percentile(e, 0.99), "max": e[-1]}
 
