@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/pdsm/refined_pixel.h"
 #include "core/util/png_writer.h"
 
 namespace pdsm {
@@ -49,7 +50,7 @@ void PreviewImage::ShadeTile(const PdsmTile& tile, std::span<const float> sample
       const float z = sampled_depth[next++];
       uint8_t rgb[3] = {24, 28, 52};
       if (std::isfinite(z)) {
-        const double lit = 1.0 - EvaluateAttenuation(tile.Function(i, j), z);
+        const double lit = 1.0 - EvaluatePixelCentre(tile.Function(i, j), z);
         const auto gray = static_cast<uint8_t>(std::lround(36 + 219 * lit));
         rgb[0] = rgb[1] = rgb[2] = gray;
       }

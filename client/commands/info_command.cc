@@ -11,6 +11,7 @@
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_header_json.h"
 #include "core/pdsm/pdsm_lights.h"
+#include "core/pdsm/refined_pixel.h"
 
 namespace pdsm {
 namespace {
@@ -47,11 +48,22 @@ void Describe(const InfoFlags& flags, const std::string& title, const PdsmImage*
   const PdsmHeader& h = pdsm->header;
   const PdsmGeometry& g = h.geometry;
   size_t max_vertices = 0, empty_pixels = 0;
+  struct {
+    size_t total = 0;
+    size_t by_factor[4] = {0, 0, 0, 0};  // by log2 of the refinement
+  } refined;
   const size_t pixels = static_cast<size_t>(g.width) * g.height;
   for (size_t p = 0; p < pixels; ++p) {
     const size_t n = pdsm->offsets[p + 1] - pdsm->offsets[p];
     max_vertices = std::max(max_vertices, n);
     empty_pixels += n == 0;
+    const int f = h.max_refinement > 1 ? RefinementOf(pdsm->Function(static_cast<int>(p % g.width),
+                                                                     static_cast<int>(p / g.width)))
+                                       : 1;
+    if (f > 1) {
+      ++refined.total;
+      ++refined.by_factor[f == 2 ? 1 : f == 4 ? 2 : 3];
+    }
   }
   // JSON is exact (pdsm_header_json.h); the text is for people: 6 significant digits.
   const auto v3_text = [](const glm::dvec3& v) {
@@ -60,12 +72,13 @@ void Describe(const InfoFlags& flags, const std::string& title, const PdsmImage*
   const std::string projection =
       g.projection == Projection::kPerspective ? "perspective" : "orthographic";
   if (flags.json) {
-    std::printf(
-        "%s", PdsmHeaderJson(h, absl::StrFormat(", \"vertices\": %zu, "
-                                                "\"maxVerticesPerPixel\": %zu, "
-                                                "\"emptyPixels\": %zu",
-                                                pdsm->vertices.size(), max_vertices, empty_pixels))
-                  .c_str());
+    std::printf("%s",
+                PdsmHeaderJson(h, absl::StrFormat(", \"vertices\": %zu, "
+                                                  "\"maxVerticesPerPixel\": %zu, "
+                                                  "\"emptyPixels\": %zu, \"refinedPixels\": %zu",
+                                                  pdsm->vertices.size(), max_vertices, empty_pixels,
+                                                  refined.total))
+                    .c_str());
     return;
   }
   std::printf("%s: PDSM format %d, scene \"%s\"\n", title.c_str(), h.format_version,
@@ -100,6 +113,11 @@ void Describe(const InfoFlags& flags, const std::string& title, const PdsmImage*
   }
   std::printf("  functions   %zu vertices, at most %zu per pixel, %zu empty pixels (all lit)\n",
               pdsm->vertices.size(), max_vertices, empty_pixels);
+  if (h.max_refinement > 1) {
+    std::printf("  refined     %zu pixels (2x %zu, 4x %zu, 8x %zu), up to %dx per axis\n",
+                refined.total, refined.by_factor[1], refined.by_factor[2], refined.by_factor[3],
+                h.max_refinement);
+  }
 }
 
 int RunInfo(const InfoFlags& flags) {

@@ -16,8 +16,8 @@
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
-#include "core/pdsm/attenuation_function.h"
 #include "core/pdsm/exr_output_stream.h"
+#include "core/pdsm/refined_pixel.h"
 #include "core/reference/embree_handles.h"
 #include "core/util/atomic_file.h"
 #include "core/util/png_writer.h"
@@ -42,10 +42,11 @@ AttenuationImage EmptyImage(const PdsmGeometry& g) {
   return image;
 }
 
-// The pixel's function at depth z; NaN nearer than what the file resolves.
+// The pixel's value at its centre at depth z (a refined pixel's central sub-pixels); NaN nearer
+// than what the file resolves.
 float EvaluateAt(const PdsmImage& pdsm, int x, int y, double z) {
   if (z < pdsm.header.geometry.z_valid_min) return kNaN;
-  return static_cast<float>(EvaluateAttenuation(pdsm.Function(x, y), z));
+  return static_cast<float>(EvaluatePixelCentre(pdsm.Function(x, y), z));
 }
 
 // Receiver triangles in light space (the file's frame), in double, less `origin`.

@@ -9,7 +9,7 @@
 #include "client/export/attenuation_image.h"
 #include "client/view/image_io.h"
 #include "client/view/text_overlay.h"
-#include "core/pdsm/attenuation_function.h"
+#include "core/pdsm/refined_pixel.h"
 
 namespace pdsm {
 namespace {
@@ -83,7 +83,7 @@ absl::StatusOr<ErrorMap> MeasureErrorMap(const PdsmImage& pdsm, const Scene& sce
       const double z = static_cast<double>(surface->depth[source]);
       const double nudged = z - kTowardTheLight * std::max(std::abs(z), g.z_far - g.z_near);
       if (nudged < g.z_valid_min) continue;
-      map.pdsm[pixel] = EvaluateAttenuation(pdsm.Function(x, y), nudged);
+      map.pdsm[pixel] = EvaluatePixelCentre(pdsm.Function(x, y), nudged);
       const glm::dvec3 light = PointOnRay(g, x, y, nudged);
       where.push_back(pixel);
       points.push_back(g.frame.WorldFromLight(light));

@@ -20,6 +20,11 @@ struct Vertex {
   bool operator==(const Vertex&) const = default;
 };
 
+// The depth of the vertex that opens a function defined only in windows (a surfaces-only
+// function, a refined pixel's sub-function): the lowest float, so that every depth before the
+// first window evaluates to NaN (EvaluateAttenuation interpolates from a NaN vertex).
+inline constexpr float kUndefinedFrom = -3.40282347e+38f;
+
 // Evaluates A(z) by binary search. O(log n). Finite values are clamped to [0, 1] (a
 // compressed function may overshoot; the true one never does); NaN stays NaN: a NaN vertex
 // at or around z makes the result NaN.

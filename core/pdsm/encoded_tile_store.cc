@@ -47,6 +47,16 @@ absl::Status EncodedTileStore::Put(const PdsmTile& tile) {
   if (tile.vertices.empty() && tile.offsets.size() == pixels + 1 && tile.offsets.back() == 0) {
     return PutWithoutVertices(tile.x0, tile.y0, tile.samples);
   }
+  return Encode(tile, *index, /*replace=*/false);
+}
+
+absl::Status EncodedTileStore::Replace(const PdsmTile& tile) {
+  absl::StatusOr<size_t> index = CellIndex(tile.x0, tile.y0, tile.width, tile.height);
+  if (!index.ok()) return index.status();
+  return Encode(tile, *index, /*replace=*/true);
+}
+
+absl::Status EncodedTileStore::Encode(const PdsmTile& tile, size_t index, bool replace) {
   // Encoded before the lock: this is the bake's compression, on the thread that finished it.
   absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(tile, tile_size_);
   if (!encoded.ok()) return encoded.status();
@@ -55,8 +65,39 @@ absl::Status EncodedTileStore::Put(const PdsmTile& tile) {
         absl::StrFormat("tile at (%d, %d) compresses to %d bytes, more than a chunk holds", tile.x0,
                         tile.y0, encoded->chunk.size()));
   }
-  return Keep(*index, Place{0, static_cast<uint32_t>(encoded->chunk.size()), tile.samples, true},
-              encoded->chunk, tile.x0, tile.y0);
+  // A tile without pixels encodes to nothing: kept as the empty chunk.
+  return Keep(index, Place{0, static_cast<uint32_t>(encoded->chunk.size()), tile.samples, true},
+              encoded->chunk, tile.x0, tile.y0, replace);
+}
+
+absl::StatusOr<PdsmTile> EncodedTileStore::Get(int x0, int y0) {
+  const TileGrid grid = Grid();
+  const int width = grid.TileWidth(x0), height = grid.TileHeight(y0);
+  absl::StatusOr<size_t> index = CellIndex(x0, y0, width, height);
+  if (!index.ok()) return index.status();
+  EncodedTile tile{x0, y0, width, height, 0, grid.tile_size, ""};
+  {
+    absl::MutexLock lock(&mu_);
+    if (!error_.ok()) return error_;
+    const Place place = places_[*index];
+    if (!place.present) {
+      return absl::FailedPreconditionError(
+          absl::StrFormat("tile at (%d, %d) was never stored", x0, y0));
+    }
+    tile.samples = place.samples;
+    if (place.size == 0) {  // without a vertex: nothing to read or decode
+      PdsmTile empty;
+      empty.x0 = x0, empty.y0 = y0, empty.width = width, empty.height = height;
+      empty.samples = place.samples;
+      empty.offsets.assign(static_cast<size_t>(width) * height + 1, 0);
+      return empty;
+    }
+    tile.chunk.assign(place.size, '\0');
+    if (absl::Status s = scratch_->ReadAt(place.offset, place.size, tile.chunk.data()); !s.ok()) {
+      return ForOutput(s);
+    }
+  }
+  return DecodeTileChunk(tile, output_path_);
 }
 
 absl::Status EncodedTileStore::PutWithoutVertices(int x0, int y0, int samples) {
@@ -72,11 +113,14 @@ absl::Status EncodedTileStore::PutWithoutVertices(int x0, int y0, int samples) {
 }
 
 absl::Status EncodedTileStore::Keep(size_t index, Place place, const std::string& chunk, int x0,
-                                    int y0) {
+                                    int y0, bool replace) {
   absl::MutexLock lock(&mu_);
   if (!error_.ok()) return error_;
-  if (places_[index].present) {
-    return absl::InvalidArgumentError(absl::StrFormat("tile at (%d, %d) stored twice", x0, y0));
+  if (places_[index].present != replace) {
+    return replace ? absl::FailedPreconditionError(
+                         absl::StrFormat("tile at (%d, %d) was never stored", x0, y0))
+                   : absl::InvalidArgumentError(
+                         absl::StrFormat("tile at (%d, %d) stored twice", x0, y0));
   }
   if (!chunk.empty()) {
     if (!scratch_) {

@@ -44,6 +44,14 @@ class EncodedTileStore {
   // `samples`: nothing to encode or assemble.
   absl::Status PutWithoutVertices(int x0, int y0, int samples);
 
+  // The stored tile whose corner is (x0, y0), decoded. FAILED_PRECONDITION when it was never
+  // stored; the scratch file's and the decoder's errors.
+  absl::StatusOr<PdsmTile> Get(int x0, int y0);
+  // Puts `tile` in place of the stored tile of its cell (adaptive resolution's refined pixels:
+  // worker/local_bake.cc, RefineLight); the old chunk's bytes stay in the scratch file unused.
+  // FAILED_PRECONDITION when none was stored; otherwise as Put.
+  absl::Status Replace(const PdsmTile& tile);
+
   // Writes every tile into `writer` (PdsmWriter::WriteEncodedTiles), which must be a writer of
   // this grid with no tile written. FAILED_PRECONDITION naming the first missing tile; the
   // scratch file's and the writer's errors.
@@ -64,9 +72,13 @@ class EncodedTileStore {
   // The index of the cell whose corner is (x0, y0) and whose size is width x height, or
   // INVALID_ARGUMENT.
   absl::StatusOr<size_t> CellIndex(int x0, int y0, int width, int height) const;
-  // Keeps tile `index` at `place` (its chunk, if any, appended to the scratch file).
-  // Errors of the scratch file name the output.
-  absl::Status Keep(size_t index, Place place, const std::string& chunk, int x0, int y0);
+  // Keeps tile `index` at `place` (its chunk, if any, appended to the scratch file): a new
+  // tile, or with `replace` one in place of the stored one. Errors of the scratch file name the
+  // output.
+  absl::Status Keep(size_t index, Place place, const std::string& chunk, int x0, int y0,
+                    bool replace = false);
+  // Put's encoding of `tile` for cell `index`.
+  absl::Status Encode(const PdsmTile& tile, size_t index, bool replace);
 
   // The grid (core/pdsm/pdsm_exr_tiles.h, which OpenEXR's headers come with: kept out of
   // this header, which the worker includes).

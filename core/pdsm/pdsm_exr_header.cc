@@ -45,6 +45,7 @@
 #include "core/assets/mesh_asset.h"
 #include "core/pdsm/exr_output_stream.h"
 #include "core/pdsm/pdsm_exr_tiles.h"
+#include "core/pdsm/refined_pixel.h"
 #include "core/util/atomic_file.h"
 #include "core/util/file_system.h"
 #include "core/util/little_endian.h"
@@ -89,6 +90,7 @@ constexpr char kAttrSurfacesOnly[] = "pdsmSurfacesOnly";
 constexpr char kAttrConeHalfAngle[] = "pdsmConeHalfAngleDeg";
 constexpr char kAttrSphereFaceTangent[] = "pdsmSphereFaceTangent";
 constexpr char kAttrWeighting[] = "pdsmWeighting";
+constexpr char kAttrMaxRefinement[] = "pdsmMaxRefinement";
 
 constexpr char kAttenuationNote[] =
     "channel 'attenuation' = A(z), the fraction of the light hidden from the point at depth "
@@ -300,6 +302,11 @@ void ReadBakeSettings(AttributeReader& in, const Imf::Header& exr, PdsmHeader* h
   }
   h->tile_size = in.Get<int>(kAttrTileSize);
   h->surfaces_only = in.GetOptional<int>(kAttrSurfacesOnly, 0) != 0;
+  h->max_refinement = in.GetOptional<int>(kAttrMaxRefinement, 1);
+  if (in.status().ok() && !IsRefinementFactor(h->max_refinement)) {
+    in.Fail(absl::StrFormat("attribute %s = %d is not 1, 2, 4 or 8", kAttrMaxRefinement,
+                            h->max_refinement));
+  }
   if (exr.find(kAttrWeighting) != exr.end()) {
     h->weighting = in.GetEnum(kAttrWeighting, kWeightingNames);
   }
@@ -408,6 +415,7 @@ Imf::Header ExrHeaderFromPdsm(const PdsmHeader& h,
   }
   if (g.z_valid_min != 0) exr.insert(kAttrZValidMin, Imf::DoubleAttribute(g.z_valid_min));
   if (h.surfaces_only) exr.insert(kAttrSurfacesOnly, Imf::IntAttribute(1));
+  if (h.max_refinement > 1) exr.insert(kAttrMaxRefinement, Imf::IntAttribute(h.max_refinement));
   if (h.weighting != LightWeighting::kUnweighted) {
     exr.insert(kAttrWeighting, Imf::StringAttribute(NameOf(kWeightingNames, h.weighting)));
   }
@@ -480,9 +488,10 @@ absl::StatusOr<PdsmHeader> PdsmHeaderFromExr(const Imf::Header& exr, absl::strin
   ReadAdaptive(in, exr, &h);
   if (!in.status().ok()) return in.status();
   if (h.format_version < MinimumFormatVersion(h)) {
-    return absl::DataLossError(absl::StrFormat(
-        "%s: %s = %d, but its %s/%s attributes need version %d", path, kAttrFormatVersion,
-        h.format_version, kAttrSurfacesOnly, kAttrZValidMin, MinimumFormatVersion(h)));
+    return absl::DataLossError(
+        absl::StrFormat("%s: %s = %d, but its %s/%s/%s attributes need version %d", path,
+                        kAttrFormatVersion, h.format_version, kAttrSurfacesOnly, kAttrZValidMin,
+                        kAttrMaxRefinement, MinimumFormatVersion(h)));
   }
   return h;
 }
@@ -497,6 +506,10 @@ absl::Status ValidateHeaderForWrite(const PdsmHeader& h, absl::string_view path)
     return absl::InvalidArgumentError(
         absl::StrFormat("%s: header.geometry resolution %dx%d is empty", path, h.geometry.width,
                         h.geometry.height));
+  }
+  if (!IsRefinementFactor(h.max_refinement)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "%s: header.max_refinement = %d, must be 1, 2, 4 or 8", path, h.max_refinement));
   }
   if (h.tile_size <= 0 || h.tile_size > kMaxTileSize) {
     return absl::InvalidArgumentError(absl::StrFormat(

@@ -1,12 +1,15 @@
 #include "core/pdsm/pdsm_exr_tiles.h"
 
 #include <cmath>
+#include <span>
+#include <string>
 
 #include "absl/strings/str_format.h"
+#include "core/pdsm/refined_pixel.h"
 
 namespace pdsm {
 
-absl::Status CheckTileFunctions(const PdsmTile& tile, absl::string_view path) {
+absl::Status CheckTileFunctions(const PdsmTile& tile, absl::string_view path, int max_refinement) {
   const size_t pixels = static_cast<size_t>(tile.width) * tile.height;
   if (tile.offsets[0] != 0 || tile.offsets[pixels] != tile.vertices.size()) {
     return absl::InvalidArgumentError(
@@ -24,14 +27,12 @@ absl::Status CheckTileFunctions(const PdsmTile& tile, absl::string_view path) {
       return absl::InvalidArgumentError(absl::StrFormat(
           "%s: tile (%d, %d): offsets decrease at pixel %d", path, tile.x0, tile.y0, p));
     }
-    for (uint64_t k = begin; k < end; ++k) {
-      const float z = tile.vertices[k].z;
-      if (std::isnan(z) || (k > begin && z < tile.vertices[k - 1].z)) {
-        return absl::InvalidArgumentError(
-            absl::StrFormat("%s: pixel (%d, %d): vertex depths are not nondecreasing", path,
-                            tile.x0 + static_cast<int>(p % tile.width),
-                            tile.y0 + static_cast<int>(p / tile.width)));
-      }
+    const std::string fault = PixelFunctionFault(
+        std::span<const Vertex>(tile.vertices.data() + begin, end - begin), max_refinement);
+    if (!fault.empty()) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s: pixel (%d, %d): %s", path, tile.x0 + static_cast<int>(p % tile.width),
+          tile.y0 + static_cast<int>(p / tile.width), fault));
     }
   }
   return absl::OkStatus();

@@ -31,8 +31,10 @@ struct TileGrid {
 
 // INVALID_ARGUMENT naming `path` and the tile or pixel when the offsets do not span the
 // vertices, decrease, or hold more vertices than a deep tile can, or a pixel's depths are NaN
-// or decrease. REQUIRES: tile.offsets has width * height + 1 entries.
-absl::Status CheckTileFunctions(const PdsmTile& tile, absl::string_view path);
+// or decrease, or a refined pixel is malformed or refined beyond `max_refinement`
+// (PixelFunctionFault, core/pdsm/refined_pixel.h). REQUIRES: tile.offsets has
+// width * height + 1 entries.
+absl::Status CheckTileFunctions(const PdsmTile& tile, absl::string_view path, int max_refinement);
 
 // Per-pixel sample counts and channel pointers of one tile, as OpenEXR's deep frame
 // buffers want them, addressed relative to the tile's corner.

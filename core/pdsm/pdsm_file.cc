@@ -37,6 +37,7 @@
 #include "core/pdsm/pdsm_exr_header.h"
 #include "core/pdsm/pdsm_exr_tiles.h"
 #include "core/pdsm/pdsm_lights.h"
+#include "core/pdsm/refined_pixel.h"
 #include "core/pdsm/tile_chunk.h"
 #include "core/pdsm/tile_reorder_buffer.h"
 #include "core/util/atomic_file.h"
@@ -199,7 +200,9 @@ class ExrPdsmWriter final : public PdsmWriter {
           absl::StrFormat("%s: tile (%d, %d) has %d offsets, expected %d", path_, tile.x0, tile.y0,
                           tile.offsets.size(), static_cast<size_t>(tile.width) * tile.height + 1));
     }
-    if (absl::Status s = CheckTileFunctions(tile, path_); !s.ok()) return s;
+    if (absl::Status s = CheckTileFunctions(tile, path_, header_.max_refinement); !s.ok()) {
+      return s;
+    }
     if (header_.adaptive() && (tile.samples < 1 || tile.samples > header_.samples)) {
       return absl::InvalidArgumentError(
           absl::StrFormat("%s: tile (%d, %d) of an adaptive bake has %d samples, expected [1, %d]",
@@ -343,13 +346,13 @@ absl::Status CheckDepthOrder(const PdsmImage& image, absl::string_view path) {
   const int width = image.header.geometry.width;
   const size_t pixels = image.offsets.size() - 1;
   for (size_t p = 0; p < pixels; ++p) {
-    for (uint64_t k = image.offsets[p]; k < image.offsets[p + 1]; ++k) {
-      const float z = image.vertices[k].z;
-      if (std::isnan(z) || (k > image.offsets[p] && z < image.vertices[k - 1].z)) {
-        return absl::DataLossError(
-            absl::StrFormat("%s: pixel (%d, %d): vertex depths are not nondecreasing (vertex %d)",
-                            path, p % width, p / width, k - image.offsets[p]));
-      }
+    const std::string fault =
+        PixelFunctionFault(std::span<const Vertex>(image.vertices.data() + image.offsets[p],
+                                                   image.offsets[p + 1] - image.offsets[p]),
+                           image.header.max_refinement);
+    if (!fault.empty()) {
+      return absl::DataLossError(
+          absl::StrFormat("%s: pixel (%d, %d): %s", path, p % width, p / width, fault));
     }
   }
   return absl::OkStatus();
@@ -649,7 +652,7 @@ absl::StatusOr<PdsmTile> PdsmReader::ReadTile(int part, int tile_x, int tile_y) 
   } catch (...) {
     return StatusFromCurrentException(path_, "cannot read");
   }
-  if (absl::Status s = CheckTileFunctions(tile, path_); !s.ok()) {
+  if (absl::Status s = CheckTileFunctions(tile, path_, header.max_refinement); !s.ok()) {
     return absl::DataLossError(s.message());
   }
   return tile;

@@ -35,6 +35,7 @@
 #include <ostream>
 #include <random>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace pdsm {
@@ -44,8 +45,10 @@ namespace {
 namespace fs = std::filesystem;
 using ::pdsm::testing::CutTile;
 using ::pdsm::testing::CutTiles;
+using ::pdsm::testing::ExpectSameTile;
 using ::pdsm::testing::FullHeader;
 using ::pdsm::testing::RandomImage;
+using ::pdsm::testing::RefineSomePixels;
 using ::pdsm::testing::WriteTiles;
 using ::testing::HasSubstr;
 
@@ -86,6 +89,7 @@ void ExpectHeadersEqual(const PdsmHeader& a, const PdsmHeader& b) {
   EXPECT_EQ(a.sampling, b.sampling);
   EXPECT_EQ(a.seed, b.seed);
   EXPECT_EQ(a.tile_size, b.tile_size);
+  EXPECT_EQ(a.max_refinement, b.max_refinement);
 }
 
 void ExpectImagesEqual(const PdsmImage& expected, const PdsmImage& actual) {
@@ -530,6 +534,73 @@ TEST_F(PdsmFileTest, VersionTwoOnlyWhenTheEvaluationRuleChanged) {
   const absl::Status s = ReadPdsmHeader(lying).status();
   EXPECT_EQ(s.code(), absl::StatusCode::kDataLoss) << s;
   EXPECT_THAT(s.message(), HasSubstr("pdsmSurfacesOnly"));
+}
+
+TEST_F(PdsmFileTest, RefinedPixelsRoundTripInVersionThree) {
+  PdsmImage image = RandomImage(FullHeader(70, 40, 16), 11);
+  image.header.max_refinement = 8;
+  image.header.format_version = MinimumFormatVersion(image.header);
+  RefineSomePixels(&image, 12);
+  const std::string path = Path("refined.exr");
+  ASSERT_TRUE(WriteTiles(path, image.header, CutTiles(image)).ok());
+  EXPECT_EQ(HeaderOf(path).typedAttribute<Imf::IntAttribute>("pdsmFormatVersion").value(), 3);
+  EXPECT_EQ(HeaderOf(path).typedAttribute<Imf::IntAttribute>("pdsmMaxRefinement").value(), 8);
+  absl::StatusOr<PdsmImage> read = ReadPdsm(path);
+  ASSERT_TRUE(read.ok()) << read.status();
+  ExpectImagesEqual(image, *read);
+  // Tile by tile, as the viewer and the tile cache read it.
+  absl::StatusOr<PdsmReader> reader = PdsmReader::Open(path);
+  ASSERT_TRUE(reader.ok()) << reader.status();
+  const std::vector<PdsmTile> tiles = CutTiles(image);
+  for (const PdsmTile& want : tiles) {
+    absl::StatusOr<PdsmTile> got = reader->ReadTile(0, want.x0 / 16, want.y0 / 16);
+    ASSERT_TRUE(got.ok()) << got.status();
+    ExpectSameTile(*got, want);
+  }
+  // Files without refinement keep their version and bytes: no attribute.
+  const Imf::Header plain = HeaderOf(WriteSample("plain.exr"));
+  EXPECT_EQ(plain.find("pdsmMaxRefinement"), plain.end());
+}
+
+TEST_F(PdsmFileTest, ARefinementBeyondTheHeadersIsRefused) {
+  PdsmImage image = RandomImage(FullHeader(40, 24, 16), 13);
+  image.header.max_refinement = 8;
+  image.header.format_version = 3;
+  RefineSomePixels(&image, 14, /*every=*/2);
+  image.header.max_refinement = 2;  // the pixels hold up to 8x
+  EXPECT_EQ(WriteTiles(Path("w.exr"), image.header, CutTiles(image)).code(),
+            absl::StatusCode::kInvalidArgument);
+  image.header.max_refinement = 1;  // and no refinement at all: version 1, a marker is no vertex
+  image.header.format_version = 1;
+  EXPECT_EQ(WriteTiles(Path("w.exr"), image.header, CutTiles(image)).code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(Files(), ::testing::IsEmpty());
+
+  // Read: a pixel refined 4x in a file whose largest refinement is 2, and malformed pixels.
+  image.header.max_refinement = 2;
+  image.header.format_version = 3;
+  const std::string valid = Path("valid.exr");
+  PdsmImage two = RandomImage(image.header, 15);
+  ASSERT_TRUE(WriteTiles(valid, two.header, CutTiles(two)).ok());
+  const Imf::Header header = HeaderOf(valid);
+  std::vector<Vertex> four;
+  const std::vector<Vertex> own = {{1.0f, 0.25f}};
+  const std::vector<RefinedBand> band = {{0.5f, 5.0f}};
+  AppendRefinedPixel(4, band, own, std::vector<std::vector<Vertex>>(16, {{1.0f, 0.5f}}), &four);
+  std::vector<Vertex> unordered;
+  AppendRefinedPixel(2, band, own,
+                     std::vector<std::vector<Vertex>>(4, {{2.0f, 0.5f}, {1.0f, 0.5f}}), &unordered);
+  std::vector<Vertex> short_ends = {{4.0f, -2.0f}, {1.0f, -1.0f}, {1.0f, -1.0f}, {2.0f, -1.0f}};
+  for (const auto& [name, samples, says] : {std::tuple{"four", four, "a refinement of 4"},
+                                            std::tuple{"unordered", unordered, "sub-pixel (0, 0)"},
+                                            std::tuple{"short", short_ends, "function ends"}}) {
+    const std::string path = Path(std::string(name) + ".exr");
+    WriteRawDeepTiled(path, header, samples);
+    const absl::Status s = ReadPdsm(path).status();
+    EXPECT_EQ(s.code(), absl::StatusCode::kDataLoss) << name << ": " << s;
+    EXPECT_THAT(s.message(), HasSubstr("pixel (0, 0)")) << name;
+    EXPECT_THAT(s.message(), HasSubstr(says)) << name;
+  }
 }
 
 TEST_F(PdsmFileTest, MissingAttributeIsDataLossNamingIt) {

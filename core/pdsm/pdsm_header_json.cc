@@ -110,14 +110,14 @@ std::string PdsmHeaderJson(const PdsmHeader& h, std::string_view extra_members) 
       "\"samples\": %d, \"shadowMapResolution\": %d, \"epsilon\": %.17g, "
       "\"depthBias\": %.17g, \"slopeBias\": %.17g, \"tileSize\": %d, "
       "\"sampling\": \"%s\", \"seed\": \"%llu\"%s%s%s, \"surfacesOnly\": %s, "
-      "\"zValidMin\": %.17g, \"weighting\": \"%s\"}",
+      "\"zValidMin\": %.17g, \"weighting\": \"%s\", \"maxRefinement\": %d}",
       h.format_version, JsonString(h.scene_name), name, JsonString(LightKindName(h)), projection,
       g.width, g.height, g.s_min, g.s_max, g.t_min, g.t_max, g.z_near, g.z_far,
       V3Json(g.frame.center), V3Json(g.frame.n), h.samples, h.shadow_map_resolution, h.epsilon,
       h.depth_bias, h.slope_bias, h.tile_size, SamplingName(h.sampling),
       static_cast<unsigned long long>(h.seed), LightSizeJson(h), extra_members, adaptive,
       h.surfaces_only ? "true" : "false", g.z_valid_min,
-      h.weighting == LightWeighting::kEmitter ? "emitter" : "unweighted");
+      h.weighting == LightWeighting::kEmitter ? "emitter" : "unweighted", h.max_refinement);
 }
 
 }  // namespace pdsm

@@ -16,7 +16,7 @@
 namespace pdsm {
 
 // The newest format this build reads and writes (docs/pdsm_format.md, "Versioning").
-inline constexpr int kPdsmFormatVersion = 2;
+inline constexpr int kPdsmFormatVersion = 3;
 
 // Everything a reader needs to evaluate the PDSM and to know how it was made.
 struct PdsmHeader {
@@ -74,12 +74,18 @@ struct PdsmHeader {
   // receiver surfaces; elsewhere they evaluate to NaN (attenuation NaN vertices bracket the
   // windows), or to 0 in pixels that hold no vertex.
   bool surfaces_only = false;
+  // Adaptive resolution (issue #15 item 2; docs/pdsm_format.md "Refined pixels"): the largest
+  // refinement a pixel of this PDSM may hold, 1 (none), 2, 4 or 8. Above 1, pixels may be
+  // refined (core/pdsm/refined_pixel.h) and the file is format version 3.
+  int max_refinement = 1;
 };
 
 // Version 2 changed the evaluation rule (NaN nearer than z_valid_min, NaN-bracketed
-// surfaces-only windows); files that use neither stay version 1, so a version-1 reader still
-// opens them and their bytes did not change.
+// surfaces-only windows); version 3 added refined pixels. A file is written with the oldest
+// version its features need, so an older reader still opens every file that uses none of the
+// newer features, and their bytes did not change.
 inline int MinimumFormatVersion(const PdsmHeader& h) {
+  if (h.max_refinement > 1) return 3;
   return h.surfaces_only || h.geometry.z_valid_min != 0 ? 2 : 1;
 }
 

@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
+#include <span>
+#include <utility>
 #include <vector>
 
 #include "core/geometry/light_frame.h"
@@ -167,6 +170,136 @@ TEST_P(PdsmQueryTest, ResultsAreAttenuations) {
     ASSERT_LE(a, 1.0);
   }
 }
+
+// Refined pixels (core/pdsm/refined_pixel.h): pixels (1, 1) and (2, 1) refined 4x over the band
+// [kBandLo, kBandHi), the rest as MakeImage; sub-pixel (a, b) of pixel (i, 1) hidden by
+// SubValue(i, a, b) in the band, and each refined pixel keeps MakeImage's function as its own.
+constexpr int kF = 4;
+constexpr float kBandLo = 2.0f, kBandHi = 4.0f;
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+const std::vector<RefinedBand> kBand = {{kBandLo, kBandHi}};
+double SubValue(int i, int a, int b) { return 0.02 + 0.03 * a + 0.15 * b + 0.25 * (i - 1); }
+double StoredSub(int i, int a, int b) { return static_cast<float>(SubValue(i, a, b)); }
+
+PdsmImage MakeRefinedImage(Projection projection) {
+  const PdsmImage plain = MakeImage(projection);
+  PdsmImage image;
+  image.header = plain.header;
+  image.header.max_refinement = kF;
+  image.offsets.push_back(0);
+  for (int j = 0; j < kHeight; ++j) {
+    for (int i = 0; i < kWidth; ++i) {
+      if (j == 1 && (i == 1 || i == 2)) {
+        std::vector<std::vector<Vertex>> subs;
+        for (int b = 0; b < kF; ++b) {
+          for (int a = 0; a < kF; ++a) {
+            const float v = static_cast<float>(SubValue(i, a, b));
+            subs.push_back({{kUndefinedFrom, kNaN}, {kBandLo, v}, {kBandHi, v}, {kBandHi, kNaN}});
+          }
+        }
+        AppendRefinedPixel(kF, kBand, plain.Function(i, j), subs, &image.vertices);
+      } else {
+        const std::span<const Vertex> f = plain.Function(i, j);
+        image.vertices.insert(image.vertices.end(), f.begin(), f.end());
+      }
+      image.offsets.push_back(image.vertices.size());
+    }
+  }
+  return image;
+}
+
+class RefinedQueryTest : public testing::TestWithParam<Projection> {
+ protected:
+  // The attenuation at pixel coordinates (px, py) (centres at k + 0.5) and depth z.
+  double At(double px, double py, double z = 3.0) const {
+    const PdsmGeometry& g = image_.header.geometry;
+    return QueryAttenuation(
+        image_, PointAt(image_, g.s_min + px * g.PixelPitchS(), g.t_min + py * g.PixelPitchT(), z));
+  }
+  PdsmImage image_ = MakeRefinedImage(GetParam());
+};
+
+TEST_P(RefinedQueryTest, ASubPixelCentreGivesItsValue) {
+  for (int i : {1, 2}) {
+    for (int b = 0; b < kF; ++b) {
+      for (int a = 0; a < kF; ++a) {
+        EXPECT_NEAR(At(i + (a + 0.5) / kF, 1 + (b + 0.5) / kF), StoredSub(i, a, b), 1e-9)
+            << i << ": " << a << "," << b;
+      }
+    }
+  }
+}
+
+TEST_P(RefinedQueryTest, OffItsBandsTheMapReadsAsUnrefined) {
+  const PdsmImage plain = MakeImage(GetParam());
+  const PdsmGeometry& g = plain.header.geometry;
+  int inside_refined = 0;
+  for (const double z : {0.999, 1.5, 1.999, 4.001, 4.5, 9.0}) {
+    for (double py = 0.05; py < kHeight; py += 0.1) {
+      for (double px = 0.05; px < kWidth; px += 0.1) {
+        const glm::dvec3 p =
+            PointAt(plain, g.s_min + px * g.PixelPitchS(), g.t_min + py * g.PixelPitchT(), z);
+        ASSERT_EQ(QueryAttenuation(image_, p), QueryAttenuation(plain, p)) << px << "," << py;
+        inside_refined += px > 1 && px < 3 && py > 1 && py < 2;
+      }
+    }
+  }
+  EXPECT_GT(inside_refined, 100);
+}
+
+TEST_P(RefinedQueryTest, BetweenSubPixelsIsBilinear) {
+  // Halfway between sub-pixels (1, 2) and (2, 2) of pixel (1, 1), and a quarter of the way to
+  // the row above.
+  const double px = 1 + 2.0 / kF, py = 1 + (2.5 + 0.25) / kF;
+  const double lower = 0.5 * (StoredSub(1, 1, 2) + StoredSub(1, 2, 2));
+  const double upper = 0.5 * (StoredSub(1, 1, 3) + StoredSub(1, 2, 3));
+  EXPECT_NEAR(At(px, py), 0.75 * lower + 0.25 * upper, 1e-9);
+}
+
+TEST_P(RefinedQueryTest, ANeighbourRefinedAlikeContinuesTheLattice) {
+  // On the edge between pixels (1, 1) and (2, 1): the mean of the last column of one and the
+  // first of the other, from either side.
+  const double py = 1 + 1.5 / kF;
+  const double mean = 0.5 * (StoredSub(1, kF - 1, 1) + StoredSub(2, 0, 1));
+  EXPECT_NEAR(At(2.0, py), mean, 1e-9);
+  EXPECT_NEAR(At(2.0 - 1e-9, py), mean, 1e-6);
+}
+
+TEST_P(RefinedQueryTest, AnUnrefinedNeighbourGivesItsOwnValueOnTheLattice) {
+  // Pixel (0, 1) is not refined: inside (1, 1), left of its first sub-pixel centre, the point
+  // blends that sub-pixel with the lattice ray a sub-pixel to its left, in (0, 1): (0, 1)'s own
+  // value, not its centre's half a pixel away.
+  const double py = 1 + 2.5 / kF;
+  EXPECT_NEAR(At(1.0 + 0.1 / kF, py), 0.4 * Stored(0, 1) + 0.6 * StoredSub(1, 0, 2), 1e-9);
+  // Pixel (1, 0) below is not refined either.
+  EXPECT_NEAR(At(1 + 1.5 / kF, 1.0 + 0.1 / kF), 0.4 * Stored(1, 0) + 0.6 * StoredSub(1, 1, 0),
+              1e-9);
+}
+
+TEST_P(RefinedQueryTest, BesideARefinedPixelItsOwnFunctionBlendsAsUnrefined) {
+  // In pixel (0, 1), a quarter of the way from its centre to (1, 1)'s: the lattice rays around
+  // the point lie in (0, 1), no sub-pixel is among them, and the pixels' own functions blend.
+  const PdsmImage unrefined = MakeImage(GetParam());
+  const PdsmGeometry& pg = unrefined.header.geometry;
+  EXPECT_EQ(At(0.75, 1.5),
+            QueryAttenuation(unrefined, PointAt(unrefined, pg.s_min + 0.75 * pg.PixelPitchS(),
+                                                pg.t_min + 1.5 * pg.PixelPitchT(), 3.0)));
+  // Pixels with no refined neighbour read exactly as before.
+  const PdsmImage plain = MakeImage(GetParam());
+  const PdsmGeometry& g = plain.header.geometry;
+  for (const auto& [px, py] : {std::pair{3.3, 0.2}, std::pair{0.4, 2.9}, std::pair{3.9, 2.6}}) {
+    const glm::dvec3 p =
+        PointAt(plain, g.s_min + px * g.PixelPitchS(), g.t_min + py * g.PixelPitchT(), 3.0);
+    EXPECT_EQ(QueryAttenuation(image_, p), QueryAttenuation(plain, p));
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Projections, RefinedQueryTest,
+                         testing::Values(Projection::kPerspective, Projection::kOrthographic),
+                         [](const testing::TestParamInfo<Projection>& info) {
+                           return info.param == Projection::kPerspective ? "Perspective"
+                                                                         : "Orthographic";
+                         });
 
 INSTANTIATE_TEST_SUITE_P(Projections, PdsmQueryTest,
                          testing::Values(Projection::kPerspective, Projection::kOrthographic),

@@ -10,6 +10,7 @@
 #include <memory>
 #include <numbers>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,7 @@
 #include "absl/status/status.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pdsm/pdsm_image.h"
+#include "core/pdsm/refined_pixel.h"
 #include "core/util/file_system.h"
 
 namespace pdsm::testing {
@@ -79,6 +81,43 @@ inline PdsmImage RandomImage(const PdsmHeader& header, uint32_t seed, int big_co
     image.offsets.push_back(image.vertices.size());
   }
   return image;
+}
+
+// Refines about one pixel in `every` of `image` (format version 3): each becomes a refined
+// pixel (core/pdsm/refined_pixel.h) of a random factor up to header.max_refinement, keeping its
+// function as its own, its sub-functions random like RandomImage's, some empty. REQUIRES:
+// header.max_refinement > 1.
+inline void RefineSomePixels(PdsmImage* image, uint32_t seed, int every = 5) {
+  const std::vector<RefinedBand> kEverywhere = {{-1e30f, 1e30f}};
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  const PdsmGeometry& g = image->header.geometry;
+  std::vector<int> factors;
+  for (int f = 2; f <= image->header.max_refinement; f *= 2) factors.push_back(f);
+  PdsmImage out;
+  out.header = image->header;
+  out.offsets.push_back(0);
+  for (int y = 0; y < g.height; ++y) {
+    for (int x = 0; x < g.width; ++x) {
+      const std::span<const Vertex> own = image->Function(x, y);
+      if (rng() % every != 0) {
+        out.vertices.insert(out.vertices.end(), own.begin(), own.end());
+      } else {
+        const int f = factors[rng() % factors.size()];
+        std::vector<std::vector<Vertex>> subs(static_cast<size_t>(f) * f);
+        for (std::vector<Vertex>& sub : subs) {
+          float z = 0.5f + unit(rng);
+          for (int k = static_cast<int>(rng() % 6) - 1; k > 0; --k) {
+            if (unit(rng) > 0.2f) z += unit(rng) * 3.0f;
+            sub.push_back({z, unit(rng)});
+          }
+        }
+        AppendRefinedPixel(f, kEverywhere, own, subs, &out.vertices);
+      }
+      out.offsets.push_back(out.vertices.size());
+    }
+  }
+  *image = std::move(out);
 }
 
 inline PdsmTile CutTile(const PdsmImage& image, int x0, int y0) {

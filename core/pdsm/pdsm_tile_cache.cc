@@ -72,20 +72,28 @@ absl::StatusOr<double> PdsmTileCache::Attenuation(int part, const glm::dvec3& p_
   if (!point) return std::numeric_limits<double>::quiet_NaN();
   const int size = header.tile_size;
   absl::Status status;
-  std::shared_ptr<const PdsmTile> last;  // the four pixels are mostly of one tile
+  // The tiles of the four pixels, held for the whole lookup (a refined pixel's spans are read
+  // after its neighbours are fetched); mostly one tile.
+  std::shared_ptr<const PdsmTile> held[4];
+  int count = 0;
   const double a =
       BilinearAttenuationOf(header.geometry, *point, [&](int x, int y) -> std::span<const Vertex> {
-        if (!last || x < last->x0 || x >= last->x0 + last->width || y < last->y0 ||
-            y >= last->y0 + last->height) {
-          absl::StatusOr<std::shared_ptr<const PdsmTile>> tile = Tile(part, x / size, y / size);
-          if (!tile.ok()) {
-            status = tile.status();
+        const PdsmTile* tile = nullptr;
+        for (int k = 0; k < count && tile == nullptr; ++k) {
+          const PdsmTile& t = *held[k];
+          if (x >= t.x0 && x < t.x0 + t.width && y >= t.y0 && y < t.y0 + t.height) tile = &t;
+        }
+        if (tile == nullptr) {
+          absl::StatusOr<std::shared_ptr<const PdsmTile>> got = Tile(part, x / size, y / size);
+          if (!got.ok()) {
+            status = got.status();
             return {};
           }
-          last = *std::move(tile);
+          held[count] = *std::move(got);
+          tile = held[count++].get();
         }
-        if (last->vertices.empty()) return {};
-        return last->Function(x - last->x0, y - last->y0);
+        if (tile->vertices.empty()) return {};
+        return tile->Function(x - tile->x0, y - tile->y0);
       });
   if (!status.ok()) return status;
   return a;

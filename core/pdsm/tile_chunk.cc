@@ -16,6 +16,7 @@
 #include "core/pdsm/exr_memory_stream.h"
 #include "core/pdsm/pdsm_exr_header.h"
 #include "core/pdsm/pdsm_exr_tiles.h"
+#include "core/pdsm/refined_pixel.h"
 #include "core/util/little_endian.h"
 
 namespace pdsm {
@@ -63,7 +64,9 @@ absl::StatusOr<EncodedTile> EncodeTileChunk(const PdsmTile& tile, int tile_size)
         absl::StrFormat("tile at (%d, %d) has %d offsets, expected %d", tile.x0, tile.y0,
                         tile.offsets.size(), pixels + 1));
   }
-  if (absl::Status s = CheckTileFunctions(tile, "tile"); !s.ok()) return s;
+  // A chunk does not know its file's header: it holds any well-formed pixel, and the file's
+  // writer checks the header's largest refinement.
+  if (absl::Status s = CheckTileFunctions(tile, "tile", kLargestRefinement); !s.ok()) return s;
   if (pixels == 0) return encoded;
   ExrStringOStream out("tile chunk");
   try {
@@ -141,7 +144,9 @@ absl::StatusOr<PdsmTile> DecodeTileChunk(const EncodedTile& encoded, absl::strin
   } catch (...) {
     return corrupt(StatusFromCurrentException("chunk", "cannot decode").message());
   }
-  if (absl::Status s = CheckTileFunctions(tile, label); !s.ok()) return corrupt(s.message());
+  if (absl::Status s = CheckTileFunctions(tile, label, kLargestRefinement); !s.ok()) {
+    return corrupt(s.message());
+  }
   return tile;
 }
 

@@ -24,6 +24,7 @@ using ::pdsm::testing::ExpectSameTile;
 using ::pdsm::testing::FullHeader;
 using ::pdsm::testing::RandomImage;
 using ::pdsm::testing::ReadBytes;
+using ::pdsm::testing::RefineSomePixels;
 using ::pdsm::testing::TempDir;
 using ::pdsm::testing::WriteTiles;
 using ::testing::HasSubstr;
@@ -59,6 +60,19 @@ TEST(PdsmTileChunkTest, EveryTileComesBackExactly) {
     ASSERT_TRUE(encoded.ok()) << encoded.status();
     EXPECT_EQ(encoded->x0, tile.x0);
     EXPECT_EQ(encoded->width, tile.width);
+    absl::StatusOr<PdsmTile> decoded = DecodeTileChunk(*encoded, "test");
+    ASSERT_TRUE(decoded.ok()) << decoded.status();
+    ExpectSameTile(*decoded, tile);
+  }
+}
+
+TEST(PdsmTileChunkTest, RefinedPixelsComeBackExactly) {
+  PdsmImage image = RandomImage(FullHeader(37, 21, 16), 8);
+  image.header.max_refinement = 8;
+  RefineSomePixels(&image, 9, /*every=*/3);
+  for (const PdsmTile& tile : CutTiles(image)) {
+    absl::StatusOr<EncodedTile> encoded = EncodeTileChunk(tile, 16);
+    ASSERT_TRUE(encoded.ok()) << encoded.status();
     absl::StatusOr<PdsmTile> decoded = DecodeTileChunk(*encoded, "test");
     ASSERT_TRUE(decoded.ok()) << decoded.status();
     ExpectSameTile(*decoded, tile);

@@ -104,20 +104,28 @@ uvec2 PoolWord(uint b, uint i) {
   return pdsm_pool3[i];
 }
 
-// A(z) of one PDSM pixel of a resident (or empty) tile: the last vertex with depth <= z and
-// the next one, by binary search; linear between them, 0 before the first, the last value
-// after the last (right-continuous at jumps) -- EvaluateAttenuation in
-// core/pdsm/attenuation_function.cc.
-float EvaluatePixel(int part, ivec2 pixel, float z) {
+// One PDSM pixel's samples in the pool: buffer, first word, count (count 0 in an empty tile).
+struct PixelSpan {
+  uint b, offset, count;
+};
+
+PixelSpan SpanOf(int part, ivec2 pixel) {
   int tile_size = pdsm_parts[part].size.z;
   ivec2 tile = pixel / tile_size;
   uint page = PageOf(part, pixel);
-  if (page >= kTileNotResident) return 0.0;  // empty (callers turned the others away)
+  if (page >= kTileNotResident) return PixelSpan(0u, 0u, 0u);  // empty (callers turned the others away)
   uint b = page >> 28, block = page & 0x0FFFFFFFu;
   ivec2 local = pixel - tile * tile_size;
   int tile_width = min(tile_size, pdsm_parts[part].size.x - tile.x * tile_size);
   uvec2 entry = PoolWord(b, block + uint(local.y * tile_width + local.x));
-  uint offset = block + entry.x, count = entry.y;
+  return PixelSpan(b, block + entry.x, entry.y);
+}
+
+// A(z) of one function: the last vertex with depth <= z and the next one, by binary search;
+// linear between them, 0 before the first, the last value after the last (right-continuous at
+// jumps) -- EvaluateAttenuation in core/pdsm/attenuation_function.cc.
+float EvaluateSpan(PixelSpan s, float z) {
+  uint b = s.b, offset = s.offset, count = s.count;
   if (count == 0u || z < uintBitsToFloat(PoolWord(b, offset).x)) return 0.0;
   uint lo = 1u, hi = count;  // first index in [lo, hi) with depth > z; index 0 is <= z
   while (lo < hi) {
@@ -131,6 +139,66 @@ float EvaluatePixel(int part, ivec2 pixel, float z) {
   float f = (z - a.x) / (c.x - a.x);
   float value = a.y + f * (c.y - a.y);
   return isnan(value) ? value : clamp(value, 0.0, 1.0);
+}
+
+// A refined pixel's refinement f (its first sample's attenuation is -f), 1 for a function --
+// RefinementOf in core/pdsm/refined_pixel.h.
+int RefinementOf(PixelSpan s) {
+  if (s.count == 0u) return 1;
+  float marker = uintBitsToFloat(PoolWord(s.b, s.offset).y);
+  return marker <= -2.0 ? int(-marker) : 1;
+}
+
+// The band count of a refined pixel (its sample 1's depth); its bands follow, then its ends.
+uint BandCount(PixelSpan s) { return uint(uintBitsToFloat(PoolWord(s.b, s.offset + 1u).x)); }
+
+// Function m of a refined pixel of refinement f (0: the pixel's own, 1 + k: sub-function k):
+// its end is the m-th of the f * f + 1 ends after the bands, its vertices follow them --
+// RefinedFunction in core/pdsm/refined_pixel.cc.
+PixelSpan RefinedSpan(PixelSpan s, int f, uint m) {
+  uint ends = s.offset + 2u + 2u * BandCount(s);
+  uint base = ends + 1u + uint(f * f);
+  uint begin = m == 0u ? 0u : uint(uintBitsToFloat(PoolWord(s.b, ends + m - 1u).x));
+  uint end = uint(uintBitsToFloat(PoolWord(s.b, ends + m).x));
+  return PixelSpan(s.b, base + begin, end - begin);
+}
+
+// Whether the pixel is refined at depth z: refined, and z in one of its bands (RefinedAt).
+bool RefinedAt(PixelSpan s, float z) {
+  if (RefinementOf(s) == 1) return false;
+  uint bands = BandCount(s);
+  for (uint k = 0u; k < bands; ++k) {
+    float lo = uintBitsToFloat(PoolWord(s.b, s.offset + 2u + 2u * k).x);
+    float hi = uintBitsToFloat(PoolWord(s.b, s.offset + 3u + 2u * k).x);
+    if (lo <= z && z <= hi) return true;
+  }
+  return false;
+}
+
+// The point of the lattice of refinement f at sub-pixel (i, j) of this pixel: its sub-pixel's
+// A where it is refined at z and the sub-function is defined there, else its own function's;
+// `sub` says which (LatticeAttenuation).
+float LatticeAttenuation(PixelSpan s, int f, int i, int j, float z, out bool sub) {
+  sub = false;
+  int g = RefinementOf(s);
+  if (g == 1) return EvaluateSpan(s, z);
+  PixelSpan own = RefinedSpan(s, g, 0u);
+  if (g > f || !RefinedAt(s, z)) return EvaluateSpan(own, z);
+  PixelSpan ray = RefinedSpan(s, g, 1u + uint(i * g / f + g * (j * g / f)));
+  if (ray.count != 0u) {
+    float a = EvaluateSpan(ray, z);
+    if (!isnan(a)) {
+      sub = true;
+      return a;
+    }
+  }
+  return EvaluateSpan(own, z);
+}
+
+// A pixel's own function: the whole of an ordinary one, function 0 of a refined one.
+float EvaluateOwn(PixelSpan s, float z) {
+  int f = RefinementOf(s);
+  return EvaluateSpan(f == 1 ? s : RefinedSpan(s, f, 0u), z);
 }
 
 // kPending or kNotResident when a page the lookup reads is so (pending first), else 0.
@@ -159,7 +227,12 @@ float PdsmAttenuationOf(int part, vec3 q) {
     ivec2 nearest = clamp(ivec2(floor(pixel)), ivec2(0), last);
     float missing = MissingPage(PageOf(part, nearest));
     if (missing != 0.0) return missing;
-    float a = EvaluatePixel(part, nearest, q.z);
+    PixelSpan held = SpanOf(part, nearest);
+    int rf = RefinementOf(held);
+    // A refined pixel: its nearest sub-pixel where it is refined.
+    ivec2 sub = clamp(ivec2(floor((pixel - vec2(nearest)) * float(rf))), ivec2(0), ivec2(rf - 1));
+    bool defined;
+    float a = LatticeAttenuation(held, rf, sub.x, sub.y, q.z, defined);
     return isnan(a) ? -1.0 : a;
   }
   vec2 f = pixel - 0.5;
@@ -172,11 +245,40 @@ float PdsmAttenuationOf(int part, vec3 q) {
   float m10 = MissingPage(PageOf(part, ivec2(p1.x, p0.y)));
   if (m00 == kPending || m11 == kPending || m01 == kPending || m10 == kPending) return kPending;
   if (min(min(m00, m11), min(m01, m10)) == kNotResident) return kNotResident;
-  float a00 = EvaluatePixel(part, ivec2(p0.x, p0.y), q.z);
-  float a10 = EvaluatePixel(part, ivec2(p1.x, p0.y), q.z);
-  float a01 = EvaluatePixel(part, ivec2(p0.x, p1.y), q.z);
-  float a11 = EvaluatePixel(part, ivec2(p1.x, p1.y), q.z);
-  float a = (1.0 - w.y) * ((1.0 - w.x) * a00 + w.x * a10) + w.y * ((1.0 - w.x) * a01 + w.x * a11);
+  PixelSpan s00 = SpanOf(part, ivec2(p0.x, p0.y)), s10 = SpanOf(part, ivec2(p1.x, p0.y));
+  PixelSpan s01 = SpanOf(part, ivec2(p0.x, p1.y)), s11 = SpanOf(part, ivec2(p1.x, p1.y));
+  // Where one of the four is refined at this depth, the rays of the finest such lattice around
+  // the point, each from the pixel holding it (BilinearAttenuationOf in core/pdsm/pdsm_query.h).
+  int rf = 1;
+  if (RefinedAt(s00, q.z)) rf = max(rf, RefinementOf(s00));
+  if (RefinedAt(s10, q.z)) rf = max(rf, RefinementOf(s10));
+  if (RefinedAt(s01, q.z)) rf = max(rf, RefinementOf(s01));
+  if (RefinedAt(s11, q.z)) rf = max(rf, RefinementOf(s11));
+  float a;
+  bool defined = false;
+  if (rf > 1) {
+    vec2 u = pixel * float(rf) - 0.5;
+    vec2 ub = floor(u);
+    vec2 sw = u - ub;
+    ivec2 last_ray = size * rf - 1;
+    float v[4];
+    for (int k = 0; k < 4; ++k) {
+      ivec2 ray = clamp(ivec2(ub) + ivec2(k & 1, k >> 1), ivec2(0), last_ray);
+      ivec2 in_pixel = ray / rf;
+      PixelSpan source = in_pixel.y != p0.y ? (in_pixel.x != p0.x ? s11 : s01)
+                                            : (in_pixel.x != p0.x ? s10 : s00);
+      bool sub;
+      v[k] = LatticeAttenuation(source, rf, ray.x - in_pixel.x * rf, ray.y - in_pixel.y * rf, q.z,
+                                sub);
+      defined = defined || sub;
+    }
+    a = (1.0 - sw.y) * ((1.0 - sw.x) * v[0] + sw.x * v[1]) + sw.y * ((1.0 - sw.x) * v[2] + sw.x * v[3]);
+  }
+  if (!defined) {
+    float a00 = EvaluateOwn(s00, q.z), a10 = EvaluateOwn(s10, q.z);
+    float a01 = EvaluateOwn(s01, q.z), a11 = EvaluateOwn(s11, q.z);
+    a = (1.0 - w.y) * ((1.0 - w.x) * a00 + w.x * a10) + w.y * ((1.0 - w.x) * a01 + w.x * a11);
+  }
   return isnan(a) ? -1.0 : a;  // a NaN neighbour: unknown, as QueryAttenuation says
 }
 

@@ -3,6 +3,8 @@
 // dynamic sphere that was not in the bake (thesis 4.3). docs/viewer.md states the tolerance.
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -11,6 +13,9 @@
 
 #include "client/view/frame_renderer.h"
 #include "client/view/image_io.h"
+#include "core/pdsm/pdsm_file.h"
+#include "core/pdsm/pdsm_test_images.h"
+#include "core/pdsm/refined_pixel.h"
 #include "tests/view/view_test_support.h"
 
 namespace pdsm::testing {
@@ -29,13 +34,13 @@ constexpr char kSphere[] = "--sphere -1.5,1.0,-1.0,0.6";
 constexpr char kCamera[] = "--camera 4,7,6,0,1,0,40";
 
 FloatImage RenderAttenuation(const std::string& mode, const std::string& extra, const TempDir& dir,
-                             bool surfaces_only = false) {
+                             bool surfaces_only = false, const std::string& pdsm = "") {
   const std::string pfm = dir.File(mode + ".pfm");
   CommandResult r =
       RunView("plates",
-              "--pdsm " + SmallBake("plates", surfaces_only) + " --headless --size 160x120 " +
-                  kCamera + " --mode " + mode + " --screenshot " + dir.File(mode + ".png") +
-                  " --save-attenuation " + pfm + " " + extra,
+              "--pdsm " + (pdsm.empty() ? SmallBake("plates", surfaces_only) : pdsm) +
+                  " --headless --size 160x120 " + kCamera + " --mode " + mode + " --screenshot " +
+                  dir.File(mode + ".png") + " --save-attenuation " + pfm + " " + extra,
               dir);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   absl::StatusOr<FloatImage> image = view::ReadPfm(pfm);
@@ -58,12 +63,14 @@ void WriteDiffImage(const FloatImage& a, const FloatImage& b, const std::string&
 
 std::vector<bool> SphereMask(const std::string& mode, const TempDir& dir);
 
-// GPU and CPU images of the same bake: same background and outside pixels, and attenuation
-// within the tolerance; returns the count of pixels on the PDSM's surfaces.
-size_t ExpectGpuMatchesCpu(bool surfaces_only, const std::string& diff_name) {
+// GPU and CPU images of the same bake (`pdsm`, or the small bake of plates): same background
+// and outside pixels, and attenuation within the tolerance; returns the count of pixels on the
+// PDSM's surfaces.
+size_t ExpectGpuMatchesCpu(bool surfaces_only, const std::string& diff_name,
+                           const std::string& pdsm = "") {
   TempDir dir;
-  const FloatImage gpu = RenderAttenuation("pdsm", kSphere, dir, surfaces_only);
-  const FloatImage cpu = RenderAttenuation("cpu", kSphere, dir, surfaces_only);
+  const FloatImage gpu = RenderAttenuation("pdsm", kSphere, dir, surfaces_only, pdsm);
+  const FloatImage cpu = RenderAttenuation("cpu", kSphere, dir, surfaces_only, pdsm);
   EXPECT_EQ(gpu.values.size(), cpu.values.size());
   if (gpu.values.empty() || gpu.values.size() != cpu.values.size()) {
     ADD_FAILURE() << "no image";
@@ -104,6 +111,75 @@ size_t ExpectGpuMatchesCpu(bool surfaces_only, const std::string& diff_name) {
 
 TEST(ViewAgreement, GpuPdsmMatchesCpuQueryPerPixel) {
   ExpectGpuMatchesCpu(/*surfaces_only=*/false, "agreement_diff.png");
+}
+
+// A copy of the small bake of plates with refined pixels (format version 3,
+// core/pdsm/refined_pixel.h): in blocks of 5 x 5 pixels, in turn unrefined, 2x, 4x and 8x.
+// Sub-pixel (i, j) of a refined pixel holds the pixel's function with A scaled by
+// 0.4 + 0.6 * (i + j) / (2f - 2): sharp steps between sub-pixels and across every kind of
+// block edge, which the GPU's lookup must take exactly as the CPU's does. The 2x pixels' and
+// every other 4x pixel's sub-functions are defined only from the pixel's first vertex on (a
+// NaN-bracketed window), and some 8x sub-pixels have none, so that the lookup takes its
+// fallbacks to the pixels' own functions too.
+std::string RefinedPlates(const TempDir& dir) {
+  absl::StatusOr<PdsmImage> plain = ReadPdsm(SmallBake("plates"));
+  EXPECT_TRUE(plain.ok()) << plain.status();
+  if (!plain.ok()) return "";
+  PdsmImage refined;
+  refined.header = plain->header;
+  refined.header.max_refinement = 8;
+  refined.header.format_version = MinimumFormatVersion(refined.header);
+  refined.offsets.push_back(0);
+  const PdsmGeometry& g = refined.header.geometry;
+  const std::vector<RefinedBand> everywhere = {{-1e30f, 1e30f}};
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  for (int y = 0; y < g.height; ++y) {
+    for (int x = 0; x < g.width; ++x) {
+      const std::span<const Vertex> own = plain->Function(x, y);
+      const int f = (1 << ((x / 5 + y / 5) % 4));
+      if (f == 1) {
+        refined.vertices.insert(refined.vertices.end(), own.begin(), own.end());
+      } else {
+        std::vector<std::vector<Vertex>> subs;
+        for (int j = 0; j < f; ++j) {
+          for (int i = 0; i < f; ++i) {
+            const float scale = 0.4f + 0.6f * static_cast<float>(i + j) / (2 * f - 2);
+            std::vector<Vertex>& sub = subs.emplace_back();
+            const bool windowed = !own.empty() && (f == 2 || (f == 4 && (x + y) % 2 == 0));
+            if (f == 8 && (i + 3 * j) % 5 == 0) continue;  // undefined everywhere
+            if (windowed) sub.push_back({kUndefinedFrom, kNaN});
+            for (Vertex v : own) sub.push_back({v.z, v.a * scale});
+            if (windowed) {
+              sub.push_back({1e30f, sub.back().a});
+              sub.push_back({1e30f, kNaN});
+            }
+          }
+        }
+        AppendRefinedPixel(f, everywhere, own, subs, &refined.vertices);
+      }
+      refined.offsets.push_back(refined.vertices.size());
+    }
+  }
+  const std::string path = dir.File("plates_refined.exr");
+  EXPECT_TRUE(WriteTiles(path, refined.header, CutTiles(refined)).ok());
+  return path;
+}
+
+TEST(ViewAgreement, RefinedPixelsGpuMatchesCpu) {
+  TempDir dir;
+  const std::string refined = RefinedPlates(dir);
+  ASSERT_FALSE(refined.empty());
+  ExpectGpuMatchesCpu(/*surfaces_only=*/false, "agreement_refined_diff.png", refined);
+  // Not vacuous: the refined copy reads differently from the plain bake.
+  TempDir other;
+  const FloatImage plain = RenderAttenuation("cpu", kSphere, other);
+  const FloatImage with = RenderAttenuation("cpu", kSphere, other, false, refined);
+  ASSERT_EQ(plain.values.size(), with.values.size());
+  size_t differ = 0;
+  for (size_t i = 0; i < plain.values.size(); ++i) {
+    differ += plain.values[i] >= 0 && std::abs(plain.values[i] - with.values[i]) > 0.01;
+  }
+  EXPECT_GT(differ, plain.values.size() / 50);
 }
 
 // A surfaces-only PDSM holds A(z) only near the static receivers: there GPU and CPU agree as
