@@ -14,7 +14,14 @@ every tile would cost, the ceiling adaptive refinement must stay far under.
 
   /usr/bin/python3 bench/contact_resolution.py [--pdsm build/client/pdsm] [--out DIR]
       [--shared ../shared] [--scenes sun_pillars,dragon] [--factors 1,2,4]
+      [--refinements 2,4,8] [--repeat 3] [--surface-points 6000]
       [--radius 0.3] [--band 0.02] [--step 0.01] [--reference embree|exact]
+
+--refinements: adaptive resolution (issue #15 item 2): bakes at the scene's own resolution with
+`--max-refinement R`, interleaved with the unrefined bake --repeat times (CPU medians), with
+the bytes and the errors at the same points; and, on --surface-points points on the casters'
+surfaces that face the light (2e-3 off them, where self-shadows fall), the same errors. Where
+--factors and --refinements are both given, the uniform bakes come first.
 
 Footprint: the parts of caster triangles within --band of the ground plane (along its normal),
 rasterized onto the ground at --step. Points: the centres of --step cells within --radius of
@@ -91,6 +98,73 @@ def contact_points(model, radius, band, step):
     return points, under
 
 
+def surface_points(model, count, seed=4):
+    """Points on the casters' surfaces that face the light, area-weighted, 2e-3 off them."""
+    rng = np.random.default_rng(seed)
+    tris, normals, areas = [], [], []
+    for verts, faces in model.casters():
+        v = np.array(verts)
+        t = np.array(faces)
+        a, b = v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]]
+        n = np.cross(a, b)
+        area = np.linalg.norm(n, axis=1)
+        centre = v[t].mean(axis=1)
+        light = np.array([model.toward_light(list(c)) for c in centre])
+        facing = (n * light).sum(axis=1) > 0.2 * area
+        keep = np.where(facing & (area > 0))[0]
+        tris.append(v[t[keep]])
+        normals.append(n[keep] / area[keep, None])
+        areas.append(area[keep])
+    if not tris:
+        return []
+    tris, normals, areas = np.concatenate(tris), np.concatenate(normals), np.concatenate(areas)
+    pick = rng.choice(len(areas), size=count, p=areas / areas.sum())
+    r1, r2 = rng.random(count), rng.random(count)
+    flip = r1 + r2 > 1
+    r1[flip], r2[flip] = 1 - r1[flip], 1 - r2[flip]
+    t = tris[pick]
+    p = t[:, 0] + r1[:, None] * (t[:, 1] - t[:, 0]) + r2[:, None] * (t[:, 2] - t[:, 0])
+    return [tuple(x) for x in p + 2e-3 * normals[pick]]
+
+
+def refined_rows(args, name, scene, folder, csv, sets, exact, reference_method):
+    """The unrefined bake and one per --refinements, interleaved --repeat times."""
+    tags = [1] + [int(r) for r in args.refinements.split(",")]
+    surface = None
+    if args.surface_points > 0:
+        points = surface_points(pdsm_scene.Scene(scene), args.surface_points)
+        surface_csv = os.path.join(folder, "surface_points.csv")
+        pdsm_scene.write_points(surface_csv, points)
+        ref = os.path.join(folder, "surface_reference.csv")
+        run_timed([args.pdsm, "reference", scene, "--points", surface_csv] + reference_method, ref)
+        surface = (surface_csv, read_values(ref))
+    cpu = {r: [] for r in tags}
+    for _ in range(args.repeat):
+        for r in tags:
+            exr = os.path.join(folder, f"refined{r}.exr")
+            cpu[r].append(run_timed([args.pdsm, "bake", scene, "-o", exr, "--no-preview",
+                                     "--max-refinement", str(r)]))
+    rows = []
+    for r in tags:
+        exr = os.path.join(folder, f"refined{r}.exr")
+        out = os.path.join(folder, f"refined{r}.csv")
+        run_timed([args.pdsm, "query", exr, "--points", csv], out)
+        row = {"scene": name, "refinement": r, "cpu": statistics.median(cpu[r]), "cpu_runs": cpu[r],
+               "bytes": os.path.getsize(exr)}
+        baked = read_values(out)
+        for key, keep in sets.items():
+            row[key] = errors(baked, exact, keep)
+        if surface:
+            surface_out = os.path.join(folder, f"refined{r}_surface.csv")
+            run_timed([args.pdsm, "query", exr, "--points", surface[0]], surface_out)
+            values = read_values(surface_out)
+            row["surface"] = errors(values, surface[1],
+                                    [i for i, x in enumerate(surface[1]) if 0.01 < x < 0.99])
+        rows.append(row)
+        print(f"{name} refinement {r}: {json.dumps(row)}", file=sys.stderr, flush=True)
+    return rows
+
+
 def measure(args, name, scene):
     folder = os.path.join(args.out, name)
     os.makedirs(folder, exist_ok=True)
@@ -109,7 +183,7 @@ def measure(args, name, scene):
     bake = json.load(open(scene)).get("bake", {})
     base_sm = bake.get("shadowMapResolution", 512)
     rows = []
-    for factor in [int(f) for f in args.factors.split(",")]:
+    for factor in [int(f) for f in args.factors.split(",") if f]:
         res = f"{base[0] * factor}x{base[1] * factor}"
         for maps in sorted({base_sm, min(16384, base_sm * factor)}):  # one bake at 1x
             tag = f"x{factor}_sm{maps}"
@@ -127,6 +201,8 @@ def measure(args, name, scene):
                 row[key] = errors(baked, exact, keep)
             rows.append(row)
             print(f"{name} {tag}: {json.dumps(row)}", file=sys.stderr, flush=True)
+    if args.refinements:
+        rows += refined_rows(args, name, scene, folder, csv, sets, exact, method)
     return rows
 
 
@@ -147,6 +223,9 @@ def main():
     p.add_argument("--band", type=float, default=0.02)
     p.add_argument("--step", type=float, default=0.01)
     p.add_argument("--repeat", type=int, default=1, help="bakes per resolution (CPU median)")
+    p.add_argument("--refinements", default="", help="adaptive resolution: --max-refinement values")
+    p.add_argument("--surface-points", type=int, default=0,
+                   help="with --refinements: points on the casters' lit surfaces")
     p.add_argument("--reference", choices=("embree", "exact"), default="embree")
     args = p.parse_args()
     os.makedirs(args.out, exist_ok=True)
@@ -162,9 +241,21 @@ def main():
     lines = ["Penumbra points near contacts: |pdsm - reference| as MAE / P95 / P99 / max (points)",
              "", "| scene | PDSM | shadow maps | beside the footprint | under it | CPU-s | bytes |",
              "|---|---|---|---|---|---|---|"]
-    for r in rows:
+    uniform = [r for r in rows if "refinement" not in r]
+    for r in uniform:
         lines.append(f"| {r['scene']} | {r['resolution']} | {r['shadow_maps']} | {fmt(r['beside'])} "
                      f"| {fmt(r['under'])} | {r['cpu']:.2f} | {r['bytes']:,} |")
+    refined = [r for r in rows if "refinement" in r]
+    if refined:
+        lines += ["", "Adaptive resolution (`--max-refinement R`), CPU-s the median of interleaved runs",
+                  "", "| scene | R | near contacts (beside) | casters' lit surfaces | CPU-s | x | bytes | x |",
+                  "|---|---|---|---|---|---|---|---|"]
+        base = {r["scene"]: r for r in refined if r["refinement"] == 1}
+        for r in refined:
+            b = base[r["scene"]]
+            lines.append(f"| {r['scene']} | {r['refinement']} | {fmt(r['beside'])} | "
+                         f"{fmt(r.get('surface', {}))} | {r['cpu']:.2f} | {r['cpu'] / b['cpu']:.2f} | "
+                         f"{r['bytes']:,} | {r['bytes'] / b['bytes']:.2f} |")
     text = "\n".join(lines) + "\n"
     print(text)
     open(os.path.join(args.out, "summary.md"), "w").write(text)

@@ -30,6 +30,9 @@ void AddOverrideFlags(CLI::App* cmd, OverrideFlags* flags) {
                   "What a light sample counts for: unweighted (the fraction of the light's area "
                   "hidden) or emitter (its power toward the point, cos/r^2: the fraction of the "
                   "light's solid angle hidden)");
+  cmd->add_option("--max-refinement", flags->max_refinement,
+                  "Adaptive resolution: refine pixels whose penumbra is narrower than a pixel, "
+                  "up to 1 (off), 2, 4 or 8 times per axis");
 }
 
 absl::StatusOr<pdsm::v1::Sampling> ParseSamplingName(const std::string& name,
@@ -86,6 +89,10 @@ absl::StatusOr<pdsm::v1::BakeParams> ToBakeParams(const OverrideFlags& flags) {
   if (s.ok()) {
     s = set_count("--adaptive-min-samples", flags.adaptive_min_samples,
                   [&](uint32_t v) { params.set_adaptive_min_samples(v); });
+  }
+  if (s.ok()) {
+    s = set_count("--max-refinement", flags.max_refinement,
+                  [&](uint32_t v) { params.set_max_refinement(v); });
   }
   if (!s.ok()) return s;
   if (flags.epsilon) params.set_epsilon(*flags.epsilon);

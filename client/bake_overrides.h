@@ -1,7 +1,7 @@
 // The bake-parameter flags shared by `pdsm bake` and `pdsm submit` (--resolution, --samples,
 // --sm-resolution, --epsilon, --tile-size, --depth-bias, --sampling, --adaptive-tolerance,
-// --adaptive-min-samples, --surfaces-only, --weighting): they override the scene file's bake
-// fields.
+// --adaptive-min-samples, --surfaces-only, --weighting, --max-refinement): they override the
+// scene file's bake fields.
 #ifndef PDSM_CLIENT_BAKE_OVERRIDES_H_
 #define PDSM_CLIENT_BAKE_OVERRIDES_H_
 
@@ -23,8 +23,9 @@ struct OverrideFlags {
   std::string sampling;  // a bake.sampling name, any case, '-' for '_' ("blue-noise")
   std::optional<double> adaptive_tolerance;
   std::optional<int64_t> adaptive_min_samples;
-  bool surfaces_only = false;  // --surfaces-only
-  std::string weighting;       // --weighting: unweighted or emitter (bake.weighting)
+  bool surfaces_only = false;             // --surfaces-only
+  std::string weighting;                  // --weighting: unweighted or emitter (bake.weighting)
+  std::optional<int64_t> max_refinement;  // --max-refinement: 1, 2, 4 or 8
 };
 
 void AddOverrideFlags(CLI::App* command, OverrideFlags* flags);

@@ -169,6 +169,18 @@ absl::StatusOr<std::vector<PlannedLight>> PlanJobLights(const pdsm::v1::Scene& s
                      assets.Resolver(limits ? limits->max_triangles : 0, &asset_triangles));
   if (!loaded.ok()) return loaded.status();
   const size_t count = loaded->LightCount();
+  for (size_t i = 0; i < count; ++i) {
+    // Adaptive resolution's refinement pass (docs/algorithms.md section 10) runs in the local
+    // bake only so far: refused here rather than baked unrefined under a refined header.
+    const SceneLight light = LightOf(*loaded, i);
+    if (light.bake.max_refinement > 1) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s%s: bake.maxRefinement: %d: adaptive resolution is baked by `pdsm bake` only; this "
+          "service does not run it yet (submit with maxRefinement 1, or bake locally)",
+          label, count == 1 ? "" : absl::StrFormat(": lights[%d] \"%s\"", i, light.name),
+          light.bake.max_refinement));
+    }
+  }
   if (limits != nullptr) {
     int64_t triangles = 0;
     for (const TriangleMesh& m : loaded->meshes) triangles += m.indices.size() / 3;

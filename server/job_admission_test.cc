@@ -13,6 +13,7 @@
 #include <memory>
 #include <vector>
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "core/bake/plan_fingerprint.h"
@@ -90,6 +91,18 @@ TEST_F(PlanJobLightsTest, ASurfacesOnlyPlanKeepsItsReceivers) {
   pdsm::v1::BakeParams overrides;
   overrides.set_surfaces_only(true);
   ExpectSlimPlansOf(overrides);
+}
+
+TEST_F(PlanJobLightsTest, AdaptiveResolutionIsRefusedNamingTheField) {
+  pdsm::v1::BakeParams overrides;
+  overrides.set_max_refinement(4);
+  absl::StatusOr<pdsm::v1::Scene> message =
+      ParseSceneFile(testing::ExamplePath("courtyard"), overrides);
+  ASSERT_TRUE(message.ok()) << message.status();
+  const absl::Status refused = PlanJobLights(*message, "scene", *assets_, nullptr).status();
+  EXPECT_EQ(refused.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(refused.message(), ::testing::HasSubstr("bake.maxRefinement"));
+  EXPECT_THAT(refused.message(), ::testing::HasSubstr("pdsm bake"));
 }
 
 // Bytes the program's allocations hold now (the sanitizers replace malloc: ask theirs).

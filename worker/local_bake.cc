@@ -4,7 +4,9 @@
 #include <chrono>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
@@ -12,6 +14,7 @@
 #include "core/bake/bake_plan.h"
 #include "core/pdsm/pdsm_file.h"
 #include "core/pipeline/bake_engine.h"
+#include "core/pipeline/refinement_pass.h"
 #include "core/util/malloc_arenas.h"
 #include "core/util/work_queue.h"
 #include "gl/platform/osmesa_context.h"
@@ -145,23 +148,25 @@ class StartLine {
   const std::function<void()> go_;
 };
 
-// Bakes one light's plan into `writer` (a file, or one part of a multipart file), with the
-// light-view preview at `preview_path` ("": none). `on_progress` gets this light's progress.
-// `runners` holds the bake's task runners, one per thread, made here as needed and kept for
-// the next light: a runner's GL context and shaders cost ~20 ms to make, as much as the whole
-// bake of a small light.
-absl::StatusOr<BakeSummary> BakePlanned(std::shared_ptr<const BakePlan> plan, PdsmWriter* writer,
-                                        const std::string& preview_path,
-                                        const LocalBakeOptions& options,
-                                        const std::function<void(const BakeProgress&)>& on_progress,
-                                        std::vector<std::unique_ptr<TaskRunner>>* runners) {
-  const auto start = std::chrono::steady_clock::now();
+// What one engine job run on the bake's threads did.
+struct PlanRun {
+  JobProgress progress;
+  TaskStats tasks;  // summed over the threads
+};
+
+// Runs `plan`'s bake as one engine job on the bake's threads into `output`. `on_progress` gets
+// its progress, seconds counted from `start`. `runners` holds the bake's task runners, one per
+// thread, made here as needed and kept for the next plan: a runner's GL context and shaders
+// cost ~20 ms to make, as much as the whole bake of a small light.
+absl::StatusOr<PlanRun> RunPlan(std::shared_ptr<const BakePlan> plan,
+                                const std::shared_ptr<LocalOutput>& output,
+                                const LocalBakeOptions& options,
+                                const std::function<void(const BakeProgress&)>& on_progress,
+                                std::chrono::steady_clock::time_point start,
+                                std::vector<std::unique_ptr<TaskRunner>>* runners) {
   const auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
-  auto output =
-      std::make_shared<LocalOutput>(*plan, writer, preview_path, options.output_path, options.fs);
-
   const int threads = ThreadCount(*plan, options);
   // One GL context per thread: llvmpipe's own helper threads per context would only
   // oversubscribe the cores and cost ~27 MiB each (docs/performance.md, "GL memory").
@@ -225,21 +230,119 @@ absl::StatusOr<BakeSummary> BakePlanned(std::shared_ptr<const BakePlan> plan, Pd
   if (!started.ok()) return started;
   if (!output->ended()) return absl::InternalError("the local bake stopped before its end");
   if (absl::Status s = output->status(); !s.ok()) return s;
+  PlanRun run;
+  run.progress = output->progress();
+  for (const auto& w : workers) run.tasks.Add(w->stats());
+  run.tasks.tiles_skipped += run.progress.tiles_without_task;
+  return run;
+}
 
-  const JobProgress progress = output->progress();
+// Adaptive resolution (docs/algorithms.md section 10) once the base of light `light` (nullopt:
+// the scene's one light) is baked into `base_output`: chooses the pixels to refine, bakes the
+// refinement level on the bake's threads, and puts the spliced tiles in place of the base's.
+absl::StatusOr<RefinementSummary> RefineLight(
+    const SceneIndex& index, std::optional<size_t> light, const BakePlan& base,
+    LocalOutput* base_output, const LocalBakeOptions& options,
+    const std::function<void(const BakeProgress&)>& on_progress, int64_t tasks_before,
+    std::chrono::steady_clock::time_point start,
+    std::vector<std::unique_ptr<TaskRunner>>* runners) {
+  const auto since = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
+  RefinementSummary summary;
+  summary.lights = 1;
+  const int threads = options.threads > 0 ? options.threads : CoreCount();
+  EncodedTileStore& tiles = base_output->tiles();
+  const BaseTileSource base_tile = [&](int t) {
+    const TileRect rect = base.tile(t);
+    return tiles.Get(rect.x0, rect.y0);
+  };
+  auto step = std::chrono::steady_clock::now();
+  absl::StatusOr<std::shared_ptr<const RefinedPixels>> refined =
+      SelectRefinedPixels(base, base_tile, threads);
+  if (!refined.ok()) return refined.status();
+  summary.select_seconds = since(step);
+  if ((*refined)->empty()) return summary;
+  summary.factor = (*refined)->factor();
+  summary.pixels = (*refined)->count();
+
+  absl::StatusOr<BakePlan> planned = PlanRefinementLevel(index, light, base, *refined);
+  if (!planned.ok()) return planned.status();
+  const auto level = std::make_shared<const BakePlan>(*std::move(planned));
+  const auto level_output = std::make_shared<LocalOutput>(*level, /*writer=*/nullptr, "",
+                                                          options.output_path, options.fs);
+  std::function<void(const BakeProgress&)> level_progress;
+  if (on_progress) {
+    level_progress = [&](const BakeProgress& p) {
+      on_progress(
+          BakeProgress{tasks_before + p.tasks_done, tasks_before + p.tasks_total, p.seconds});
+    };
+  }
+  absl::StatusOr<PlanRun> run =
+      RunPlan(level, level_output, options, level_progress, start, runners);
+  if (!run.ok()) return run.status();
+  summary.tasks = run->progress.tasks_done;
+  summary.tasks_stats = run->tasks;
+  summary.assembly = run->progress.assembly;
+
+  step = std::chrono::steady_clock::now();
+  EncodedTileStore& level_tiles = level_output->tiles();
+  const LevelTileSource level_tile = [&](int t) -> absl::StatusOr<std::optional<PdsmTile>> {
+    const TileRect rect = level->tile(t);
+    absl::StatusOr<PdsmTile> tile = level_tiles.Get(rect.x0, rect.y0);
+    if (!tile.ok()) return tile.status();
+    return std::optional<PdsmTile>(*std::move(tile));
+  };
+  if (absl::Status s = SpliceRefinedTiles(
+          base, *level, base_tile, level_tile, [&](const PdsmTile& t) { return tiles.Replace(t); },
+          threads);
+      !s.ok()) {
+    return s;
+  }
+  summary.splice_seconds = since(step);
+  return summary;
+}
+
+// Bakes one light's plan into `writer` (a file, or one part of a multipart file), with the
+// light-view preview at `preview_path` ("": none), and refines it when its plan asks for it.
+// `on_progress` gets this light's progress; `light` names the light of `index`'s scene (nullopt:
+// its one light), for the refinement levels' plans.
+absl::StatusOr<BakeSummary> BakePlanned(const SceneIndex& index, std::optional<size_t> light,
+                                        std::shared_ptr<const BakePlan> plan, PdsmWriter* writer,
+                                        const std::string& preview_path,
+                                        const LocalBakeOptions& options,
+                                        const std::function<void(const BakeProgress&)>& on_progress,
+                                        std::vector<std::unique_ptr<TaskRunner>>* runners) {
+  const auto start = std::chrono::steady_clock::now();
+  const bool refine = plan->header.max_refinement > 1;
+  // A refined light's tiles are written once its levels are spliced in.
+  auto output = std::make_shared<LocalOutput>(*plan, refine ? nullptr : writer, preview_path,
+                                              options.output_path, options.fs);
+  absl::StatusOr<PlanRun> run = RunPlan(plan, output, options, on_progress, start, runners);
+  if (!run.ok()) return run.status();
   BakeSummary summary;
-  summary.seconds = elapsed();
+  if (refine) {
+    absl::StatusOr<RefinementSummary> refinement =
+        RefineLight(index, light, *plan, output.get(), options, on_progress,
+                    run->progress.tasks_done, start, runners);
+    if (!refinement.ok()) return refinement.status();
+    summary.refinement = *std::move(refinement);
+    if (absl::Status s = output->tiles().WriteTo(writer); !s.ok()) return s;
+    if (absl::Status s = writer->Finish(); !s.ok()) return s;
+  }
+
+  const JobProgress& progress = run->progress;
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   summary.tiles = progress.tiles_total;
   summary.tiles_all_lit = progress.tiles_all_lit;
   summary.groups = plan->group_count();
   summary.casters_left_out = static_cast<int64_t>(plan->casters_left_out);
   summary.casters = static_cast<int64_t>(plan->casters.TriangleCount()) + summary.casters_left_out;
-  summary.tasks = progress.tasks_done;
+  summary.tasks = progress.tasks_done + summary.refinement.tasks;
   summary.tile_samples_total = progress.tile_samples_total;
   summary.assembly = progress.assembly;
   summary.spilled_bytes = progress.spilled_bytes;
-  for (const auto& w : workers) summary.tasks_stats.Add(w->stats());
-  summary.tasks_stats.tiles_skipped += progress.tiles_without_task;
+  summary.tasks_stats = run->tasks;
   summary.light_name = plan->header.light_name;
   summary.width = plan->header.geometry.width;
   summary.height = plan->header.geometry.height;
@@ -259,9 +362,21 @@ void AddLight(const BakeSummary& light, BakeSummary* total) {
   total->tasks_stats.Add(light.tasks_stats);
   total->assembly.Add(light.assembly);
   total->spilled_bytes += light.spilled_bytes;
+  total->refinement.Add(light.refinement);
 }
 
 }  // namespace
+
+void RefinementSummary::Add(const RefinementSummary& o) {
+  lights += o.lights;
+  factor = std::max(factor, o.factor);
+  pixels += o.pixels;
+  tasks += o.tasks;
+  tasks_stats.Add(o.tasks_stats);
+  assembly.Add(o.assembly);
+  select_seconds += o.select_seconds;
+  splice_seconds += o.splice_seconds;
+}
 
 std::string LightPreviewPath(const std::string& preview_path, const std::string& light_name) {
   if (preview_path.empty()) return "";
@@ -277,16 +392,20 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
   };
   BakeSummary total;
   std::vector<std::unique_ptr<TaskRunner>> runners;  // one per thread, kept across lights
+  // One index of the world's triangles serves every light's plan (and refinement level).
+  absl::StatusOr<std::shared_ptr<const SceneIndex>> index = SceneIndex::Build(scene);
+  if (!index.ok()) return index.status();
   if (scene.LightCount() == 1) {
-    absl::StatusOr<BakePlan> planned = PlanBake(scene);
+    absl::StatusOr<BakePlan> planned = PlanBake(**index);
     if (!planned.ok()) return planned.status();
     if (!options.preview_path.empty()) AddLightSpaceReceivers(scene, &*planned);
     const auto plan = std::make_shared<const BakePlan>(*std::move(planned));
     absl::StatusOr<std::unique_ptr<PdsmWriter>> writer =
         PdsmWriter::Create(options.output_path, plan->header, options.fs);
     if (!writer.ok()) return writer.status();
-    absl::StatusOr<BakeSummary> light = BakePlanned(plan, writer->get(), options.preview_path,
-                                                    options, options.on_progress, &runners);
+    absl::StatusOr<BakeSummary> light =
+        BakePlanned(**index, std::nullopt, plan, writer->get(), options.preview_path, options,
+                    options.on_progress, &runners);
     if (!light.ok()) return light.status();
     total = *std::move(light);
   } else {
@@ -301,9 +420,6 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
         PdsmLightsWriter::Create(options.output_path, static_cast<int>(scene.LightCount()),
                                  max_width, max_height, options.fs);
     if (!writer.ok()) return writer.status();
-    // One index of the world's triangles serves every light's plan.
-    absl::StatusOr<std::shared_ptr<const SceneIndex>> index = SceneIndex::Build(scene);
-    if (!index.ok()) return index.status();
     int64_t tasks_before = 0;
     for (size_t i = 0; i < scene.LightCount(); ++i) {
       absl::StatusOr<BakePlan> planned = PlanBake(**index, i);
@@ -319,9 +435,9 @@ absl::StatusOr<BakeSummary> RunLocalBake(const Scene& scene, const LocalBakeOpti
               BakeProgress{tasks_before + p.tasks_done, tasks_before + p.tasks_total, elapsed()});
         };
       }
-      absl::StatusOr<BakeSummary> light =
-          BakePlanned(plan, *part, LightPreviewPath(options.preview_path, plan->header.light_name),
-                      options, on_progress, &runners);
+      absl::StatusOr<BakeSummary> light = BakePlanned(
+          **index, i, plan, *part, LightPreviewPath(options.preview_path, plan->header.light_name),
+          options, on_progress, &runners);
       if (!light.ok()) return light.status();
       tasks_before += light->tasks;
       AddLight(*light, &total);

@@ -41,6 +41,21 @@ struct LocalBakeOptions {
   int64_t event_memory_budget_bytes = kDefaultEventMemoryBudget;
 };
 
+// Adaptive resolution's part of a bake (bake.maxRefinement > 1; docs/algorithms.md section
+// 10): the pixels it refined and what their refinement levels cost (not in BakeSummary's
+// counts of the base bake, except tasks and seconds).
+struct RefinementSummary {
+  int lights = 0;      // lights refined (their pixels chosen)
+  int factor = 1;      // their refinement (the largest over lights)
+  int64_t pixels = 0;  // refined pixels
+  int64_t tasks = 0;
+  TaskStats tasks_stats;  // the levels' shadow maps and scan conversion (thread-seconds)
+  AssemblyStats assembly;
+  double select_seconds = 0;  // choosing the pixels (wall)
+  double splice_seconds = 0;  // their sub-functions into the base tiles (wall)
+  void Add(const RefinementSummary& o);
+};
+
 struct BakeSummary {
   double seconds = 0;
   // The light's name and PDSM size (one-light bakes and each entry of `lights`).
@@ -57,6 +72,7 @@ struct BakeSummary {
   AssemblyStats assembly;
   int64_t spilled_bytes = 0;  // event lists moved to the scratch file (then read back once)
   uint64_t file_bytes = 0;
+  RefinementSummary refinement;  // of a refined bake; summed over lights
   // A bake of several lights: each light's own summary, in scene order (their counts summed
   // above; no file_bytes). Empty for one light.
   std::vector<BakeSummary> lights;

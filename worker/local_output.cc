@@ -48,6 +48,7 @@ absl::Status LocalOutput::Finish() {
   if (has_preview()) {
     if (absl::Status s = preview_.Write(preview_path_, fs_); !s.ok()) return s;
   }
+  if (writer_ == nullptr) return absl::OkStatus();
   if (absl::Status s = tiles_.WriteTo(writer_); !s.ok()) return s;
   return writer_->Finish();
 }

@@ -24,9 +24,11 @@ namespace pdsm {
 
 class LocalOutput final : public JobOutput {
  public:
-  // `plan` and `writer` outlive this. `preview_path` empty: no preview. `output_path`: the
-  // PDSM's path, beside which the compressed tiles wait for the end of the light. `fs`: where
-  // they and the preview are written (null: the real file system).
+  // `plan` and `writer` outlive this. `writer` null: Finish leaves the tiles in tiles(), for
+  // the caller to refine (a refined bake's base, worker/local_bake.cc) or read (a refinement
+  // level's). `preview_path` empty: no preview. `output_path`: the PDSM's path, beside which
+  // the compressed tiles wait for the end of the light. `fs`: where they and the preview are
+  // written (null: the real file system).
   LocalOutput(const BakePlan& plan, PdsmWriter* writer, std::string preview_path,
               std::string output_path, FileSystem* fs = nullptr);
 
@@ -42,8 +44,10 @@ class LocalOutput final : public JobOutput {
   // Without a preview to shade, kept as their rectangles (no tile made and assembled each: a
   // sparse world has 2^18); with one, each through StoreTile.
   absl::Status StoreUnreachedTiles(const BakePlan& plan, const std::vector<int>& tiles) override;
-  // Writes the preview, then the PDSM's tiles, then renames the PDSM into place.
+  // Writes the preview, then (with a writer) the PDSM's tiles, then renames the PDSM into place.
   absl::Status Finish() override;
+  // The light's tiles as stored: after Finish, all of them.
+  EncodedTileStore& tiles() { return tiles_; }
   void Ended(JobEnd end, const absl::Status& status, const JobProgress& progress) override;
 
   // True once Ended() ran; then status() and progress() hold what it was given.
@@ -58,7 +62,7 @@ class LocalOutput final : public JobOutput {
   std::vector<std::vector<float>> receiver_depth_;  // by tile, sampled; dropped once shaded
   PreviewImage preview_;                            // tiles are disjoint: shading needs no lock
   EncodedTileStore tiles_;
-  PdsmWriter* const writer_;  // used by Finish() only
+  PdsmWriter* const writer_;  // used by Finish() only; null: the caller writes
 
   mutable absl::Mutex end_mu_;
   std::atomic<bool> ended_{false};

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/bake/scan_windows.h"
 #include "core/bake/tile_reach.h"
 
 namespace pdsm {
@@ -88,7 +89,7 @@ PreparedGroup PrepareGroup(const BakePlan& plan, int group_index, const std::vec
     TileReach reach = ComputeTileReach(plan, prepared.rect);
     prepared.has_casters = !reach.triangles.empty();
     if (!reach.empty()) {
-      if (plan.header.surfaces_only) prepared.windows = ComputeReceiverWindows(plan, prepared.rect);
+      prepared.windows = ScanWindows(plan, prepared.rect);
       prepared.blocks = ScannedBlocks(plan, reach, prepared.windows);
       if (!prepared.blocks.empty()) triangles.push_back(std::move(reach.triangles));
     }

@@ -1,9 +1,9 @@
 // What a task's tile group needs before its first shadow map, computed once per (group, tiles)
 // and reused by every batch of samples of it: per tile, its reach (core/bake/tile_reach.h),
-// its receiver windows (surfaces-only bakes) and the blocks of rays to scan with their depth
-// ranges; for the group, the union of its tiles' casters in the plan's cluster order, which is
-// what the renderer holds, and each cluster's run of it with the run's bounding box, so that
-// every sample's shadow map draws only the clusters its window can see.
+// its scan windows (surfaces-only bakes, refinement levels: core/bake/scan_windows.h) and the
+// blocks of rays to scan with their depth ranges; for the group, the union of its tiles' casters in
+// the plan's cluster order, which is what the renderer holds, and each cluster's run of it with the
+// run's bounding box, so that every sample's shadow map draws only the clusters its window can see.
 #ifndef PDSM_WORKER_PREPARED_GROUP_H_
 #define PDSM_WORKER_PREPARED_GROUP_H_
 
@@ -29,7 +29,7 @@ struct BlockScan {
 struct PreparedTile {
   TileRect rect;
   bool has_casters = false;            // false: all lit, nothing to render or scan
-  std::optional<TileWindows> windows;  // surfaces-only bakes
+  std::optional<TileWindows> windows;  // ScanWindows: surfaces-only bakes, refinement levels
   std::vector<BlockScan> blocks;       // empty: all lit
 };
 

@@ -134,6 +134,20 @@ void PrintSummary(const Scene& scene, const BakeFlags& flags,
                  scene.bake.adaptive_tolerance, static_cast<double>(s.tile_samples_total) / s.tiles,
                  scene.bake.adaptive_min_samples, scene.bake.samples);
   }
+  if (const RefinementSummary& r = s.refinement; r.pixels > 0) {
+    std::fprintf(stderr,
+                 "  adaptive resolution: %lld pixels refined %dx, chosen in %.2fs; their level: "
+                 "%lld tasks, %lld shadow maps (%.1f Mtexels), %lld triangles, %.2f thread-s "
+                 "maps + %.2f scan, %lld vertices; spliced in %.2fs\n",
+                 static_cast<long long>(r.pixels), r.factor, r.select_seconds,
+                 static_cast<long long>(r.tasks), static_cast<long long>(r.tasks_stats.shadow_maps),
+                 r.tasks_stats.shadow_map_texels / 1e6,
+                 static_cast<long long>(r.tasks_stats.triangles_submitted),
+                 r.tasks_stats.shadow_map_seconds, r.tasks_stats.scan_seconds,
+                 static_cast<long long>(r.assembly.vertices), r.splice_seconds);
+  } else if (r.lights > 0) {
+    std::fprintf(stderr, "  adaptive resolution: no pixel needed refining\n");
+  }
   for (const BakeSummary& light : s.lights) {
     std::fprintf(stderr,
                  "  light \"%s\": %dx%d, %d samples, %d tiles (%d all lit), %lld tasks, %.2fs; "

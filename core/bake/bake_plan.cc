@@ -8,6 +8,8 @@
 #include "absl/strings/str_format.h"
 #include "core/bake/caster_culling.h"
 #include "core/bake/face_samples.h"
+#include "core/bake/level_groups.h"
+#include "core/bake/refined_pixels.h"
 #include "core/bake/tile_reach.h"
 #include "core/bake/window_fit.h"
 #include "core/sampling/light_samples.h"
@@ -72,6 +74,7 @@ void FillHeader(const PlanInput& scene, BakePlan* plan) {
   }
   h.tile_size = scene.bake.tile_size;
   h.surfaces_only = scene.bake.surfaces_only;
+  h.max_refinement = scene.bake.max_refinement;
 }
 
 // The nearest depth perspective rays are scanned from (docs/algorithms.md, "Depth range"):
@@ -217,9 +220,11 @@ absl::StatusOr<BakePlan> PlanLight(const PlanInput& scene, PlanCasters casters) 
   plan.tile_group_size = scene.bake.tile_group_size;
   plan.group_side = GroupSideInTiles(plan);
   GatherCasters(index, casters, &plan);
-  // Only a surfaces-only bake uses the receivers (its depth windows); the light-view preview
-  // adds them (AddLightSpaceReceivers).
-  if (plan.header.surfaces_only) AddLightSpaceReceivers(index.scene(), &plan);
+  // Only a surfaces-only bake (its depth windows) and a refined one (the bands of its refined
+  // pixels) use the receivers; the light-view preview adds them (AddLightSpaceReceivers).
+  if (plan.header.surfaces_only || plan.header.max_refinement > 1) {
+    AddLightSpaceReceivers(index.scene(), &plan);
+  }
   return plan;
 }
 
@@ -249,6 +254,56 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene, size_t light, PlanCasters 
   absl::StatusOr<std::shared_ptr<const SceneIndex>> index = SceneIndex::Build(scene);
   if (!index.ok()) return index.status();
   return PlanBake(**index, light, casters);
+}
+
+absl::StatusOr<BakePlan> PlanRefinementLevel(const SceneIndex& index, std::optional<size_t> light,
+                                             const BakePlan& base,
+                                             std::shared_ptr<const RefinedPixels> refined) {
+  const int factor = refined->factor();
+  const Scene& scene = index.scene();
+  const SceneLight one = light ? LightOf(scene, *light) : SceneLight{};
+  const LightSpec& spec = light ? one.spec : scene.light;
+  BakeSettings bake = light ? one.bake : scene.bake;
+  const std::string& name = light ? one.name : scene.light_name;
+  const PdsmGeometry& g = base.header.geometry;
+  const int64_t width = int64_t{g.width} * factor, height = int64_t{g.height} * factor;
+  const int64_t sm = int64_t{bake.shadow_map_resolution} * factor;
+  const int64_t tile = std::max(1, bake.tile_size);
+  const int64_t tiles = ((width + tile - 1) / tile) * ((height + tile - 1) / tile);
+  // The level's shadow maps are windows of its lattice like any bake's (their texels are
+  // bounded per window), so only the map itself is held to the limits.
+  if (width > kMaxPdsmResolution || height > kMaxPdsmResolution ||
+      width * height > kMaxPdsmPixels || tiles > kMaxPdsmTiles) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "%s: bake.maxRefinement: refining %dx%d pixels %d times makes a %dx%d map of %d "
+        "tiles, past a map's limits (%d a side, %d pixels, %d tiles): lower maxRefinement or "
+        "resolution",
+        scene.source_path, g.width, g.height, factor, width, height, tiles, kMaxPdsmResolution,
+        kMaxPdsmPixels, kMaxPdsmTiles));
+  }
+  bake.width = static_cast<int>(width);
+  bake.height = static_cast<int>(height);
+  bake.shadow_map_resolution = static_cast<int>(sm);
+  bake.max_refinement = 1;
+  bake.surfaces_only = false;
+  // The base's frustum exactly, as fitted: the level's pixels subdivide the base's.
+  bake.frustum = FrustumOverride{g.s_min, g.s_max, g.t_min, g.t_max, g.z_near, g.z_far};
+  // The base's bias as applied (a default one follows z_far, which the frustum keeps).
+  bake.depth_bias = base.header.depth_bias;
+  absl::StatusOr<BakePlan> plan = PlanLight(
+      PlanInput{index, scene.name, scene.source_path, spec, bake, name}, PlanCasters::kReachable);
+  if (!plan.ok()) return plan;
+  // Its sub-pixel rays are scanned around the receivers (core/bake/scan_windows.h).
+  AddLightSpaceReceivers(scene, &*plan);
+  plan->refinement = factor;
+  plan->refined = std::move(refined);
+  for (int t = 0; t < plan->tile_count(); ++t) {
+    if (plan->tile_has_casters[t] && !plan->refined->LevelHasRays(plan->tile(t))) {
+      plan->tile_has_casters[t] = false;
+    }
+  }
+  if (bake.tile_group_size == 0) plan->group_side = LevelGroupSide(*plan);
+  return plan;
 }
 
 void AddLightSpaceReceivers(const Scene& scene, BakePlan* plan) {
@@ -312,7 +367,7 @@ void ReleaseRenderGeometry(BakePlan* plan) {
   plan->casters = LightSpaceMesh{};
   plan->caster_clusters = std::vector<CasterCluster>{};
   plan->masks = {};
-  if (!plan->header.surfaces_only) {
+  if (!plan->header.surfaces_only && plan->header.max_refinement <= 1) {
     plan->receivers = LightSpaceMesh{};
   } else {
     // Kept for as long as the job runs: without the slack their growth left.

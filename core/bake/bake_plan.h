@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -20,6 +21,8 @@
 #include "core/scene/scene.h"
 
 namespace pdsm {
+
+class RefinedPixels;  // core/bake/refined_pixels.h
 
 struct TileRect {
   int index = 0;
@@ -73,6 +76,11 @@ struct BakePlan {
   // Every receiver, for a surfaces-only plan (its depth windows); empty otherwise unless
   // AddLightSpaceReceivers was called (the light-view preview draws them).
   LightSpaceMesh receivers;
+  // A refinement level's plan (PlanRefinementLevel): its factor, and the base map's refined
+  // pixels, whose sub-pixels are its only rays (core/bake/scan_windows.h). 1 and null for every
+  // other plan.
+  int refinement = 1;
+  std::shared_ptr<const RefinedPixels> refined;
 
   const PdsmGeometry& geometry() const { return header.geometry; }
   bool has_casters() const { return !casters.indices.empty(); }
@@ -168,16 +176,31 @@ absl::StatusOr<BakePlan> PlanBake(const Scene& scene,
 absl::StatusOr<BakePlan> PlanBake(const Scene& scene, size_t light,
                                   PlanCasters casters = PlanCasters::kReachable);
 
+// The plan of the refinement level of `base`, a plan of the same index's light `light`
+// (nullopt: the scene's one-light form), for the pixels `refined` chose
+// (core/bake/refined_pixels.h; docs/algorithms.md section 10), f = refined->factor(): the same
+// light, bake, samples and frustum as `base` at f times its resolution and its shadow-map
+// resolution, so that this plan's pixel (f x + i, f y + j) is sub-pixel (i, j) of base pixel
+// (x, y) (core/pdsm/refined_pixel.h) and its maps refine the base's lattice by the same factor.
+// Its rays are the sub-pixels of the refined pixels, scanned around the receivers inside their
+// bands (core/bake/scan_windows.h; it keeps the receivers for that), and a tile without one has
+// no task (tile_has_casters). Not itself refined, nor surfaces-only. INVALID_ARGUMENT naming
+// bake.maxRefinement when the level would pass a map's limits (kMaxPdsmResolution,
+// kMaxPdsmPixels, kMaxPdsmTiles). REQUIRES: refined is not empty.
+absl::StatusOr<BakePlan> PlanRefinementLevel(const SceneIndex& index, std::optional<size_t> light,
+                                             const BakePlan& base,
+                                             std::shared_ptr<const RefinedPixels> refined);
+
 // Sets plan->receivers to every receiver of `scene`, in the plan's light space, in scene order.
 // REQUIRES: the plan was made of `scene`.
 void AddLightSpaceReceivers(const Scene& scene, BakePlan* plan);
 
 // Frees what only a shadow-map renderer uses: the casters and their clusters, and the
 // receivers unless the plan is surfaces-only (the tile assembly places its depth windows with
-// them). What is left tiles, groups, numbers and assembles the bake as before; a coordinator
-// keeps that much of each light of each job (a world's 10^6 triangles are ~40 MB per light,
-// the rest a few KB).
-// Take PlanFingerprint first: it covers the geometry.
+// them) or refined (they place the bands of its refined pixels). What is left tiles, groups,
+// numbers and assembles the bake as before; a coordinator keeps that much of each light of each job
+// (a world's 10^6 triangles are ~40 MB per light, the rest a few KB). Take PlanFingerprint first:
+// it covers the geometry.
 void ReleaseRenderGeometry(BakePlan* plan);
 
 }  // namespace pdsm

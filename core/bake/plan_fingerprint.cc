@@ -5,6 +5,7 @@
 #include <type_traits>
 
 #include "core/assets/mesh_asset.h"
+#include "core/bake/refined_pixels.h"
 
 namespace pdsm {
 namespace {
@@ -42,8 +43,9 @@ void AddHeader(const PdsmHeader& h, Feeder* f) {
   f->Add(h.seed), f->Add(h.tile_size);
   f->Add(h.adaptive_tolerance), f->Add(h.adaptive_min_samples);
   f->Add(g.z_valid_min), f->Add(h.surfaces_only), f->Add(h.format_version);
-  // Fed only when weighted, so that unweighted plans keep the fingerprints they had.
+  // Fed only when weighted or refined, so that other plans keep the fingerprints they had.
   if (h.weighting != LightWeighting::kUnweighted) f->Add(h.weighting);
+  if (h.max_refinement > 1) f->Add(h.max_refinement);
 }
 
 }  // namespace
@@ -74,9 +76,20 @@ std::string PlanFingerprint(const BakePlan& plan) {
     }
   }
   f.Add(plan.z_scan_floor);
-  if (plan.header.surfaces_only) {  // the receivers place the depth windows
+  // The receivers place a surfaces-only plan's depth windows, a refined one's bands and a
+  // refinement level's windows.
+  if (plan.header.surfaces_only || plan.header.max_refinement > 1 || plan.refined != nullptr) {
     for (const glm::vec3& p : plan.receivers.positions) f.Add(p);
     for (uint32_t i : plan.receivers.indices) f.Add(i);
+  }
+  if (plan.refined != nullptr) {  // a refinement level: its rays and their bands
+    f.Add(plan.refinement);
+    for (int t = 0; t < plan.refined->tiles(); ++t) {
+      for (const RefinedPixel& p : plan.refined->Tile(t)) {
+        f.Add(p.x), f.Add(p.y), f.Add(p.bands.size());
+        for (const DepthWindow& band : p.bands) f.Add(band.lo), f.Add(band.hi);
+      }
+    }
   }
   return f.FinalHex();
 }

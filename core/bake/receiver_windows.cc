@@ -134,9 +134,15 @@ void MergeWindows(double abs_pad, std::vector<DepthWindow>* windows) {
 }  // namespace
 
 TileWindows ComputeReceiverWindows(const BakePlan& plan, const TileRect& tile) {
+  return ComputeReceiverWindowsAt(plan, tile, glm::dvec2(0.5), 1.0);
+}
+
+TileWindows ComputeReceiverWindowsAt(const BakePlan& plan, const TileRect& grid,
+                                     const glm::dvec2& offset, double half_pixels) {
   const PdsmGeometry& g = plan.geometry();
   const glm::dvec2 pitch(g.PixelPitchS(), g.PixelPitchT());
-  std::vector<std::vector<DepthWindow>> per_pixel(static_cast<size_t>(tile.width) * tile.height);
+  const glm::dvec2 half = half_pixels * pitch;
+  std::vector<std::vector<DepthWindow>> per_point(static_cast<size_t>(grid.width) * grid.height);
   // Receivers may lie nearer than any caster: clip only a hair in front of the light plane.
   const double z_min_perspective = 1e-6 * std::abs(g.z_far);
   const LightSpaceMesh& mesh = plan.receivers;
@@ -146,31 +152,36 @@ TileWindows ComputeReceiverWindows(const BakePlan& plan, const TileRect& tile) {
                                glm::dvec3(mesh.positions[mesh.indices[3 * k + 2]])};
     ProjectedTriangle projected;
     if (!Project(g, tri, z_min_perspective, &projected)) continue;
-    // Pixels whose support [centre - pitch, centre + pitch] meets the triangle's bounds.
+    // Points whose square [centre - half, centre + half] meets the triangle's bounds. (The
+    // shifts summed first: for pixel centres they are 1.5 and 0.5 exactly, as they always were.)
+    const glm::dvec2 lo_shift = offset + half_pixels, hi_shift = half_pixels - offset;
     const int i_lo =
-        std::max(tile.x0, PixelIndex(std::ceil((projected.lo.x - g.s_min) / pitch.x - 1.5)));
-    const int i_hi = std::min(tile.x0 + tile.width - 1,
-                              PixelIndex(std::floor((projected.hi.x - g.s_min) / pitch.x + 0.5)));
+        std::max(grid.x0, PixelIndex(std::ceil((projected.lo.x - g.s_min) / pitch.x - lo_shift.x)));
+    const int i_hi =
+        std::min(grid.x0 + grid.width - 1,
+                 PixelIndex(std::floor((projected.hi.x - g.s_min) / pitch.x + hi_shift.x)));
     const int j_lo =
-        std::max(tile.y0, PixelIndex(std::ceil((projected.lo.y - g.t_min) / pitch.y - 1.5)));
-    const int j_hi = std::min(tile.y0 + tile.height - 1,
-                              PixelIndex(std::floor((projected.hi.y - g.t_min) / pitch.y + 0.5)));
+        std::max(grid.y0, PixelIndex(std::ceil((projected.lo.y - g.t_min) / pitch.y - lo_shift.y)));
+    const int j_hi =
+        std::min(grid.y0 + grid.height - 1,
+                 PixelIndex(std::floor((projected.hi.y - g.t_min) / pitch.y + hi_shift.y)));
     for (int j = j_lo; j <= j_hi; ++j) {
       for (int i = i_lo; i <= i_hi; ++i) {
-        const glm::dvec2 centre(g.PixelCenterS(i), g.PixelCenterT(j));
-        if (!Overlaps(projected, centre, pitch)) continue;
-        per_pixel[static_cast<size_t>(j - tile.y0) * tile.width + (i - tile.x0)].push_back(
-            DepthOver(g, projected, centre, pitch));
+        const glm::dvec2 centre(g.s_min + (i + offset.x) * pitch.x,
+                                g.t_min + (j + offset.y) * pitch.y);
+        if (!Overlaps(projected, centre, half)) continue;
+        per_point[static_cast<size_t>(j - grid.y0) * grid.width + (i - grid.x0)].push_back(
+            DepthOver(g, projected, centre, half));
       }
     }
   }
   TileWindows out;
-  out.rect = tile;
-  out.offsets.assign(per_pixel.size() + 1, 0);
+  out.rect = grid;
+  out.offsets.assign(per_point.size() + 1, 0);
   const double abs_pad = 1e-9 * std::abs(g.z_far);
-  for (size_t p = 0; p < per_pixel.size(); ++p) {
-    MergeWindows(abs_pad, &per_pixel[p]);
-    out.windows.insert(out.windows.end(), per_pixel[p].begin(), per_pixel[p].end());
+  for (size_t p = 0; p < per_point.size(); ++p) {
+    MergeWindows(abs_pad, &per_point[p]);
+    out.windows.insert(out.windows.end(), per_point[p].begin(), per_point[p].end());
     out.offsets[p + 1] = out.windows.size();
   }
   return out;

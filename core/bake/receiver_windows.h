@@ -10,6 +10,8 @@
 #include <span>
 #include <vector>
 
+#include <glm/glm.hpp>
+
 #include "core/bake/bake_plan.h"
 
 namespace pdsm {
@@ -39,6 +41,15 @@ inline constexpr double kWindowRelativePad = 0x1.0p-15;
 
 // Deterministic: depends only on the plan and the tile.
 TileWindows ComputeReceiverWindows(const BakePlan& plan, const TileRect& tile);
+
+// The same for the rays through another grid of points: point (i, j) of `grid` (x0 <= i <
+// x0 + width, ...) is the ray through pixel coordinates (i + offset.x, j + offset.y), and its
+// windows hold the receiver depths over the square of half-side `half_pixels` pixel pitches
+// around it. ComputeReceiverWindows is the grid of pixel centres (offset 0.5) with half-side 1;
+// a small half-side gives the receiver depths along the ray itself (adaptive resolution compares
+// neighbouring rays there, at the points between them: core/bake/refinement_selection.h).
+TileWindows ComputeReceiverWindowsAt(const BakePlan& plan, const TileRect& grid,
+                                     const glm::dvec2& offset, double half_pixels);
 
 }  // namespace pdsm
 

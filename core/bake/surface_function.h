@@ -15,11 +15,6 @@
 
 namespace pdsm {
 
-// The depth of the vertex that opens a surfaces-only function: the lowest float, so that
-// every depth before the first window evaluates to NaN (EvaluateAttenuation interpolates from
-// a NaN vertex).
-inline constexpr float kUndefinedFrom = -3.40282347e+38f;
-
 // No events: no vertex (A = 0 everywhere, exact inside the windows). Otherwise
 //   (kUndefinedFrom, NaN), then per window [lo, hi): (lo, A(lo)), the compressed jumps inside,
 //   (hi, A(hi-)), (hi, NaN).

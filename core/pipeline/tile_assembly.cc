@@ -6,6 +6,7 @@
 #include <optional>
 #include <vector>
 
+#include "core/bake/scan_windows.h"
 #include "core/bake/surface_function.h"
 #include "core/events/consolidation.h"
 #include "core/events/emitter_weighting.h"
@@ -128,10 +129,7 @@ absl::StatusOr<PdsmTile> AssemblePlanTile(const BakePlan& plan, const TileParts&
     tile.offsets.assign(parts.shape.PixelCount() + 1, 0);
     return tile;
   }
-  std::optional<TileWindows> windows;
-  if (plan.header.surfaces_only) {
-    windows = ComputeReceiverWindows(plan, plan.tile(parts.shape.tile_index));
-  }
+  const std::optional<TileWindows> windows = ScanWindows(plan, plan.tile(parts.shape.tile_index));
   std::vector<SpilledRunReader> readers;
   readers.reserve(parts.spilled.size());
   for (const SpilledRun& run : parts.spilled) readers.emplace_back(spill, run);

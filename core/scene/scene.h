@@ -114,6 +114,9 @@ struct BakeSettings {
   bool surfaces_only = false;
   // Tiles per side of a tile group; 0: chosen by the plan (core/bake/tile_groups.h).
   int tile_group_size = 0;
+  // Adaptive resolution: the largest refinement per axis of a pixel whose penumbra is narrower
+  // than it, 1 (off), 2, 4 or 8 (docs/algorithms.md "Adaptive resolution").
+  int max_refinement = 1;
 };
 
 // One light of a scene with the settings it bakes with.

@@ -130,6 +130,13 @@ absl::Status BuildScalars(const FieldChecker& checks, const pdsm::v1::BakeParams
   if (bake.has_slope_bias()) out->slope_bias = bake.slope_bias();
   if (bake.has_seed()) out->seed = bake.seed();
   if (bake.has_surfaces_only()) out->surfaces_only = bake.surfaces_only();
+  if (bake.has_max_refinement()) {
+    const uint32_t f = bake.max_refinement();
+    if (f != 1 && f != 2 && f != 4 && f != 8) {
+      return checks.Error("bake.maxRefinement", absl::StrCat("must be 1, 2, 4 or 8 (got ", f, ")"));
+    }
+    out->max_refinement = static_cast<int>(f);
+  }
   return absl::OkStatus();
 }
 
@@ -299,6 +306,7 @@ pdsm::v1::BakeParams BakeParamsOf(const BakeSettings& b) {
   out.set_adaptive_min_samples(b.adaptive_min_samples);
   out.set_surfaces_only(b.surfaces_only);
   out.set_tile_group_size(b.tile_group_size);
+  out.set_max_refinement(b.max_refinement);
   return out;
 }
 

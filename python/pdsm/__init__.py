@@ -96,6 +96,7 @@ _BAKE_FLAGS = {
     "resolution", "samples", "sm_resolution", "epsilon", "tile_size", "depth_bias", "sampling",
     "adaptive_tolerance", "adaptive_min_samples", "surfaces_only", "threads",
     "samples_per_task", "event_memory_mib", "target_error", "preview", "weighting",
+    "max_refinement",
 }
 
 
@@ -109,7 +110,8 @@ def bake(scene, output, **overrides):
     Keywords override the scene's bake fields as `pdsm bake`'s flags do: resolution (an int for
     a square map, a (width, height) pair, or "WxH"), samples, sm_resolution, epsilon, tile_size,
     depth_bias, sampling ("sobol", "blue-noise", ...), adaptive_tolerance, adaptive_min_samples,
-    surfaces_only=True, weighting ("unweighted" or "emitter"); and threads, samples_per_task, event_memory_mib, target_error. No
+    surfaces_only=True, weighting ("unweighted" or "emitter"), max_refinement (1, 2, 4 or 8); and
+    threads, samples_per_task, event_memory_mib, target_error. No
     picture is written unless preview="path.png". The same scene and keywords give the same
     file bytes as `pdsm bake`. Raises TypeError for an unknown keyword and pdsm.BakeError
     with the command line's message when the bake fails (nothing is left at `output` then).
