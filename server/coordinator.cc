@@ -162,10 +162,36 @@ absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<in
     return absl::DataLossError(absl::StrCat("job ", record.job_id, ": stored scene is corrupt"));
   }
   const std::string job_id = record.job_id;
+  // A refined light's level (server/stored_job.h): planned from the stored scene, run as an
+  // engine job beside the job's lights, with their priority and order.
+  RefinementHooks refinement;
+  refinement.threads = std::max(1, options_.assembly_threads);
+  refinement.plan_level =
+      [this, job_id](int light,
+                     std::shared_ptr<const RefinedPixels> refined) -> absl::StatusOr<PlannedLight> {
+    const std::shared_ptr<StoredJob> job = Active(job_id);
+    if (!job) return absl::CancelledError(absl::StrCat("job ", job_id, " ended"));
+    return PlanJobLightLevel(job->scene(), absl::StrCat("job ", job_id), *assets_, light,
+                             *job->lights().at(light).plan, std::move(refined));
+  };
+  refinement.start_level = [this, priority = record.priority, sequence = record.sequence](
+                               const std::string& engine_id, std::shared_ptr<const BakePlan> plan,
+                               std::shared_ptr<JobOutput> output) {
+    EngineJob spec;
+    spec.job_id = engine_id;
+    spec.priority = priority;
+    spec.sequence = sequence;
+    spec.samples_per_task = SamplesPerTask(*plan);
+    spec.plan = std::move(plan);
+    spec.started = true;  // the job is RUNNING already
+    spec.output = std::move(output);
+    return engine_.AddJob(std::move(spec));
+  };
   auto job = std::make_shared<StoredJob>(
       store_.get(), options_.data_dir, record, std::move(scene), std::move(plans),
       [this](const std::string& id) { Forget(id); },
-      [this, job_id](const absl::Status& why) { EndLights(job_id, why); }, options_.fs);
+      [this, job_id](const absl::Status& why) { EndLights(job_id, why); }, options_.fs,
+      std::move(refinement));
   absl::StatusOr<std::vector<int>> resumed = job->ResumeTiles(done_tiles);
   if (!resumed.ok()) {
     return absl::Status(resumed.status().code(),
@@ -182,9 +208,7 @@ absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<in
     spec.priority = record.priority;
     spec.sequence = record.sequence;
     spec.plan = light.plan;
-    spec.samples_per_task = options_.samples_per_task > 0
-                                ? options_.samples_per_task
-                                : std::clamp((light.plan->header.samples + 7) / 8, 1, 64);
+    spec.samples_per_task = SamplesPerTask(*light.plan);
     // The light's range of the done tiles (ascending: JobStore::DoneTiles), in its own indices.
     const auto first = std::lower_bound(done.begin(), done.end(), light.tile_offset);
     const auto last = std::lower_bound(first, done.end(), light.tile_offset + light.tile_count());
@@ -202,10 +226,15 @@ absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<in
   return absl::OkStatus();
 }
 
+int Coordinator::SamplesPerTask(const BakePlan& plan) const {
+  return options_.samples_per_task > 0 ? options_.samples_per_task
+                                       : std::clamp((plan.header.samples + 7) / 8, 1, 64);
+}
+
 void Coordinator::EndLights(const std::string& job_id, const absl::Status& why) {
   const std::shared_ptr<StoredJob> job = Active(job_id);
   if (!job) return;
-  for (const JobLight& light : job->lights()) engine_.Fail(light.engine_id, why);
+  for (const std::string& id : job->EngineIds()) engine_.Fail(id, why);
 }
 
 absl::Status Coordinator::Resume() {
@@ -325,9 +354,7 @@ void Coordinator::CancelRunning(const std::string& job_id) {
   if (!job) return;
   const absl::Status why = absl::CancelledError("cancelled by request");
   bool cancelled = false;
-  for (const JobLight& light : job->lights()) {
-    cancelled = engine_.Cancel(light.engine_id, why) || cancelled;
-  }
+  for (const std::string& id : job->EngineIds()) cancelled = engine_.Cancel(id, why) || cancelled;
   if (cancelled) job->RecordEnd(JobEnd::kCancelled, why);
 }
 
@@ -655,6 +682,11 @@ std::optional<pdsm::v1::Task> Coordinator::LeaseTask(const std::string& worker_i
     const JobLight& light = job->lights()[of->light];
     task.set_light(light.name);
     task.set_plan_fingerprint(light.fingerprint);
+    if (of->level) {
+      task.set_refinement_level(true);
+      absl::StatusOr<StoredJob::LevelInfo> level = job->Level(of->light);
+      task.set_plan_fingerprint(level.ok() ? level->fingerprint : "");
+    }
   }
   return task;
 }
@@ -722,6 +754,19 @@ void Coordinator::ReportFailure(const std::string& worker_id, uint64_t lease_id,
 void Coordinator::SignOff(const std::string& worker_id) {
   engine_.SignOff(worker_id);
   spdlog::info("worker {}: signed off", worker_id);
+}
+
+absl::StatusOr<std::shared_ptr<const std::string>> Coordinator::RefinedPixelsBlob(
+    const std::string& job_id, const std::string& light_name) {
+  const std::shared_ptr<StoredJob> job = Active(job_id);
+  if (!job || job->ended()) {
+    return absl::FailedPreconditionError(absl::StrCat("job ", job_id, " is not running"));
+  }
+  absl::StatusOr<int> light = FindJobLight(job->lights(), light_name, job_id);
+  if (!light.ok()) return light.status();
+  absl::StatusOr<StoredJob::LevelInfo> level = job->Level(*light);
+  if (!level.ok()) return level.status();
+  return level->refined_pixels;
 }
 
 absl::StatusOr<pdsm::v1::GetJobSceneResponse> Coordinator::JobScene(const std::string& job_id) {

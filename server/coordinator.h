@@ -145,6 +145,12 @@ class Coordinator {
   void SignOff(const std::string& worker_id);
   // FAILED_PRECONDITION when the job is not running.
   absl::StatusOr<pdsm::v1::GetJobSceneResponse> JobScene(const std::string& job_id);
+  // The refined pixels of the light named `light` ("" for a one-light job) as its running
+  // refinement level bakes them (core/bake/refined_pixels_codec.h): FetchRefinement's.
+  // FAILED_PRECONDITION when the job is not running or the light has no level running; the
+  // errors of FindJobLight.
+  absl::StatusOr<std::shared_ptr<const std::string>> RefinedPixelsBlob(const std::string& job_id,
+                                                                       const std::string& light);
 
  private:
   explicit Coordinator(const CoordinatorOptions& options);
@@ -171,6 +177,9 @@ class Coordinator {
   // Ends every light of the job still in the engine as failed with `why`.
   void EndLights(const std::string& job_id, const absl::Status& why);
   std::shared_ptr<StoredJob> Active(const std::string& job_id) const;
+  // Light samples per task for an engine job of `plan` (--samples-per-task, or an eighth of
+  // its samples within [1, 64]).
+  int SamplesPerTask(const BakePlan& plan) const;
   // The job when it is running here; else FAILED_PRECONDITION saying its state (NOT_FOUND
   // for no such job).
   absl::StatusOr<std::shared_ptr<StoredJob>> RunningJob(const std::string& job_id);

@@ -1,6 +1,8 @@
 #include "server/job_admission.h"
 
 #include <algorithm>
+#include <memory>
+#include <optional>
 #include <random>
 
 #include <google/protobuf/io/coded_stream.h>
@@ -169,18 +171,6 @@ absl::StatusOr<std::vector<PlannedLight>> PlanJobLights(const pdsm::v1::Scene& s
                      assets.Resolver(limits ? limits->max_triangles : 0, &asset_triangles));
   if (!loaded.ok()) return loaded.status();
   const size_t count = loaded->LightCount();
-  for (size_t i = 0; i < count; ++i) {
-    // Adaptive resolution's refinement pass (docs/algorithms.md section 10) runs in the local
-    // bake only so far: refused here rather than baked unrefined under a refined header.
-    const SceneLight light = LightOf(*loaded, i);
-    if (light.bake.max_refinement > 1) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "%s%s: bake.maxRefinement: %d: adaptive resolution is baked by `pdsm bake` only; this "
-          "service does not run it yet (submit with maxRefinement 1, or bake locally)",
-          label, count == 1 ? "" : absl::StrFormat(": lights[%d] \"%s\"", i, light.name),
-          light.bake.max_refinement));
-    }
-  }
   if (limits != nullptr) {
     int64_t triangles = 0;
     for (const TriangleMesh& m : loaded->meshes) triangles += m.indices.size() / 3;
@@ -235,6 +225,26 @@ absl::StatusOr<std::vector<PlannedLight>> PlanJobLights(const pdsm::v1::Scene& s
   }
   return plans;
 }
+absl::StatusOr<PlannedLight> PlanJobLightLevel(const pdsm::v1::Scene& scene,
+                                               const std::string& label,
+                                               const CoordinatorAssets& assets, int light,
+                                               const BakePlan& base,
+                                               std::shared_ptr<const RefinedPixels> refined) {
+  absl::StatusOr<Scene> loaded =
+      SceneFromProto(scene, label, /*base_dir=*/"", assets.Resolver(0, nullptr));
+  if (!loaded.ok()) return loaded.status();
+  absl::StatusOr<std::shared_ptr<const SceneIndex>> index = SceneIndex::Build(*loaded);
+  if (!index.ok()) return index.status();
+  // A one-light scene is planned as it stands, as PlanJobLights plans it.
+  const std::optional<size_t> which =
+      loaded->LightCount() == 1 ? std::nullopt : std::optional<size_t>(light);
+  absl::StatusOr<BakePlan> plan = PlanRefinementLevel(**index, which, base, std::move(refined));
+  if (!plan.ok()) return plan.status();
+  std::string fingerprint = PlanFingerprint(*plan);
+  ReleaseRenderGeometry(&*plan);
+  return PlannedLight{std::make_shared<const BakePlan>(*std::move(plan)), std::move(fingerprint)};
+}
+
 absl::StatusOr<JobRecord> NewJobRecord(const pdsm::v1::SubmitBakeRequest& request,
                                        const std::vector<PlannedLight>& lights,
                                        int64_t now_unix_ms) {

@@ -6,11 +6,13 @@
 #define PDSM_SERVER_JOB_ADMISSION_H_
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/bake/bake_plan.h"
+#include "core/bake/refined_pixels.h"
 #include "core/scene/scene.h"
 #include "pdsm/v1/jobs.pb.h"
 #include "server/coordinator_assets.h"
@@ -57,6 +59,17 @@ absl::StatusOr<std::vector<PlannedLight>> PlanJobLights(const pdsm::v1::Scene& s
                                                         const std::string& label,
                                                         const CoordinatorAssets& assets,
                                                         const AdmissionLimits* limits);
+
+// The refinement level of light `light` of `scene` (adaptive resolution, docs/algorithms.md
+// section 10) for the pixels `refined` chosen from its base map `base` (PlanJobLights'),
+// planned as the local bake and the workers plan it (PlanRefinementLevel), fingerprinted and
+// released as PlanJobLights' lights are. Its memory is not counted against the planned-bytes
+// budget (docs/service.md says so). Errors: loading the scene, planning the level.
+absl::StatusOr<PlannedLight> PlanJobLightLevel(const pdsm::v1::Scene& scene,
+                                               const std::string& label,
+                                               const CoordinatorAssets& assets, int light,
+                                               const BakePlan& base,
+                                               std::shared_ptr<const RefinedPixels> refined);
 
 // What a job of these plans holds in the coordinator while it runs, in bytes: its plans
 // (core/bake/plan_memory.h), the engine's records of their groups (BakeEngine::JobHeldBytes)

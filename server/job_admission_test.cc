@@ -93,16 +93,46 @@ TEST_F(PlanJobLightsTest, ASurfacesOnlyPlanKeepsItsReceivers) {
   ExpectSlimPlansOf(overrides);
 }
 
-TEST_F(PlanJobLightsTest, AdaptiveResolutionIsRefusedNamingTheField) {
+// A refined light is planned with its receivers kept through the release (the coordinator
+// chooses its refined pixels from them), and its level is planned as a worker plans it.
+TEST_F(PlanJobLightsTest, ARefinedLightKeepsItsReceiversAndItsLevelIsTheWorkersPlan) {
   pdsm::v1::BakeParams overrides;
   overrides.set_max_refinement(4);
   absl::StatusOr<pdsm::v1::Scene> message =
       ParseSceneFile(testing::ExamplePath("courtyard"), overrides);
   ASSERT_TRUE(message.ok()) << message.status();
-  const absl::Status refused = PlanJobLights(*message, "scene", *assets_, nullptr).status();
-  EXPECT_EQ(refused.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(refused.message(), ::testing::HasSubstr("bake.maxRefinement"));
-  EXPECT_THAT(refused.message(), ::testing::HasSubstr("pdsm bake"));
+  absl::StatusOr<std::vector<PlannedLight>> plans =
+      PlanJobLights(*message, "scene", *assets_, nullptr);
+  ASSERT_TRUE(plans.ok()) << plans.status();
+  ASSERT_EQ(plans->size(), 3u);  // its first light's level
+  const BakePlan& base = *plans->front().plan;
+  EXPECT_EQ(base.header.max_refinement, 4);
+  EXPECT_GT(base.receivers.TriangleCount(), 0u);
+
+  std::vector<std::vector<RefinedPixel>> by_tile(base.tile_count());
+  const TileRect first = base.tile(0);
+  by_tile[0] = {{first.x0, first.y0, {{base.geometry().z_near, base.geometry().z_far}}}};
+  auto refined = std::make_shared<const RefinedPixels>(base.geometry(), base.header.tile_size, 4,
+                                                       std::move(by_tile));
+  absl::StatusOr<PlannedLight> level =
+      PlanJobLightLevel(*message, "scene", *assets_, 0, base, refined);
+  ASSERT_TRUE(level.ok()) << level.status();
+  EXPECT_EQ(level->plan->geometry().width, 4 * base.geometry().width);
+  EXPECT_EQ(level->plan->refinement, 4);
+  EXPECT_TRUE(level->plan->casters.indices.empty()) << "released of its render geometry";
+  EXPECT_GT(level->plan->receivers.TriangleCount(), 0u) << "its scan windows need them";
+
+  // A worker's plan: the scene loaded on its own, the full base plan.
+  absl::StatusOr<Scene> scene =
+      SceneFromProto(*message, "scene", "", assets_->Resolver(0, nullptr));
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  absl::StatusOr<std::shared_ptr<const SceneIndex>> index = SceneIndex::Build(*scene);
+  ASSERT_TRUE(index.ok()) << index.status();
+  absl::StatusOr<BakePlan> worker_base = PlanBake(**index, 0);
+  ASSERT_TRUE(worker_base.ok()) << worker_base.status();
+  absl::StatusOr<BakePlan> worker_level = PlanRefinementLevel(**index, 0, *worker_base, refined);
+  ASSERT_TRUE(worker_level.ok()) << worker_level.status();
+  EXPECT_EQ(PlanFingerprint(*worker_level), level->fingerprint);
 }
 
 // Bytes the program's allocations hold now (the sanitizers replace malloc: ask theirs).

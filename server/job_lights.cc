@@ -32,16 +32,26 @@ std::string EngineJobId(const std::string& job_id, int light, int light_count) {
   return absl::StrFormat("%s/%05d", job_id, light);
 }
 
+namespace {
+constexpr std::string_view kLevelSuffix = "/refined";
+}  // namespace
+
+std::string LevelEngineJobId(const std::string& light_engine_id) {
+  return light_engine_id + std::string(kLevelSuffix);
+}
+
 std::optional<EngineJobOf> ParseEngineJobId(std::string_view engine_id) {
+  const bool level = engine_id.ends_with(kLevelSuffix);
+  if (level) engine_id.remove_suffix(kLevelSuffix.size());
   const size_t slash = engine_id.find('/');
-  if (slash == std::string_view::npos) return EngineJobOf{std::string(engine_id), 0};
+  if (slash == std::string_view::npos) return EngineJobOf{std::string(engine_id), 0, level};
   const std::string_view digits = engine_id.substr(slash + 1);
   int light = -1;
   const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), light);
   if (error != std::errc() || end != digits.data() + digits.size() || light < 0) {
     return std::nullopt;
   }
-  return EngineJobOf{std::string(engine_id.substr(0, slash)), light};
+  return EngineJobOf{std::string(engine_id.substr(0, slash)), light, level};
 }
 
 absl::StatusOr<int> FindJobLight(const std::vector<JobLight>& lights, std::string_view name,

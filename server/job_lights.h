@@ -49,11 +49,16 @@ std::vector<JobLight> MakeJobLights(const std::string& job_id, std::vector<Plann
 // in scene order).
 std::string EngineJobId(const std::string& job_id, int light, int light_count);
 
-// The job and light of an engine job id (light 0 for a bare job id); nullopt for an id
-// EngineJobId cannot have made.
+// The engine job of the refinement level of the light whose engine job is `light_engine_id`
+// (adaptive resolution, docs/algorithms.md section 10): "<light's engine id>/refined".
+std::string LevelEngineJobId(const std::string& light_engine_id);
+
+// The job and light of an engine job id (light 0 for a bare job id), and whether it is the
+// light's refinement level; nullopt for an id EngineJobId or LevelEngineJobId cannot have made.
 struct EngineJobOf {
   std::string job_id;
   int light = 0;
+  bool level = false;
 };
 std::optional<EngineJobOf> ParseEngineJobId(std::string_view engine_id);
 

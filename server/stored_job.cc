@@ -63,12 +63,12 @@ class StoredJob::Light final : public JobOutput {
   absl::Status StoreUnreachedTiles(const BakePlan&, const std::vector<int>& tiles) override {
     return job_->StoreUnreachedTiles(*light_, tiles);
   }
-  absl::Status Finish() override { return job_->LightFinished(); }
+  absl::Status Finish() override { return job_->BaseFinished(*light_); }
   absl::Status WithdrawTiles(const std::vector<int>& tile_indices) override {
     return job_->WithdrawTiles(*light_, tile_indices);
   }
   void Ended(JobEnd end, const absl::Status& status, const JobProgress& progress) override {
-    job_->LightEnded(*light_, end, status, progress);
+    job_->EngineJobEnded(*light_, end, status, progress, /*level=*/false);
   }
 
  private:
@@ -79,7 +79,8 @@ class StoredJob::Light final : public JobOutput {
 StoredJob::StoredJob(JobStore* store, const std::string& data_dir, JobRecord record,
                      pdsm::v1::Scene scene, std::vector<PlannedLight> plans,
                      std::function<void(const std::string&)> on_ended,
-                     std::function<void(const absl::Status&)> end_lights, FileSystem* fs)
+                     std::function<void(const absl::Status&)> end_lights, FileSystem* fs,
+                     RefinementHooks refinement)
     : store_(store),
       record_(std::move(record)),
       scene_(std::move(scene)),
@@ -88,7 +89,10 @@ StoredJob::StoredJob(JobStore* store, const std::string& data_dir, JobRecord rec
       on_ended_(std::move(on_ended)),
       end_lights_(std::move(end_lights)),
       fs_(fs),
-      light_ends_(lights_.size()) {}
+      refinement_(std::move(refinement)),
+      levels_(lights_.size()),
+      light_ends_(lights_.size()),
+      engine_ends_(lights_.size()) {}
 
 StoredJob::~StoredJob() = default;
 
@@ -385,8 +389,13 @@ absl::Status StoredJob::WriteFile() {
   const auto write_light = [&](const JobLight& light, PdsmWriter* writer) -> absl::Status {
     EmptyTileChunks empty_chunks(light.plan->header.tile_size);
     std::optional<int> unreached_samples;  // UnreachedTileSamples, found at the first use
+    const std::shared_ptr<LightLevel> level = LevelOf(light.index);
     const auto tile_of = [&](int64_t index) -> absl::StatusOr<EncodedTile> {
       const int tile = static_cast<int>(index);
+      // A refined tile as spliced (stored_job_levels.cc).
+      if (level) {
+        if (std::optional<EncodedTile> spliced = SplicedTile(*level, tile)) return *spliced;
+      }
       // The stored tiles are copied as they were compressed when they were finished.
       if (!IsUnreachedTile(*light.plan, tile) && !(*all_lit)[light.tile_offset + tile]) {
         absl::StatusOr<std::string> bytes = (*log)->Read(light.tile_offset + tile);

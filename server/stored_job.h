@@ -10,6 +10,14 @@
 //   pdsm.exr            the PDSM, written from the log when every light's tiles are stored:
 //                       for one light the single-part file, for several the multipart file
 //                       the local bake writes (PdsmLightsWriter), byte for byte.
+// A light with bake.maxRefinement > 1 (adaptive resolution, docs/algorithms.md section 10)
+// has a second engine job once its base tiles are all stored: the coordinator chooses the
+// pixels to refine from them (SelectRefinedPixels), plans the level (RefinementHooks) and
+// runs it as LevelEngineJobId of the light's engine job; its tiles are kept beside the
+// file (a scratch file, not the log: a restart chooses and bakes the level again, the same
+// pixels from the same base tiles), and when it is finished its sub-pixel functions are
+// spliced into the base tiles (SpliceRefinedTiles), which the file is then written with. The
+// log keeps the base tiles unspliced. The light ends when its last engine job ends.
 // Builds before 2026-12-06 kept a file per tile (tiles/<index>.tile); a job resumed from
 // them takes their tiles into its log first (ResumeTiles).
 // The job's states (RUNNING, SUCCEEDED, FAILED, CANCELLED) go to the job store as they come.
@@ -31,8 +39,11 @@
 #include <vector>
 
 #include "absl/base/thread_annotations.h"
+#include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
 #include "core/bake/bake_plan.h"
+#include "core/bake/refined_pixels.h"
+#include "core/pdsm/tile_chunk.h"
 #include "core/pipeline/bake_engine.h"
 #include "core/util/file_system.h"
 #include "pdsm/v1/scene.pb.h"
@@ -53,17 +64,31 @@ struct JobPaths {
   std::string Tile(int tile_index) const;
 };
 
+// How a job starts its lights' refinement levels: the coordinator's.
+struct RefinementHooks {
+  // The level's plan of light `light` (its index in the job) for `refined`, as PlanJobLights
+  // plans a light (server/job_admission.h, PlanJobLightLevel).
+  std::function<absl::StatusOr<PlannedLight>(int light, std::shared_ptr<const RefinedPixels>)>
+      plan_level;
+  // Adds the level's engine job `engine_id`, of `plan`, storing into `output`.
+  std::function<absl::Status(const std::string& engine_id, std::shared_ptr<const BakePlan> plan,
+                             std::shared_ptr<JobOutput> output)>
+      start_level;
+  int threads = 1;  // choosing and splicing the refined pixels
+};
+
 class StoredJob : public std::enable_shared_from_this<StoredJob> {
  public:
   // Made with std::make_shared (LightOutput). `store` outlives this. `plans`: one per light, in
   // scene order. `on_ended(job_id)` runs at the end of the job's end. `end_lights(status)` ends the
   // engine jobs of the job's other lights (kFailed with `status`) when one light failed; it is
   // called without any lock of this held. `fs`: where tile files and the PDSM are written (null:
-  // the real file system).
+  // the real file system). `refinement`: how a refined light's level starts (without hooks a
+  // refined light's base finishes with an INTERNAL error).
   StoredJob(JobStore* store, const std::string& data_dir, JobRecord record, pdsm::v1::Scene scene,
             std::vector<PlannedLight> plans, std::function<void(const std::string&)> on_ended,
-            std::function<void(const absl::Status&)> end_lights = nullptr,
-            FileSystem* fs = nullptr);
+            std::function<void(const absl::Status&)> end_lights = nullptr, FileSystem* fs = nullptr,
+            RefinementHooks refinement = {});
   ~StoredJob();
 
   const JobRecord& record() const { return record_; }  // as it was when the job was activated
@@ -86,6 +111,18 @@ class StoredJob : public std::enable_shared_from_this<StoredJob> {
   // forgotten. Errors: the log's, the store's.
   absl::StatusOr<std::vector<int>> ResumeTiles(const std::vector<int>& done_tiles);
 
+  // The engine jobs of the job's lights, and of the refinement levels started so far.
+  std::vector<std::string> EngineIds() const;
+  // Light `light`'s refinement level, from its start to the job's end (for its tasks and
+  // FetchRefinement): its plan fingerprint, and its refined pixels as a blob
+  // (core/bake/refined_pixels_codec.h). FAILED_PRECONDITION before it started or once the
+  // job ended.
+  struct LevelInfo {
+    std::string fingerprint;
+    std::shared_ptr<const std::string> refined_pixels;
+  };
+  absl::StatusOr<LevelInfo> Level(int light) const;
+
   // Light `light`'s progress as its engine job ended; nullopt while it runs.
   std::optional<JobProgress> LightEndProgress(int light) const;
 
@@ -105,7 +142,24 @@ class StoredJob : public std::enable_shared_from_this<StoredJob> {
   bool RecordEnd(JobEnd end, const absl::Status& status);
 
  private:
-  class Light;  // the JobOutput of one light
+  class Light;        // the JobOutput of one light
+  class LevelOutput;  // the JobOutput of one light's refinement level
+  struct LightLevel;  // a light's refinement level (stored_job_levels.cc)
+  // The light's base tiles are all stored: starts its level (BeginLevel) when it has one and
+  // pixels to refine, else LightFinished.
+  absl::Status BaseFinished(const JobLight& light);
+  absl::Status BeginLevel(const JobLight& light);
+  // Base tile `tile` of `light` as stored, decoded (made from the plan when it was not stored).
+  absl::StatusOr<PdsmTile> BaseTile(const JobLight& light, int tile) const;
+  // The level's tiles are all stored: splices them into the base tiles, then LightFinished.
+  absl::Status LevelFinished(const JobLight& light);
+  std::shared_ptr<LightLevel> LevelOf(int light) const;
+  // Base tile `tile` of the level's light as spliced; nullopt when it has no refined pixel.
+  static std::optional<EncodedTile> SplicedTile(LightLevel& level, int tile);
+  // One of the light's engine jobs (its base's, or its level's) ended: the light ends with
+  // the last (LightEnded), as the first of them that did not succeed.
+  void EngineJobEnded(const JobLight& light, JobEnd end, const absl::Status& status,
+                      const JobProgress& progress, bool level);
   void Started();
   // A tile that the plan alone makes again (MakeUnreachedTile: all lit, the same samples) is
   // stored as a flag of its row in the job store, not as a file: in a sparse world most tiles
@@ -151,6 +205,7 @@ class StoredJob : public std::enable_shared_from_this<StoredJob> {
   const std::function<void(const std::string&)> on_ended_;
   const std::function<void(const absl::Status&)> end_lights_;
   FileSystem* const fs_;
+  const RefinementHooks refinement_;
   std::atomic<bool> started_{false};
   std::atomic<bool> ended_{false};  // set by RecordEnd: tiles finishing later are not recorded
 
@@ -166,8 +221,19 @@ class StoredJob : public std::enable_shared_from_this<StoredJob> {
   mutable absl::Mutex all_lit_mu_;
   mutable std::optional<std::vector<bool>> all_lit_ ABSL_GUARDED_BY(all_lit_mu_);
 
+  mutable absl::Mutex levels_mu_;
+  std::vector<std::shared_ptr<LightLevel>> levels_ ABSL_GUARDED_BY(levels_mu_);  // by light
+
   mutable absl::Mutex mu_;
   std::vector<std::optional<JobProgress>> light_ends_ ABSL_GUARDED_BY(mu_);  // by light
+  // By light: its engine jobs still to end, its base's progress as it ended, and the first of
+  // their ends that was not kSucceeded.
+  struct EngineEnds {
+    int pending = 1;
+    std::optional<JobProgress> base_progress;
+    std::optional<std::pair<JobEnd, absl::Status>> failure;
+  };
+  std::vector<EngineEnds> engine_ends_ ABSL_GUARDED_BY(mu_);
   int lights_finished_ ABSL_GUARDED_BY(mu_) = 0;
   int lights_ended_ ABSL_GUARDED_BY(mu_) = 0;
   int tiles_total_ ABSL_GUARDED_BY(mu_) = 0;  // of the lights ended so far

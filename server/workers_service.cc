@@ -166,4 +166,20 @@ grpc::ServerWriteReactor<pdsm::v1::AssetData>* WorkersService::FetchAsset(
   return new AssetReactor(coordinator_->assets().Get(request->sha256()));
 }
 
+grpc::ServerWriteReactor<pdsm::v1::AssetData>* WorkersService::FetchRefinement(
+    grpc::CallbackServerContext* context, const pdsm::v1::FetchRefinementRequest* request) {
+  using Refused = RefusedStream<grpc::ServerWriteReactor<pdsm::v1::AssetData>>;
+  if (grpc::Status s = auth_->Check(context, Audience::kWorker); !s.ok()) return new Refused(s);
+  if (absl::Status s = CheckJobId(request->job_id()); !s.ok()) {
+    return new Refused(ToGrpcStatus(s));
+  }
+  if (absl::Status s = CheckLightName(request->light()); !s.ok()) {
+    return new Refused(ToGrpcStatus(s));
+  }
+  absl::StatusOr<std::shared_ptr<const std::string>> blob =
+      coordinator_->RefinedPixelsBlob(request->job_id(), request->light());
+  if (!blob.ok()) return new AssetReactor(blob.status());
+  return new AssetReactor(**blob);
+}
+
 }  // namespace pdsm

@@ -34,6 +34,9 @@ class WorkersService final : public pdsm::v1::PdsmWorkers::CallbackService {
                                         pdsm::v1::GetJobSceneResponse* response) override;
   grpc::ServerWriteReactor<pdsm::v1::AssetData>* FetchAsset(
       grpc::CallbackServerContext* context, const pdsm::v1::FetchAssetRequest* request) override;
+  grpc::ServerWriteReactor<pdsm::v1::AssetData>* FetchRefinement(
+      grpc::CallbackServerContext* context,
+      const pdsm::v1::FetchRefinementRequest* request) override;
 
  private:
   Coordinator* coordinator_;

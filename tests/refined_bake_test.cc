@@ -16,33 +16,21 @@
 #include "core/pdsm/refined_pixel.h"
 #include "core/reference/exact_visibility.h"
 #include "core/scene/scene_loader.h"
+#include "tests/box_on_plane.h"
 #include "tests/test_support.h"
 #include "worker/local_bake.h"
 
 namespace pdsm {
 namespace {
 
+using testing::kBoxOnPlaneJson;
 using testing::ReadBytes;
 using testing::TempDir;
 using testing::WriteText;
 
-constexpr char kBoxOnPlane[] = R"({
-  "name": "box on plane",
-  "meshes": [
-    {"inline": {"positions": [-2,0,-2, 2,0,-2, 2,0,2, -2,0,2], "indices": [0,2,1, 0,3,2]},
-     "role": "RECEIVER_ONLY"},
-    {"inline": {"positions": [-0.5,0,-0.5, 0.5,0,-0.5, 0.5,0,0.5, -0.5,0,0.5,
-                              -0.5,1,-0.5, 0.5,1,-0.5, 0.5,1,0.5, -0.5,1,0.5],
-                "indices": [0,1,2, 0,2,3, 4,6,5, 4,7,6, 0,4,5, 0,5,1,
-                            1,5,6, 1,6,2, 2,6,7, 2,7,3, 3,7,4, 3,4,0]}}
-  ],
-  "light": {"rect": {"center": [-3,4,0], "normal": [0,-1,0], "up": [0,0,1], "size": [0.5,0.5]}},
-  "bake": {"resolution": [128,128], "samples": 64, "shadowMapResolution": 512, "epsilon": 0.005}
-})";
-
 Scene LoadBox(const TempDir& dir, const pdsm::v1::BakeParams& overrides) {
   const std::string path = dir.File("box_on_plane.json");
-  WriteText(path, kBoxOnPlane);
+  WriteText(path, kBoxOnPlaneJson);
   absl::StatusOr<Scene> scene = LoadSceneFile(path, overrides);
   EXPECT_TRUE(scene.ok()) << scene.status();
   return scene.ok() ? *std::move(scene) : Scene{};
@@ -243,7 +231,7 @@ TEST(RefinedBakeBytes, DoNotDependOnThreadsOrBatches) {
 TEST(RefinedBakeBytes, AnUnknownRefinementIsRefusedNamingTheField) {
   TempDir dir;
   const std::string path = dir.File("box_on_plane.json");
-  WriteText(path, kBoxOnPlane);
+  WriteText(path, kBoxOnPlaneJson);
   const absl::StatusOr<Scene> scene = LoadSceneFile(path, Refined(3));
   ASSERT_FALSE(scene.ok());
   EXPECT_EQ(scene.status().code(), absl::StatusCode::kInvalidArgument);

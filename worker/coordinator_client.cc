@@ -97,13 +97,10 @@ absl::StatusOr<pdsm::v1::GetJobSceneResponse> CoordinatorClient::JobScene(
   return response;
 }
 
-absl::StatusOr<std::string> CoordinatorClient::FetchAsset(const std::string& sha256) {
-  grpc::ClientContext context;
-  PrepareCall(&context, token_, kLongCall);
-  pdsm::v1::FetchAssetRequest request;
-  request.set_sha256(sha256);
-  std::unique_ptr<grpc::ClientReader<pdsm::v1::AssetData>> reader =
-      stub_->FetchAsset(&context, request);
+namespace {
+
+// A blob sent in chunks (FetchAsset, FetchRefinement), put together.
+absl::StatusOr<std::string> ReadChunks(grpc::ClientReader<pdsm::v1::AssetData>* reader) {
   std::string blob;
   pdsm::v1::AssetData chunk;
   while (reader->Read(&chunk)) {
@@ -112,6 +109,30 @@ absl::StatusOr<std::string> CoordinatorClient::FetchAsset(const std::string& sha
   }
   if (absl::Status s = FromGrpcStatus(reader->Finish()); !s.ok()) return s;
   return blob;
+}
+
+}  // namespace
+
+absl::StatusOr<std::string> CoordinatorClient::FetchRefinement(const std::string& job_id,
+                                                               const std::string& light) {
+  grpc::ClientContext context;
+  PrepareCall(&context, token_, kLongCall);
+  pdsm::v1::FetchRefinementRequest request;
+  request.set_job_id(job_id);
+  request.set_light(light);
+  std::unique_ptr<grpc::ClientReader<pdsm::v1::AssetData>> reader =
+      stub_->FetchRefinement(&context, request);
+  return ReadChunks(reader.get());
+}
+
+absl::StatusOr<std::string> CoordinatorClient::FetchAsset(const std::string& sha256) {
+  grpc::ClientContext context;
+  PrepareCall(&context, token_, kLongCall);
+  pdsm::v1::FetchAssetRequest request;
+  request.set_sha256(sha256);
+  std::unique_ptr<grpc::ClientReader<pdsm::v1::AssetData>> reader =
+      stub_->FetchAsset(&context, request);
+  return ReadChunks(reader.get());
 }
 
 }  // namespace pdsm

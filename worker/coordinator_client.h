@@ -47,6 +47,9 @@ class CoordinatorClient {
   absl::Status SignOff();
   absl::StatusOr<pdsm::v1::GetJobSceneResponse> JobScene(const std::string& job_id);
   absl::StatusOr<std::string> FetchAsset(const std::string& sha256);
+  // The refined pixels of the job's light `light`'s running refinement level (a blob of
+  // core/bake/refined_pixels_codec.h).
+  absl::StatusOr<std::string> FetchRefinement(const std::string& job_id, const std::string& light);
 
  private:
   std::unique_ptr<pdsm::v1::PdsmWorkers::Stub> stub_;

@@ -12,6 +12,7 @@
 #include "absl/strings/str_cat.h"
 #include "core/assets/mesh_asset.h"
 #include "core/bake/plan_fingerprint.h"
+#include "core/bake/refined_pixels_codec.h"
 #include "core/scene/scene.h"
 #include "core/scene/scene_loader.h"
 #include "core/util/backoff.h"
@@ -102,12 +103,11 @@ absl::Status RemoteWorker::Run(const std::atomic<bool>& stop) {
 // ---- Job contexts ----------------------------------------------------------------------
 
 absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::Context(
-    const std::string& job_id, const std::string& light) {
+    const JobKey& key) {
   absl::MutexLock lock(&jobs_mu_);
-  const std::pair<std::string, std::string> key(job_id, light);
   auto it = jobs_.find(key);
   if (it != jobs_.end()) return it->second;
-  absl::StatusOr<std::shared_ptr<const JobContext>> context = LoadContext(job_id, light);
+  absl::StatusOr<std::shared_ptr<const JobContext>> context = LoadContext(key);
   if (!context.ok()) return context.status();
   if (jobs_.size() >= kCachedJobs) jobs_.erase(jobs_.begin());  // threads keep their copies
   jobs_[key] = *context;
@@ -138,8 +138,13 @@ absl::StatusOr<RemoteWorker::JobWorld> RemoteWorker::JobScene(const std::string&
   absl::StatusOr<std::shared_ptr<const SceneIndex>> index = SceneIndex::Build(*world.scene);
   if (!index.ok()) return index.status();
   world.index = *std::move(index);
-  // Kept for the job's other lights only: a one-light job's is planned once.
-  if (world.scene->LightCount() > 1) {
+  // Kept for the job's other lights, and for a refined light's level: a one-light job that
+  // does not refine is planned once.
+  bool refines = false;
+  for (size_t i = 0; i < world.scene->LightCount(); ++i) {
+    refines = refines || LightOf(*world.scene, i).bake.max_refinement > 1;
+  }
+  if (world.scene->LightCount() > 1 || refines) {
     world_ = world;
     scene_job_ = job_id;
   }
@@ -147,13 +152,15 @@ absl::StatusOr<RemoteWorker::JobWorld> RemoteWorker::JobScene(const std::string&
 }
 
 absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::LoadContext(
-    const std::string& job_id, const std::string& light) {
+    const JobKey& key) {
+  const auto& [job_id, light, level] = key;
   absl::StatusOr<JobWorld> world = JobScene(job_id);
   if (!world.ok()) return world.status();
   const Scene& scene = *world->scene;
   // The light as the coordinator planned it: the scene as it stands for its only light, else
   // the scene baking the named one.
   absl::StatusOr<BakePlan> plan;
+  std::optional<size_t> which;
   if (light.empty() && scene.LightCount() == 1) {
     plan = PlanBake(*world->index);
   } else {
@@ -163,17 +170,29 @@ absl::StatusOr<std::shared_ptr<const RemoteWorker::JobContext>> RemoteWorker::Lo
                                                      "\" is not one of the scene's ",
                                                      scene.LightCount(), " lights"));
     }
-    plan = PlanBake(*world->index, static_cast<size_t>(index));
+    which = static_cast<size_t>(index);
+    plan = PlanBake(*world->index, *which);
   }
   if (!plan.ok()) return plan.status();
+  if (level) {
+    // Its refinement level: the pixels the coordinator chose from the light's base map.
+    absl::StatusOr<std::string> blob = client_->FetchRefinement(job_id, light);
+    if (!blob.ok()) return blob.status();
+    absl::StatusOr<std::shared_ptr<const RefinedPixels>> refined = DecodeRefinedPixels(
+        *blob, *plan, absl::StrCat("job ", job_id, light.empty() ? "" : " light ", light));
+    if (!refined.ok()) return refined.status();
+    plan = PlanRefinementLevel(*world->index, which, *plan, *std::move(refined));
+    if (!plan.ok()) return plan.status();
+  }
   auto context = std::make_shared<JobContext>();
   context->plan = *std::move(plan);
   // Compared with each task's (ThreadLoop): a mismatch makes the job incompatible here.
   context->fingerprint = PlanFingerprint(context->plan) + options_.test_fingerprint_salt;
   context->groups = std::make_unique<GroupCache>(context->plan);
-  spdlog::info("job {}{}: planned, {} tiles, {} samples", job_id,
-               light.empty() ? "" : absl::StrCat(" light ", light), context->plan.tile_count(),
-               context->plan.samples.size());
+  spdlog::info("job {}{}{}: planned, {} tiles, {} samples", job_id,
+               light.empty() ? "" : absl::StrCat(" light ", light),
+               level ? absl::StrCat(" refinement level ", context->plan.refinement, "x") : "",
+               context->plan.tile_count(), context->plan.samples.size());
   return std::shared_ptr<const JobContext>(std::move(context));
 }
 
@@ -209,7 +228,7 @@ void RemoteWorker::KeepLeases(const std::atomic<bool>& stop) {
 // ---- Tasks -----------------------------------------------------------------------------
 
 void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
-  std::pair<std::string, std::string> runner_job;  // (job id, light) of `runner`
+  JobKey runner_job;  // (job id, light, level) of `runner`
   std::shared_ptr<const JobContext> context;
   std::unique_ptr<TaskRunner> runner;
   std::shared_ptr<const JobContext> runner_context;  // keeps the runner's plan alive
@@ -257,11 +276,10 @@ void RemoteWorker::ThreadLoop(const std::atomic<bool>& stop) {
       leases_.erase(task.lease_id());
     };
 
-    const std::pair<std::string, std::string> task_job(task.job_id(), task.light());
+    const JobKey task_job(task.job_id(), task.light(), task.refinement_level());
     if (runner_job != task_job) {
       runner_job = {};
-      absl::StatusOr<std::shared_ptr<const JobContext>> loaded =
-          Context(task.job_id(), task.light());
+      absl::StatusOr<std::shared_ptr<const JobContext>> loaded = Context(task_job);
       if (!loaded.ok()) {
         forget_lease();
         fail(loaded.status(), TaskFailure::kFailed);

@@ -10,6 +10,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <utility>
 
 #include "absl/base/thread_annotations.h"
@@ -71,12 +72,13 @@ class RemoteWorker {
   // thread.
   bool StopIfPermanent(const absl::Status& status);
   bool Stopping(const std::atomic<bool>& stop) const { return stop || fatal_stop_; }
-  // The plan of the job's light `light` (Task.light: "" for a one-light job), planned here on
-  // first use from the job's scene (fetched once per job: JobScene).
-  absl::StatusOr<std::shared_ptr<const JobContext>> Context(const std::string& job_id,
-                                                            const std::string& light);
-  absl::StatusOr<std::shared_ptr<const JobContext>> LoadContext(const std::string& job_id,
-                                                                const std::string& light)
+  // The plan of the job's light `light` (Task.light: "" for a one-light job), or with `level`
+  // of its refinement level (Task.refinement_level: PlanRefinementLevel of the light's plan and
+  // the refined pixels FetchRefinement returns), planned here on first use from the job's
+  // scene (fetched once per job: JobScene).
+  using JobKey = std::tuple<std::string, std::string, bool>;  // (job id, light, level)
+  absl::StatusOr<std::shared_ptr<const JobContext>> Context(const JobKey& key);
+  absl::StatusOr<std::shared_ptr<const JobContext>> LoadContext(const JobKey& key)
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(jobs_mu_);
   // The job's scene and the index its lights are planned through (the index refers to the
   // scene, which it keeps alive with it).
@@ -92,9 +94,7 @@ class RemoteWorker {
   std::unique_ptr<AssetStore> assets_;
 
   absl::Mutex jobs_mu_;  // held while a job's context loads: one download per job
-  // By (job id, light name).
-  std::map<std::pair<std::string, std::string>, std::shared_ptr<const JobContext>> jobs_
-      ABSL_GUARDED_BY(jobs_mu_);
+  std::map<JobKey, std::shared_ptr<const JobContext>> jobs_ ABSL_GUARDED_BY(jobs_mu_);
   // The scene of the job planned last (its lights are planned one by one as tasks come).
   std::string scene_job_ ABSL_GUARDED_BY(jobs_mu_);
   JobWorld world_ ABSL_GUARDED_BY(jobs_mu_);

@@ -367,7 +367,9 @@ void ReleaseRenderGeometry(BakePlan* plan) {
   plan->casters = LightSpaceMesh{};
   plan->caster_clusters = std::vector<CasterCluster>{};
   plan->masks = {};
-  if (!plan->header.surfaces_only && plan->header.max_refinement <= 1) {
+  // A surfaces-only plan, a refined one and a refinement level place their depth windows, and
+  // choose their refined pixels, from the receivers.
+  if (!plan->header.surfaces_only && plan->header.max_refinement <= 1 && plan->refinement <= 1) {
     plan->receivers = LightSpaceMesh{};
   } else {
     // Kept for as long as the job runs: without the slack their growth left.

@@ -197,7 +197,8 @@ void AddLightSpaceReceivers(const Scene& scene, BakePlan* plan);
 
 // Frees what only a shadow-map renderer uses: the casters and their clusters, and the
 // receivers unless the plan is surfaces-only (the tile assembly places its depth windows with
-// them) or refined (they place the bands of its refined pixels). What is left tiles, groups,
+// them), refined (they place the bands of its refined pixels) or a refinement level (they
+// place its scan windows). What is left tiles, groups,
 // numbers and assembles the bake as before; a coordinator keeps that much of each light of each job
 // (a world's 10^6 triangles are ~40 MB per light, the rest a few KB). Take PlanFingerprint first:
 // it covers the geometry.
