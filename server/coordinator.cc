@@ -430,6 +430,21 @@ void Coordinator::AddLightsProgress(const JobRecord& record, const std::vector<J
     }
     if (active != nullptr && !active->ended() && i < active->lights().size()) {
       light->set_plan_fingerprint(active->lights()[i].fingerprint);
+      const absl::StatusOr<StoredJob::LevelInfo> level = active->Level(static_cast<int>(i));
+      const std::optional<JobProgress> p =
+          level.ok() ? engine_.Progress(level->engine_id) : std::nullopt;
+      if (p) {
+        pdsm::v1::RefinementLevelProgress* out = light->mutable_refinement_level();
+        out->set_factor(level->factor);
+        out->set_pixels(level->pixels);
+        out->set_tiles_total(p->tiles_total);
+        out->set_tiles_done(p->tiles_done);
+        out->set_samples_total(p->samples_total);
+        out->set_samples_done(p->samples_done);
+        out->set_progress(p->samples_total > 0 ? static_cast<double>(p->samples_done) /
+                                                     static_cast<double>(p->samples_total)
+                                               : 0.0);
+      }
     }
     light->set_progress(light->samples_total() > 0 ? static_cast<double>(light->samples_done()) /
                                                          static_cast<double>(light->samples_total())

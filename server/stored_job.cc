@@ -98,7 +98,8 @@ StoredJob::~StoredJob() = default;
 
 std::optional<JobProgress> StoredJob::LightEndProgress(int light) const {
   absl::MutexLock lock(&mu_);
-  return light_ends_.at(light);
+  // While its refinement level runs, a light's progress is its base map's as that ended.
+  return light_ends_.at(light) ? light_ends_.at(light) : engine_ends_.at(light).base_progress;
 }
 
 std::shared_ptr<JobOutput> StoredJob::LightOutput(int light) {

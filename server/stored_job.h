@@ -118,12 +118,16 @@ class StoredJob : public std::enable_shared_from_this<StoredJob> {
   // (core/bake/refined_pixels_codec.h). FAILED_PRECONDITION before it started or once the
   // job ended.
   struct LevelInfo {
+    std::string engine_id;
     std::string fingerprint;
     std::shared_ptr<const std::string> refined_pixels;
+    int factor = 1;
+    int64_t pixels = 0;  // refined
   };
   absl::StatusOr<LevelInfo> Level(int light) const;
 
-  // Light `light`'s progress as its engine job ended; nullopt while it runs.
+  // Light `light`'s progress as its engine job ended (a refined light's base map, while its
+  // level runs); nullopt while it runs.
   std::optional<JobProgress> LightEndProgress(int light) const;
 
   // Light `light`'s tiles (its own indices) that are finished, ascending: those in the log

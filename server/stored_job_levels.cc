@@ -24,13 +24,15 @@ namespace pdsm {
 struct StoredJob::LightLevel {
   LightLevel(PlannedLight planned, std::string engine, std::string refined, FileSystem* fs,
              const std::string& pdsm_path)
-      : plan(std::move(planned.plan)),
+      : pixels(planned.plan->refined->count()),
+        plan(std::move(planned.plan)),
         fingerprint(std::move(planned.fingerprint)),
         engine_id(std::move(engine)),
         refined_pixels(std::make_shared<const std::string>(std::move(refined))),
         tiles(plan->header, pdsm_path, fs),
         stored(plan->tile_count(), false) {}
 
+  const int64_t pixels;  // refined
   const std::shared_ptr<const BakePlan> plan;
   const std::string fingerprint;
   const std::string engine_id;
@@ -113,7 +115,8 @@ absl::StatusOr<StoredJob::LevelInfo> StoredJob::Level(int light) const {
     return absl::FailedPreconditionError(absl::StrCat("job ", record_.job_id, ": light ", light,
                                                       " has no refinement level running"));
   }
-  return LevelInfo{level->fingerprint, level->refined_pixels};
+  return LevelInfo{level->engine_id, level->fingerprint, level->refined_pixels,
+                   level->plan->refinement, level->pixels};
 }
 
 std::optional<EncodedTile> StoredJob::SplicedTile(LightLevel& level, int tile) {

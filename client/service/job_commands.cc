@@ -53,6 +53,14 @@ void PrintJob(const pdsm::v1::Job& job) {
     std::printf("\n  %dx%d, %d samples, priority %d, submitted %s\n", job.width(), job.height(),
                 job.samples(), job.priority(), LocalTime(job.created_unix_ms()).c_str());
   }
+  for (const pdsm::v1::LightProgress& light : job.lights()) {
+    if (!light.has_refinement_level()) continue;
+    const pdsm::v1::RefinementLevelProgress& level = light.refinement_level();
+    std::printf("  %s%srefinement level %dx: %lld pixels, %.1f%% (%d/%d tiles)\n",
+                light.name().c_str(), light.name().empty() ? "" : ": ", level.factor(),
+                static_cast<long long>(level.pixels()), 100 * level.progress(), level.tiles_done(),
+                level.tiles_total());
+  }
   if (!job.queued_reason().empty()) std::printf("  %s\n", job.queued_reason().c_str());
   if (!job.error().empty()) std::printf("  error: %s\n", job.error().c_str());
   if (job.pdsm_bytes() > 0)

@@ -78,13 +78,23 @@ TEST(ServiceRefined, ARestartWhileTheLevelRunsGivesTheSameBytes) {
   const std::string job_id = cluster.Submit(scene, kFlags);
   ASSERT_FALSE(job_id.empty());
   cluster.AddWorker();
-  // Until the level has started (bounded: 120 s).
-  bool level_started = false;
-  for (int i = 0; i < 1200 && !level_started; ++i) {
-    level_started = cluster.Log("coordinator.log").find("refining") != std::string::npos;
-    if (!level_started) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  // Until the job shows its level running (bounded: 120 s), with its progress.
+  pdsm::v1::Job running;
+  for (int i = 0; i < 1200; ++i) {
+    if (cluster.GetJob(job_id, &running).ok() && running.lights_size() == 1 &&
+        running.lights(0).has_refinement_level()) {
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
-  ASSERT_TRUE(level_started) << cluster.Log("coordinator.log");
+  ASSERT_EQ(running.lights_size(), 1);
+  ASSERT_TRUE(running.lights(0).has_refinement_level()) << cluster.Log("coordinator.log");
+  const pdsm::v1::RefinementLevelProgress& level = running.lights(0).refinement_level();
+  EXPECT_EQ(level.factor(), 4);
+  EXPECT_GT(level.pixels(), 20);
+  EXPECT_EQ(level.tiles_total(), 16);  // 256^2 in tiles of 64
+  EXPECT_EQ(running.state(), pdsm::v1::RUNNING);
+  EXPECT_EQ(running.lights(0).tiles_done(), running.lights(0).tiles_total()) << "its base map";
   cluster.coordinator().Signal(SIGKILL);
   cluster.coordinator().Wait(std::chrono::seconds(10));
   pdsm::v1::Job before;
