@@ -230,8 +230,9 @@ absl::StatusOr<PlannedLight> PlanJobLightLevel(const pdsm::v1::Scene& scene,
                                                const CoordinatorAssets& assets, int light,
                                                const BakePlan& base,
                                                std::shared_ptr<const RefinedPixels> refined) {
+  int64_t asset_triangles = 0;  // counted by the resolver; admission checked them already
   absl::StatusOr<Scene> loaded =
-      SceneFromProto(scene, label, /*base_dir=*/"", assets.Resolver(0, nullptr));
+      SceneFromProto(scene, label, /*base_dir=*/"", assets.Resolver(0, &asset_triangles));
   if (!loaded.ok()) return loaded.status();
   absl::StatusOr<std::shared_ptr<const SceneIndex>> index = SceneIndex::Build(*loaded);
   if (!index.ok()) return index.status();

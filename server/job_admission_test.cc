@@ -123,8 +123,9 @@ TEST_F(PlanJobLightsTest, ARefinedLightKeepsItsReceiversAndItsLevelIsTheWorkersP
   EXPECT_GT(level->plan->receivers.TriangleCount(), 0u) << "its scan windows need them";
 
   // A worker's plan: the scene loaded on its own, the full base plan.
+  int64_t triangles = 0;
   absl::StatusOr<Scene> scene =
-      SceneFromProto(*message, "scene", "", assets_->Resolver(0, nullptr));
+      SceneFromProto(*message, "scene", "", assets_->Resolver(0, &triangles));
   ASSERT_TRUE(scene.ok()) << scene.status();
   absl::StatusOr<std::shared_ptr<const SceneIndex>> index = SceneIndex::Build(*scene);
   ASSERT_TRUE(index.ok()) << index.status();

@@ -25,6 +25,23 @@ std::string WriteBox(const ServiceCluster& cluster) {
   return path;
 }
 
+// The same scene with the box as a mesh file: `pdsm submit` uploads it as an asset, which the
+// coordinator decodes again to plan the level.
+std::string WriteBoxAsset(const ServiceCluster& cluster) {
+  WriteText(cluster.dir().File("box.obj"),
+            "v -0.5 0 -0.5\nv 0.5 0 -0.5\nv 0.5 0 0.5\nv -0.5 0 0.5\n"
+            "v -0.5 1 -0.5\nv 0.5 1 -0.5\nv 0.5 1 0.5\nv -0.5 1 0.5\n"
+            "f 1 2 3\nf 1 3 4\nf 5 7 6\nf 5 8 7\nf 1 5 6\nf 1 6 2\n"
+            "f 2 6 7\nf 2 7 3\nf 3 7 8\nf 3 8 4\nf 4 8 5\nf 4 5 1\n");
+  std::string json = kBoxOnPlaneJson;
+  const size_t box = json.find("    {\"inline\": {\"positions\": [-0.5");
+  const size_t end = json.find("]}}\n", box) + 4;
+  json.replace(box, end - box, "    {\"path\": \"box.obj\"}\n");
+  const std::string path = cluster.dir().File("box_asset.json");
+  WriteText(path, json);
+  return path;
+}
+
 // Pixels of the file at `path` that hold refined sub-functions.
 int RefinedPixelsOf(const std::string& path) {
   absl::StatusOr<PdsmImage> image = ReadPdsm(path);
@@ -41,7 +58,7 @@ int RefinedPixelsOf(const std::string& path) {
 TEST(ServiceRefined, MatchesTheLocalBakeByteForByte) {
   ServiceCluster cluster(CoordinatorArgs({"--samples-per-task", "4"}));
   ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
-  const pdsm::v1::Job job = ExpectServiceBakesAsLocal(cluster, WriteBox(cluster), 2, kFlags);
+  const pdsm::v1::Job job = ExpectServiceBakesAsLocal(cluster, WriteBoxAsset(cluster), 2, kFlags);
   ASSERT_EQ(job.state(), pdsm::v1::SUCCEEDED);
   // Not a bake that refined nothing: the level ran on the workers.
   EXPECT_GT(RefinedPixelsOf(cluster.dir().File("local.exr")), 20);
