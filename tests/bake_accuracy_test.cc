@@ -14,6 +14,7 @@
 #include "core/reference/accuracy_points.h"
 #include "core/reference/exact_visibility.h"
 #include "core/scene/scene_loader.h"
+#include "tests/box_on_plane.h"
 #include "tests/test_support.h"
 #include "worker/local_bake.h"
 
@@ -184,23 +185,7 @@ class ContactAccuracy : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = new TempDir();
     const std::string scene_path = dir_->File("box_on_plane.json");
-    std::FILE* f = std::fopen(scene_path.c_str(), "w");
-    ASSERT_NE(f, nullptr);
-    std::fputs(R"({
-  "name": "box on plane",
-  "meshes": [
-    {"inline": {"positions": [-2,0,-2, 2,0,-2, 2,0,2, -2,0,2], "indices": [0,2,1, 0,3,2]},
-     "role": "RECEIVER_ONLY"},
-    {"inline": {"positions": [-0.5,0,-0.5, 0.5,0,-0.5, 0.5,0,0.5, -0.5,0,0.5,
-                              -0.5,1,-0.5, 0.5,1,-0.5, 0.5,1,0.5, -0.5,1,0.5],
-                "indices": [0,1,2, 0,2,3, 4,6,5, 4,7,6, 0,4,5, 0,5,1,
-                            1,5,6, 1,6,2, 2,6,7, 2,7,3, 3,7,4, 3,4,0]}}
-  ],
-  "light": {"rect": {"center": [-3,4,0], "normal": [0,-1,0], "up": [0,0,1], "size": [0.5,0.5]}},
-  "bake": {"resolution": [128,128], "samples": 64, "shadowMapResolution": 512, "epsilon": 0.005}
-})",
-               f);
-    std::fclose(f);
+    testing::WriteText(scene_path, testing::kBoxOnPlaneJson);
     auto scene = LoadSceneFile(scene_path);
     ASSERT_TRUE(scene.ok()) << scene.status();
     scene_ = new Scene(*std::move(scene));
@@ -211,16 +196,9 @@ class ContactAccuracy : public ::testing::Test {
     delete scene_;
     delete dir_;
   }
-  // The PDSM pixel's size on the ground at `p` (the ground is square to the light's axis).
+  // The PDSM pixel's size on the ground at `p`.
   static double GroundPixel(const glm::dvec3& p) {
-    const PdsmGeometry& g = pdsm_->header.geometry;
-    return std::max(g.PixelPitchS(), g.PixelPitchT()) * g.frame.LightFromWorld(p).z;
-  }
-  // Ground points at distance `d` outside the wall x = side * 0.5, along its middle 0.8.
-  static std::vector<glm::dvec3> AlongWall(double side, double d) {
-    std::vector<glm::dvec3> points;
-    for (int k = 0; k < 17; ++k) points.emplace_back(side * (0.5 + d), 0.0, -0.4 + 0.05 * k);
-    return points;
+    return testing::BoxGroundPixel(pdsm_->header.geometry, p);
   }
   static Scene* scene_;
   static PdsmImage* pdsm_;
@@ -233,7 +211,7 @@ TempDir* ContactAccuracy::dir_ = nullptr;
 TEST_F(ContactAccuracy, UmbraReachesTheContactOnTheShadowSide) {
   ASSERT_NE(pdsm_, nullptr);
   for (double d : {0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.4}) {
-    const std::vector<glm::dvec3> points = AlongWall(+1, d);
+    const std::vector<glm::dvec3> points = testing::AlongBoxWall(+1, d);
     absl::StatusOr<std::vector<double>> exact = ExactAttenuation(*scene_, points);
     ASSERT_TRUE(exact.ok()) << exact.status();
     for (size_t k = 0; k < points.size(); ++k) {
@@ -249,7 +227,7 @@ TEST_F(ContactAccuracy, LitGroundStaysLitUpToTheWall) {
   const double pixel = GroundPixel({-0.5, 0, 0});
   ASSERT_GT(pixel, 0.01);  // 0.031 here
   for (double d : {0.002, 0.1, 0.25, 0.5, 1.0, 2.0, 5.0}) {
-    const std::vector<glm::dvec3> points = AlongWall(-1, d * pixel);
+    const std::vector<glm::dvec3> points = testing::AlongBoxWall(-1, d * pixel);
     absl::StatusOr<std::vector<double>> exact = ExactAttenuation(*scene_, points);
     ASSERT_TRUE(exact.ok()) << exact.status();
     for (size_t k = 0; k < points.size(); ++k) {
@@ -266,7 +244,7 @@ TEST_F(ContactAccuracy, UnderTheBoxIsHiddenBeyondOnePixelOfTheLitWall) {
   double least_within = 1;
   for (double d : {0.25, 0.5, 0.75, 1.5, 2.0, 4.0, 8.0}) {
     // Inside the footprint, d pixels from the lit wall (negative distance outside it).
-    const std::vector<glm::dvec3> points = AlongWall(-1, -d * pixel);
+    const std::vector<glm::dvec3> points = testing::AlongBoxWall(-1, -d * pixel);
     for (const glm::dvec3& p : points) {
       const double baked = QueryAttenuation(*pdsm_, p);
       if (d > 1.0) {

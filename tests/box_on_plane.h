@@ -4,6 +4,13 @@
 #ifndef PDSM_TESTS_BOX_ON_PLANE_H_
 #define PDSM_TESTS_BOX_ON_PLANE_H_
 
+#include <algorithm>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "core/pdsm/pdsm_image.h"
+
 namespace pdsm::testing {
 
 inline constexpr char kBoxOnPlaneJson[] = R"({
@@ -19,6 +26,20 @@ inline constexpr char kBoxOnPlaneJson[] = R"({
   "light": {"rect": {"center": [-3,4,0], "normal": [0,-1,0], "up": [0,0,1], "size": [0.5,0.5]}},
   "bake": {"resolution": [128,128], "samples": 64, "shadowMapResolution": 512, "epsilon": 0.005}
 })";
+
+// The size of a pixel of a map of `g` on the ground at `p` (the ground is square to the
+// light's axis).
+inline double BoxGroundPixel(const PdsmGeometry& g, const glm::dvec3& p) {
+  return std::max(g.PixelPitchS(), g.PixelPitchT()) * g.frame.LightFromWorld(p).z;
+}
+
+// Ground points at distance `d` outside the wall x = side * 0.5 (inside for d < 0), along its
+// middle 0.8.
+inline std::vector<glm::dvec3> AlongBoxWall(double side, double d) {
+  std::vector<glm::dvec3> points;
+  for (int k = 0; k < 17; ++k) points.emplace_back(side * (0.5 + d), 0.0, -0.4 + 0.05 * k);
+  return points;
+}
 
 }  // namespace pdsm::testing
 

@@ -78,16 +78,7 @@ class RefinedBake : public ::testing::Test {
   }
   // The PDSM pixel's size on the ground near the lit wall.
   static double GroundPixel() {
-    const PdsmGeometry& g = plain_->header.geometry;
-    return std::max(g.PixelPitchS(), g.PixelPitchT()) *
-           g.frame.LightFromWorld(glm::dvec3(-0.5, 0, 0)).z;
-  }
-  // Ground points at distance `d` from the wall x = side * 0.5 (outside for d > 0), along its
-  // middle 0.8.
-  static std::vector<glm::dvec3> AlongWall(double side, double d) {
-    std::vector<glm::dvec3> points;
-    for (int k = 0; k < 17; ++k) points.emplace_back(side * (0.5 + d), 0.0, -0.4 + 0.05 * k);
-    return points;
+    return testing::BoxGroundPixel(plain_->header.geometry, glm::dvec3(-0.5, 0, 0));
   }
 
   static TempDir* dir_;
@@ -129,13 +120,13 @@ TEST_F(RefinedBake, UnderTheBoxIsHiddenFromAQuarterPixelOfTheLitWall) {
   ASSERT_NE(refined_, nullptr);
   const double pixel = GroundPixel();
   for (double d : {0.3, 0.5, 0.75, 1.5, 4.0}) {
-    for (const glm::dvec3& p : AlongWall(-1, -d * pixel)) {
+    for (const glm::dvec3& p : testing::AlongBoxWall(-1, -d * pixel)) {
       EXPECT_GE(QueryAttenuation(*refined_, p), 0.95) << "under the box, " << d << " pixels in";
     }
   }
   // Not vacuous: the unrefined bake reads these half lit (measured 0 a third of a pixel in,
   // 0.49 at one pixel).
-  for (const glm::dvec3& p : AlongWall(-1, -0.5 * pixel)) {
+  for (const glm::dvec3& p : testing::AlongBoxWall(-1, -0.5 * pixel)) {
     EXPECT_LT(QueryAttenuation(*plain_, p), 0.5);
   }
 }
@@ -144,13 +135,13 @@ TEST_F(RefinedBake, LitGroundStaysLitUpToTheWallAndTheUmbraReachesTheContact) {
   ASSERT_NE(refined_, nullptr);
   const double pixel = GroundPixel();
   for (double d : {0.002, 0.1, 0.25, 0.5, 1.0, 2.0}) {
-    const std::vector<glm::dvec3> points = AlongWall(-1, d * pixel);
+    const std::vector<glm::dvec3> points = testing::AlongBoxWall(-1, d * pixel);
     for (const glm::dvec3& p : points) {
       EXPECT_EQ(QueryAttenuation(*refined_, p), 0.0) << "lit ground, " << d << " pixels out";
     }
   }
   for (double d : {0.002, 0.01, 0.05, 0.2}) {
-    for (const glm::dvec3& p : AlongWall(+1, d)) {
+    for (const glm::dvec3& p : testing::AlongBoxWall(+1, d)) {
       EXPECT_GE(QueryAttenuation(*refined_, p), 0.95) << "umbra, " << d << " from the wall";
     }
   }
