@@ -142,14 +142,9 @@ absl::StatusOr<std::string> StoredJob::FinishedTileBytes(int light, int tile) co
   };
   if (tile < 0 || tile >= l.plan->tile_count()) return not_yet();
   // All lit first: the log may still hold a record of what the tile was before.
-  bool made = IsUnreachedTile(*l.plan, tile);
-  if (!made) {
-    absl::MutexLock lock(&all_lit_mu_);
-    absl::StatusOr<const std::vector<bool>*> all_lit = AllLitLocked();
-    if (!all_lit.ok()) return all_lit.status();
-    made = (**all_lit)[l.tile_offset + tile];
-  }
-  if (made) {
+  absl::StatusOr<bool> made = IsUnstoredTile(l, tile);
+  if (!made.ok()) return made.status();
+  if (*made) {
     return EncodeTileFile(MakeUnreachedTile(*l.plan, tile).tile, l.plan->header.tile_size,
                           absl::StrCat("job ", record_.job_id, " tile ", tile));
   }
@@ -325,6 +320,14 @@ absl::StatusOr<const std::vector<bool>*> StoredJob::AllLitLocked() const {
     all_lit_ = std::move(all_lit);
   }
   return &*all_lit_;
+}
+
+absl::StatusOr<bool> StoredJob::IsUnstoredTile(const JobLight& light, int tile) const {
+  if (IsUnreachedTile(*light.plan, tile)) return true;
+  absl::MutexLock lock(&all_lit_mu_);
+  absl::StatusOr<const std::vector<bool>*> all_lit = AllLitLocked();
+  if (!all_lit.ok()) return all_lit.status();
+  return (**all_lit)[light.tile_offset + tile];
 }
 
 absl::StatusOr<std::vector<bool>> StoredJob::AllLitTiles() const {

@@ -183,6 +183,9 @@ class StoredJob : public std::enable_shared_from_this<StoredJob> {
   // The light whose tiles hold job tile `index` (the last for an index past them all).
   const JobLight& LightOfTile(int index) const;
   static bool IsMadeFromThePlan(const BakePlan& plan, int tile_index, const PdsmTile& tile);
+  // Whether tile `tile` of `light` is not stored but made again from the plan: no caster reaches
+  // it, or it was stored all lit. The store's errors (its all-lit tiles, read at the first use).
+  absl::StatusOr<bool> IsUnstoredTile(const JobLight& light, int tile) const;
   // The job's tiles (job indices) stored all lit, read from the store at the first use.
   absl::StatusOr<std::vector<bool>> AllLitTiles() const;
   absl::StatusOr<const std::vector<bool>*> AllLitLocked() const

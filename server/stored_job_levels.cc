@@ -127,14 +127,10 @@ std::optional<EncodedTile> StoredJob::SplicedTile(LightLevel& level, int tile) {
 }
 
 absl::StatusOr<PdsmTile> StoredJob::BaseTile(const JobLight& light, int tile) const {
-  bool made = IsUnreachedTile(*light.plan, tile);
-  if (!made) {
-    absl::StatusOr<std::vector<bool>> all_lit = AllLitTiles();
-    if (!all_lit.ok()) return all_lit.status();
-    made = (*all_lit)[light.tile_offset + tile];
-  }
+  absl::StatusOr<bool> made = IsUnstoredTile(light, tile);
+  if (!made.ok()) return made.status();
   // As the engine made it (and the local bake stored it).
-  if (made) return MakeUnreachedTile(*light.plan, tile).tile;
+  if (*made) return MakeUnreachedTile(*light.plan, tile).tile;
   absl::StatusOr<TileLog*> log = Log();
   if (!log.ok()) return log.status();
   const int index = light.tile_offset + tile;
