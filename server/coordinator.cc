@@ -10,6 +10,7 @@
 #include "core/scene/scene_loader.h"
 #include "core/util/malloc_arenas.h"
 #include "rpc/tile_events_codec.h"
+#include "server/job_eta.h"
 
 namespace pdsm {
 namespace {
@@ -174,6 +175,7 @@ absl::Status Coordinator::Activate(const JobRecord& record, const std::vector<in
     return PlanJobLightLevel(job->scene(), absl::StrCat("job ", job_id), *assets_, light,
                              *job->lights().at(light).plan, std::move(refined));
   };
+  refinement.hold = [this, job_id](int64_t bytes) { budget_.Grow(job_id, bytes); };
   refinement.start_level = [this, priority = record.priority, sequence = record.sequence](
                                const std::string& engine_id, std::shared_ptr<const BakePlan> plan,
                                std::shared_ptr<JobOutput> output) {
@@ -389,10 +391,10 @@ std::optional<JobProgress> Coordinator::SumProgress(
   return sum;
 }
 
-void Coordinator::AddLightsProgress(const JobRecord& record, const std::vector<JobLightSize>& sizes,
-                                    const StoredJob* active,
-                                    const std::vector<std::optional<JobProgress>>& progress,
-                                    pdsm::v1::Job* job) const {
+std::vector<double> Coordinator::AddLightsProgress(
+    const JobRecord& record, const std::vector<JobLightSize>& sizes, const StoredJob* active,
+    const std::vector<std::optional<JobProgress>>& progress, pdsm::v1::Job* job) const {
+  std::vector<double> level_etas;
   // An ended job of several lights: its done tiles, told apart by light.
   std::vector<int> done_tiles;
   if (sizes.size() > 1 && progress.empty() && record.state != pdsm::v1::SUCCEEDED) {
@@ -444,6 +446,8 @@ void Coordinator::AddLightsProgress(const JobRecord& record, const std::vector<J
         out->set_progress(p->samples_total > 0 ? static_cast<double>(p->samples_done) /
                                                      static_cast<double>(p->samples_total)
                                                : 0.0);
+        out->set_eta_seconds(RateEtaSeconds(*p, SteadyNowMs()));
+        level_etas.push_back(out->eta_seconds());
       }
     }
     light->set_progress(light->samples_total() > 0 ? static_cast<double>(light->samples_done()) /
@@ -454,6 +458,7 @@ void Coordinator::AddLightsProgress(const JobRecord& record, const std::vector<J
   }
   // An ended job's work over its lights' own samples (the record keeps the first light's).
   if (progress.empty() && sizes.size() > 1) job->set_samples_done(samples_done);
+  return level_etas;
 }
 
 pdsm::v1::Job Coordinator::ToProto(const JobRecord& record) const {
@@ -501,16 +506,19 @@ pdsm::v1::Job Coordinator::ToProto(const JobRecord& record) const {
       if (p->started) job.set_state(pdsm::v1::RUNNING);
       job.set_tiles_done(p->tiles_done);
       job.set_samples_done(p->samples_done);
-      const double elapsed_s = static_cast<double>(SteadyNowMs() - p->added_ms) / 1000.0;
-      const int64_t gained = p->samples_done - p->samples_at_add;
-      if (gained > 0 && elapsed_s > 0) {
-        job.set_eta_seconds(static_cast<double>(p->samples_total - p->samples_done) * elapsed_s /
-                            static_cast<double>(gained));
-      }
+      job.set_eta_seconds(RateEtaSeconds(*p, SteadyNowMs()));
     }
   }
   // Each light (GetJob and WatchJob: ListJobs' records carry no scene to size them from).
-  if (sizes.ok()) AddLightsProgress(record, *sizes, active.get(), light_progress, &job);
+  if (sizes.ok()) {
+    const std::vector<double> level_etas =
+        AddLightsProgress(record, *sizes, active.get(), light_progress, &job);
+    // Base maps baked, their levels running: the job is not done in 0 s.
+    if (!level_etas.empty()) {
+      job.set_eta_seconds(
+          JobEtaSeconds(job.eta_seconds(), job.samples_done() >= job.samples_total(), level_etas));
+    }
+  }
   job.set_progress(job.samples_total() > 0
                        ? static_cast<double>(job.samples_done()) / job.samples_total()
                        : (job.state() == pdsm::v1::SUCCEEDED ? 1.0 : 0.0));

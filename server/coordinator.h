@@ -192,10 +192,12 @@ class Coordinator {
   // Job.lights, and for an ended job of several lights its samples_done over their samples.
   // `active`: the job when it runs here (for the fingerprints); `progress`: LightsProgress of
   // it, empty when it does not run.
-  void AddLightsProgress(const JobRecord& record, const std::vector<JobLightSize>& sizes,
-                         const StoredJob* active,
-                         const std::vector<std::optional<JobProgress>>& progress,
-                         pdsm::v1::Job* job) const;
+  // Returns the running refinement levels' ETAs (server/job_eta.h).
+  std::vector<double> AddLightsProgress(const JobRecord& record,
+                                        const std::vector<JobLightSize>& sizes,
+                                        const StoredJob* active,
+                                        const std::vector<std::optional<JobProgress>>& progress,
+                                        pdsm::v1::Job* job) const;
   // Adds the active jobs to *started (with a task leased) or *waiting, and to *progress (if
   // not null) their done fraction.
   void CountActiveJobs(int* started, int* waiting,

@@ -112,12 +112,6 @@ int64_t GroupsWithWork(const BakePlan& plan) {
   return groups;
 }
 
-// What a light of this plan holds (JobHeldBytes without the scene).
-int64_t LightHeldBytes(const BakePlan& plan) {
-  return PlanHeldBytes(plan) + BakeEngine::JobHeldBytes(static_cast<int64_t>(plan.tile_count()),
-                                                        plan.group_count(), GroupsWithWork(plan));
-}
-
 absl::Status PlannedBytesError(const std::string& label, const char* what, int64_t bytes,
                                int64_t max_bytes, bool surfaces_only) {
   return absl::ResourceExhaustedError(absl::StrFormat(
@@ -152,6 +146,11 @@ absl::Status CheckMinPlannedBytes(const pdsm::v1::Scene& scene, const Scene& loa
 }
 
 }  // namespace
+
+int64_t LightHeldBytes(const BakePlan& plan) {
+  return PlanHeldBytes(plan) + BakeEngine::JobHeldBytes(static_cast<int64_t>(plan.tile_count()),
+                                                        plan.group_count(), GroupsWithWork(plan));
+}
 
 int64_t JobHeldBytes(const std::vector<PlannedLight>& plans, const pdsm::v1::Scene& scene) {
   int64_t bytes = SceneHeldBytes(scene);

@@ -71,6 +71,10 @@ absl::StatusOr<PlannedLight> PlanJobLightLevel(const pdsm::v1::Scene& scene,
                                                const BakePlan& base,
                                                std::shared_ptr<const RefinedPixels> refined);
 
+// What one light's plan, or a refinement level's (its refined pixels included), and its
+// engine job hold in the coordinator: JobHeldBytes of one plan, without the scene.
+int64_t LightHeldBytes(const BakePlan& plan);
+
 // What a job of these plans holds in the coordinator while it runs, in bytes: its plans
 // (core/bake/plan_memory.h), the engine's records of their groups (BakeEngine::JobHeldBytes)
 // and its scene, parsed and serialized. What --max-planned-mib counts.

@@ -271,6 +271,63 @@ TEST_F(JobMemoryTest, TheLowerBoundBeforePlanningNeverExceedsWhatAPlanHolds) {
   }
 }
 
+// A refinement level (a plan that keeps the receivers, its refined pixels and their bands) and
+// its engine job hold what LightHeldBytes counts: the coordinator adds it to its job's bytes
+// when the level starts (server/plan_budget.h, Grow).
+TEST_F(JobMemoryTest, LightHeldBytesCountsWhatARefinementLevelHolds) {
+  pdsm::v1::Scene scene = Plates(256, 16);
+  scene.mutable_bake()->set_max_refinement(4);
+  absl::StatusOr<std::vector<PlannedLight>> plans =
+      PlanJobLights(scene, "scene", *assets_, nullptr);
+  ASSERT_TRUE(plans.ok()) << plans.status();
+  const BakePlan& base = *plans->front().plan;
+  // Every `stride`-th pixel refined, each with two bands.
+  const auto measure = [&](int stride, int64_t* measured, int64_t* counted) {
+    std::vector<std::function<void()>> queued;
+    EngineOptions options;
+    options.executor = [&queued](std::function<void()> work) { queued.push_back(std::move(work)); };
+    auto engine = std::make_unique<BakeEngine>(std::move(options));
+    auto output = std::make_shared<testing::RecordingOutput>();
+    queued.reserve(16);
+    const double z0 = base.geometry().z_near, z1 = base.geometry().z_far;
+    const int64_t before = HeapBytesInUse();
+    {
+      std::vector<std::vector<RefinedPixel>> by_tile(base.tile_count());
+      for (int t = 0; t < base.tile_count(); ++t) {
+        const TileRect rect = base.tile(t);
+        for (int y = rect.y0; y < rect.y0 + rect.height; ++y) {
+          for (int x = rect.x0; x < rect.x0 + rect.width; ++x) {
+            if ((y * base.geometry().width + x) % stride != 0) continue;
+            by_tile[t].push_back({x, y, {{z0, z0 + (z1 - z0) / 4}, {(z0 + z1) / 2, z1}}});
+          }
+        }
+      }
+      auto refined = std::make_shared<const RefinedPixels>(base.geometry(), base.header.tile_size,
+                                                           4, std::move(by_tile));
+      absl::StatusOr<PlannedLight> level =
+          PlanJobLightLevel(scene, "scene", *assets_, 0, base, std::move(refined));
+      ASSERT_TRUE(level.ok()) << level.status();
+      EngineJob job;
+      job.job_id = "job/refined";
+      job.plan = level->plan;
+      job.output = output;
+      ASSERT_TRUE(engine->AddJob(std::move(job)).ok());
+      queued.clear();
+      *counted = LightHeldBytes(*level->plan);
+    }
+    *measured = HeapBytesInUse() - before;
+    engine.reset();
+  };
+  int64_t measured = 0, counted = 0;
+  measure(64, &measured, &counted);  // warms up what is made once per process
+  measure(3, &measured, &counted);   // 21,846 refined pixels of 65,536
+  std::printf("a level of 21,846 refined pixels: %lld bytes held, %lld counted\n",
+              static_cast<long long>(measured), static_cast<long long>(counted));
+  ASSERT_GT(measured, 21846 * (8 + 32)) << "the measure misses the refined pixels";
+  EXPECT_GE(counted, measured);
+  EXPECT_LE(counted, measured * 3 / 2);
+}
+
 TEST_F(JobMemoryTest, AJobWhosePlansExceedTheLimitIsRefusedNamingTheFlag) {
   AdmissionLimits limits;
   // Before planning: 2^18 tiles need at least their 32 KiB of bits.

@@ -85,6 +85,14 @@ bool PlanBudget::Activated(const std::string& job_id) {
   return it->second.cancel_requested;
 }
 
+void PlanBudget::Grow(const std::string& job_id, int64_t bytes) {
+  absl::MutexLock lock(&mu_);
+  const auto it = held_.find(job_id);
+  if (it == held_.end() || bytes <= 0) return;
+  it->second.bytes += bytes;
+  held_bytes_ += bytes;
+}
+
 void PlanBudget::Release(const std::string& job_id) {
   absl::MutexLock lock(&mu_);
   if (const auto it = held_.find(job_id); it != held_.end()) {

@@ -5,7 +5,8 @@
 // errors are the submit's, then they were dropped) and is planned again when it is its turn and its
 // bytes fit. Turns go in scheduling order (priority, then submission), and a waiting job is never
 // passed over: a large job is not starved by a stream of small ones. A job alone always fits (when
-// nothing is held), so a limit lowered across a restart cannot stall the queue.
+// nothing is held), so a limit lowered across a restart cannot stall the queue. A running job's
+// refinement levels add what they hold as they start and end (Grow).
 //
 // Bookkeeping only: the coordinator plans, activates, cancels and ends jobs, and tells this
 // what happened. Thread-safe.
@@ -56,6 +57,12 @@ class PlanBudget {
   // The job's engine jobs are added. True when a cancel came while it was activating: the
   // caller cancels it now.
   bool Activated(const std::string& job_id);
+  // A running job holds `bytes` more than it was admitted with: a light's refinement level,
+  // whose size is known only once its base map is baked (its plan when it starts, its
+  // spliced tiles when it ends). Never refused and never stops the job, whose base map is
+  // done; the held bytes may then pass the limit, and waiting jobs wait until they fit again.
+  // Released with the rest. Nothing for a job that holds nothing here.
+  void Grow(const std::string& job_id, int64_t bytes);
   // The job holds nothing any more (it ended, or could not be activated); a waiting job leaves
   // the queue. Nothing for a job this does not know.
   void Release(const std::string& job_id);

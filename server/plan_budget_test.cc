@@ -129,5 +129,32 @@ TEST(PlanBudget, ReleaseForgetsHeldAndWaitingJobsAndIgnoresOthers) {
   EXPECT_EQ(budget.usage().jobs_held, 0);
 }
 
+// A refinement level's bytes join its running job's: later jobs wait for them, the job is
+// never stopped for them (held may pass the limit), and they leave with the job.
+TEST(PlanBudget, ALevelsBytesJoinItsJobsUntilTheJobEnds) {
+  constexpr int64_t kMiB = 1 << 20;
+  PlanBudget budget(100 * kMiB);
+  ASSERT_TRUE(budget.Admit(Job("a", 30 * kMiB, 1)));
+  EXPECT_FALSE(budget.Activated("a"));
+  budget.Grow("a", 40 * kMiB);  // its level's plan
+  EXPECT_EQ(budget.usage().held_bytes, 70 * kMiB);
+  EXPECT_FALSE(budget.Admit(Job("b", 40 * kMiB, 2))) << "110 > 100 with the level counted";
+  budget.Grow("a", 50 * kMiB);  // its spliced tiles: past the limit, and nothing refuses it
+  EXPECT_EQ(budget.usage().held_bytes, 120 * kMiB);
+  EXPECT_NE(budget.WaitingReason("b").find("beside 120.0 MiB held by 1 running job"),
+            std::string::npos)
+      << budget.WaitingReason("b");
+  budget.Grow("b", 10);        // waiting, holds nothing: ignored
+  budget.Grow("unknown", 10);  // ignored
+  budget.Grow("a", -500);      // never shrinks what a job holds
+  EXPECT_EQ(budget.usage().held_bytes, 120 * kMiB);
+  EXPECT_FALSE(budget.TakeNext().has_value());
+  budget.Release("a");
+  EXPECT_EQ(budget.usage().held_bytes, 0);
+  const std::optional<PlanBudget::Entry> next = budget.TakeNext();
+  ASSERT_TRUE(next.has_value());
+  EXPECT_EQ(next->job_id, "b");
+}
+
 }  // namespace
 }  // namespace pdsm

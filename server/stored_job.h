@@ -74,6 +74,10 @@ struct RefinementHooks {
   std::function<absl::Status(const std::string& engine_id, std::shared_ptr<const BakePlan> plan,
                              std::shared_ptr<JobOutput> output)>
       start_level;
+  // The level holds `bytes` more in the coordinator until the job ends: its plan and refined
+  // pixels when it starts, its spliced tiles when it ends (counted against --max-planned-mib,
+  // server/plan_budget.h). Optional.
+  std::function<void(int64_t bytes)> hold;
   int threads = 1;  // choosing and splicing the refined pixels
 };
 
@@ -158,6 +162,8 @@ class StoredJob : public std::enable_shared_from_this<StoredJob> {
   // The level's tiles are all stored: splices them into the base tiles, then LightFinished.
   absl::Status LevelFinished(const JobLight& light);
   std::shared_ptr<LightLevel> LevelOf(int light) const;
+  // What `level` holds in memory as it starts (RefinementHooks::hold).
+  static int64_t LevelHeldBytes(const LightLevel& level);
   // Base tile `tile` of the level's light as spliced; nullopt when it has no refined pixel.
   static std::optional<EncodedTile> SplicedTile(LightLevel& level, int tile);
   // One of the light's engine jobs (its base's, or its level's) ended: the light ends with

@@ -17,6 +17,7 @@
 #include "core/pipeline/refinement_pass.h"
 #include "core/pipeline/tile_file.h"
 #include "core/pipeline/unreached_tile.h"
+#include "server/job_admission.h"
 #include "server/stored_job.h"
 
 namespace pdsm {
@@ -47,6 +48,27 @@ struct StoredJob::LightLevel {
   // tile's chunk, as EncodedTileStore::Replace encodes it in the local bake.
   std::map<int, EncodedTile> spliced ABSL_GUARDED_BY(mu);
 };
+
+namespace {
+
+// A spliced tile in StoredJob::LightLevel::spliced: its chunk and its map node.
+int64_t SplicedHeldBytes(const EncodedTile& tile) {
+  constexpr int64_t kMapNodeBytes = 4 * sizeof(void*);  // std::map's links and colour
+  return kMapNodeBytes + static_cast<int64_t>(sizeof(int) + sizeof(EncodedTile)) +
+         static_cast<int64_t>(tile.chunk.capacity());
+}
+
+}  // namespace
+
+// What `level` holds when it starts: its plan, refined pixels and engine job
+// (LightHeldBytes), the pixels' encoding FetchRefinement hands out, and the per-tile records
+// of its scratch store and of which tiles are stored.
+int64_t StoredJob::LevelHeldBytes(const LightLevel& level) {
+  const int64_t tiles = level.plan->tile_count();
+  return static_cast<int64_t>(sizeof(LightLevel)) + LightHeldBytes(*level.plan) +
+         static_cast<int64_t>(level.refined_pixels->capacity()) +
+         tiles * EncodedTileStore::kHeldBytesPerTile + (tiles + 7) / 8;
+}
 
 // The level's engine job's output. It holds the job, as Light does.
 class StoredJob::LevelOutput final : public JobOutput {
@@ -164,6 +186,7 @@ absl::Status StoredJob::BeginLevel(const JobLight& light) {
   if (!planned.ok()) return planned.status();
   auto level = std::make_shared<LightLevel>(*std::move(planned), LevelEngineJobId(light.engine_id),
                                             EncodeRefinedPixels(**refined), fs_, paths_.pdsm);
+  if (refinement_.hold) refinement_.hold(LevelHeldBytes(*level));
   {
     absl::MutexLock lock(&levels_mu_);
     levels_[light.index] = level;
@@ -211,6 +234,14 @@ absl::Status StoredJob::LevelFinished(const JobLight& light) {
           refinement_.threads);
       !s.ok()) {
     return s;
+  }
+  if (refinement_.hold) {
+    int64_t spliced = 0;
+    {
+      absl::MutexLock lock(&level->mu);
+      for (const auto& [index, tile] : level->spliced) spliced += SplicedHeldBytes(tile);
+    }
+    refinement_.hold(spliced);
   }
   return LightFinished();
 }

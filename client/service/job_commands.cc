@@ -56,10 +56,12 @@ void PrintJob(const pdsm::v1::Job& job) {
   for (const pdsm::v1::LightProgress& light : job.lights()) {
     if (!light.has_refinement_level()) continue;
     const pdsm::v1::RefinementLevelProgress& level = light.refinement_level();
-    std::printf("  %s%srefinement level %dx: %lld pixels, %.1f%% (%d/%d tiles)\n",
+    std::printf("  %s%srefinement level %dx: %lld pixels, %.1f%% (%d/%d tiles)",
                 light.name().c_str(), light.name().empty() ? "" : ": ", level.factor(),
                 static_cast<long long>(level.pixels()), 100 * level.progress(), level.tiles_done(),
                 level.tiles_total());
+    if (level.eta_seconds() > 0) std::printf(", ETA %.0fs", level.eta_seconds());
+    std::printf("\n");
   }
   if (!job.queued_reason().empty()) std::printf("  %s\n", job.queued_reason().c_str());
   if (!job.error().empty()) std::printf("  error: %s\n", job.error().c_str());

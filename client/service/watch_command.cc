@@ -31,8 +31,16 @@ int RunWatch(const WatchFlags& flags) {
     any = true;
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    // The job's samples count its base maps; a running refinement level's join them, so that
+    // the bar does not stand at 100 % while a level runs (it steps back when one starts).
+    int64_t done = job.samples_done(), total = job.samples_total();
+    for (const pdsm::v1::LightProgress& light : job.lights()) {
+      if (!light.has_refinement_level()) continue;
+      done += light.refinement_level().samples_done();
+      total += light.refinement_level().samples_total();
+    }
     progress.Update(
-        job.samples_done(), job.samples_total(), seconds,
+        done, total, seconds,
         job.eta_seconds() >= 0 ? std::optional<double>(job.eta_seconds()) : std::nullopt);
   }
   progress.Finish();

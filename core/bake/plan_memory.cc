@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include "core/bake/refined_pixels.h"
+
 namespace pdsm {
 namespace {
 
@@ -38,6 +40,8 @@ int64_t PlanHeldBytes(const BakePlan& plan) {
   // Masks are shared with the scene; counted here as if the plan held them alone.
   bytes += VectorBytes(plan.masks);
   for (const auto& mask : plan.masks) bytes += sizeof(AlphaMask) + VectorBytes(mask->alpha);
+  // A refinement level's pixels (shared with whoever chose them; counted here, with the level).
+  if (plan.refined) bytes += plan.refined->HeldBytes();
   return bytes;
 }
 

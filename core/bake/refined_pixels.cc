@@ -16,6 +16,23 @@ RefinedPixels::RefinedPixels(const PdsmGeometry& geometry, int tile_size, int fa
     count_ += static_cast<int64_t>(tile.size());
 }
 
+int64_t RefinedPixels::HeldBytes() const {
+  // Each pixel's bands are a small heap block of their own, where the allocator's header and
+  // rounding (16 bytes with glibc) are a third of what it holds: counted, unlike a plan's few
+  // large vectors (core/bake/plan_memory.h).
+  constexpr int64_t kBlockOverhead = 16;
+  int64_t bytes = sizeof(RefinedPixels) +
+                  static_cast<int64_t>(by_tile_.capacity() * sizeof(std::vector<RefinedPixel>));
+  for (const std::vector<RefinedPixel>& tile : by_tile_) {
+    bytes += static_cast<int64_t>(tile.capacity() * sizeof(RefinedPixel));
+    for (const RefinedPixel& pixel : tile) {
+      if (pixel.bands.capacity() == 0) continue;
+      bytes += static_cast<int64_t>(pixel.bands.capacity() * sizeof(DepthWindow)) + kBlockOverhead;
+    }
+  }
+  return bytes;
+}
+
 template <typename Visit>
 void RefinedPixels::ForEachIn(int x0, int y0, int x1, int y1, Visit&& visit) const {
   x0 = std::max(x0, 0), y0 = std::max(y0, 0);

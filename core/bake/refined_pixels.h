@@ -42,6 +42,9 @@ class RefinedPixels {
   std::span<const RefinedPixel> Tile(int tile_index) const { return by_tile_[tile_index]; }
   int64_t count() const { return count_; }
   bool empty() const { return count_ == 0; }
+  // The heap and struct bytes this holds (a coordinator counts a level's plan against
+  // --max-planned-mib: server/plan_budget.h): reserved sizes, as core/bake/plan_memory.h counts.
+  int64_t HeldBytes() const;
 
   // The bands of the level's tile `level_rect` (pixels of the level's grid), as windows: level
   // pixel (X, Y) holds those of base pixel (X / factor, Y / factor) when that pixel is refined,

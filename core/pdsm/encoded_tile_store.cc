@@ -19,7 +19,9 @@ EncodedTileStore::EncodedTileStore(const PdsmHeader& header, std::string output_
       output_path_(std::move(output_path)),
       fs_(fs != nullptr ? fs : FileSystem::Default()),
       empty_(header.tile_size),
-      places_(static_cast<size_t>(Grid().Count())) {}
+      places_(static_cast<size_t>(Grid().Count())) {
+  static_assert(sizeof(Place) <= kHeldBytesPerTile, "kHeldBytesPerTile counts a Place");
+}
 
 TileGrid EncodedTileStore::Grid() const { return TileGrid{width_, height_, tile_size_}; }
 

@@ -57,6 +57,9 @@ class EncodedTileStore {
   // scratch file's and the writer's errors.
   absl::Status WriteTo(PdsmWriter* writer);
 
+  // What this holds in memory per tile of its grid (a coordinator counts it: server/plan_budget.h).
+  static constexpr int64_t kHeldBytesPerTile = 24;  // sizeof(Place), asserted in the .cc
+
  private:
   // Where tile i is: its chunk at [offset, offset + size) of the scratch file, or, with
   // size 0, a tile without a vertex (its chunk is empty_'s).

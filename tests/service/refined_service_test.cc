@@ -94,6 +94,9 @@ TEST(ServiceRefined, ARestartWhileTheLevelRunsGivesTheSameBytes) {
   ASSERT_FALSE(expected.empty());
   const std::string job_id = cluster.Submit(scene, kFlags);
   ASSERT_FALSE(job_id.empty());
+  // What its plans hold before any worker came: the base map's (--max-planned-mib).
+  const int64_t base_bytes = cluster.Stats().planned_bytes();
+  EXPECT_GT(base_bytes, 0);
   cluster.AddWorker();
   // Until the job shows its level running (bounded: 120 s), with its progress.
   pdsm::v1::Job running;
@@ -112,6 +115,12 @@ TEST(ServiceRefined, ARestartWhileTheLevelRunsGivesTheSameBytes) {
   EXPECT_EQ(level.tiles_total(), 16);  // 256^2 in tiles of 64
   EXPECT_EQ(running.state(), pdsm::v1::RUNNING);
   EXPECT_EQ(running.lights(0).tiles_done(), running.lights(0).tiles_total()) << "its base map";
+  // Its base maps are baked but the job is not done in 0 s: its ETA is the level's (unknown
+  // until the level has a rate).
+  EXPECT_NE(running.eta_seconds(), 0.0);
+  if (level.eta_seconds() >= 0) EXPECT_DOUBLE_EQ(running.eta_seconds(), level.eta_seconds());
+  // The level's plan and pixels are counted with the job's plans, so later jobs wait for them.
+  EXPECT_GT(cluster.Stats().planned_bytes(), base_bytes);
   cluster.coordinator().Signal(SIGKILL);
   cluster.coordinator().Wait(std::chrono::seconds(10));
   pdsm::v1::Job before;
