@@ -127,9 +127,29 @@ def surface_points(model, count, seed=4):
     return [tuple(x) for x in p + 2e-3 * normals[pick]]
 
 
+def ground_only_scene(scene, folder):
+    """A copy of `scene` in `folder` whose receiving meshes but the ground (the first
+    RECEIVER_ONLY one) have `"refine": false`: adaptive resolution refines the ground alone."""
+    data = json.load(open(scene))
+    base = os.path.dirname(os.path.abspath(scene))
+    ground = next(i for i, m in enumerate(data["meshes"]) if m.get("role") == "RECEIVER_ONLY")
+    for i, mesh in enumerate(data["meshes"]):
+        if "path" in mesh:
+            mesh["path"] = os.path.join(base, mesh["path"])
+        if i != ground and mesh.get("role", "CASTER_AND_RECEIVER") != "CASTER_ONLY":
+            mesh["refine"] = False
+    path = os.path.join(folder, "scene_ground_only.json")
+    json.dump(data, open(path, "w"), indent=1)
+    return path
+
+
 def refined_rows(args, name, scene, folder, csv, sets, exact, reference_method):
-    """The unrefined bake and one per --refinements, interleaved --repeat times."""
+    """The unrefined bake and one per --refinements, interleaved --repeat times; with
+    --ground-only, also one per refinement of the ground alone (ground_only_scene)."""
     tags = [1] + [int(r) for r in args.refinements.split(",")]
+    if args.ground_only:
+        ground_scene = ground_only_scene(scene, folder)
+        tags += [f"{r}g" for r in args.refinements.split(",")]
     surface = None
     if args.surface_points > 0:
         points = surface_points(pdsm_scene.Scene(scene), args.surface_points)
@@ -142,8 +162,9 @@ def refined_rows(args, name, scene, folder, csv, sets, exact, reference_method):
     for _ in range(args.repeat):
         for r in tags:
             exr = os.path.join(folder, f"refined{r}.exr")
-            cpu[r].append(run_timed([args.pdsm, "bake", scene, "-o", exr, "--no-preview",
-                                     "--max-refinement", str(r)]))
+            source = ground_scene if str(r).endswith("g") else scene
+            cpu[r].append(run_timed([args.pdsm, "bake", source, "-o", exr, "--no-preview",
+                                     "--max-refinement", str(r).rstrip("g")]))
     rows = []
     for r in tags:
         exr = os.path.join(folder, f"refined{r}.exr")
@@ -227,6 +248,9 @@ def main():
     p.add_argument("--surface-points", type=int, default=0,
                    help="with --refinements: points on the casters' lit surfaces")
     p.add_argument("--reference", choices=("embree", "exact"), default="embree")
+    p.add_argument("--ground-only", action="store_true",
+                   help="with --refinements: also refine the ground alone (`refine: false` on "
+                        "the other receivers), tagged Rg")
     args = p.parse_args()
     os.makedirs(args.out, exist_ok=True)
     rows = []

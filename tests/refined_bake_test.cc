@@ -219,6 +219,76 @@ TEST(RefinedBakeBytes, DoNotDependOnThreadsOrBatches) {
   }
 }
 
+// `"refine": false` keeps a receiver's shadows at the base map's resolution. With the ground
+// opted out only the box's own surfaces are refined (their bands still reach the ground at the
+// contact, where the wall meets it); with both opted out nothing is, and the file reads as the
+// unrefined bake bit for bit, while the same scene opted in refines the contact.
+TEST(RefinedBakeBytes, ReceiversThatOptOutOfRefinementAreNotRefined) {
+  TempDir dir;
+  pdsm::v1::BakeParams overrides;
+  overrides.add_resolution(64);
+  overrides.add_resolution(64);
+  overrides.set_samples(16);
+  const Scene plain_scene = LoadBox(dir, overrides);
+  overrides.set_max_refinement(4);
+  const Scene refined_scene = LoadBox(dir, overrides);
+  // The box on plane with `"refine": false` on the ground, and also on the box.
+  std::string json = kBoxOnPlaneJson;
+  const std::string ground = R"("role": "RECEIVER_ONLY"})";
+  const std::string box = "3,7,4, 3,4,0]}}";
+  ASSERT_NE(json.find(ground), std::string::npos);
+  json.replace(json.find(ground), ground.size(), R"("role": "RECEIVER_ONLY", "refine": false})");
+  WriteText(dir.File("ground_out.json"), json);
+  ASSERT_NE(json.find(box), std::string::npos);
+  json.replace(json.find(box), box.size(), R"(3,7,4, 3,4,0]}, "refine": false})");
+  WriteText(dir.File("all_out.json"), json);
+  absl::StatusOr<Scene> ground_out = LoadSceneFile(dir.File("ground_out.json"), overrides);
+  absl::StatusOr<Scene> all_out = LoadSceneFile(dir.File("all_out.json"), overrides);
+  ASSERT_TRUE(ground_out.ok()) << ground_out.status();
+  ASSERT_TRUE(all_out.ok()) << all_out.status();
+  const absl::StatusOr<PdsmImage> plain = ReadPdsm(Bake(plain_scene, dir, "plain"));
+  const absl::StatusOr<PdsmImage> refined = ReadPdsm(Bake(refined_scene, dir, "refined"));
+  const absl::StatusOr<PdsmImage> box_only = ReadPdsm(Bake(*ground_out, dir, "ground_out"));
+  const absl::StatusOr<PdsmImage> none = ReadPdsm(Bake(*all_out, dir, "all_out"));
+  ASSERT_TRUE(plain.ok() && refined.ok() && box_only.ok() && none.ok());
+  const auto refined_pixels = [](const PdsmImage& image) {
+    int n = 0;
+    for (int k = 0; k < 64 * 64; ++k) n += RefinementOf(image.Function(k % 64, k / 64)) > 1;
+    return n;
+  };
+  const int all = refined_pixels(*refined), of_the_box = refined_pixels(*box_only);
+  std::printf("refined pixels: %d, %d with the ground opted out, %d with both\n", all, of_the_box,
+              refined_pixels(*none));
+  EXPECT_GT(all, 20);
+  EXPECT_LT(of_the_box, all);
+  EXPECT_EQ(refined_pixels(*none), 0);
+  // Ground points across the lit wall's contact, a pixel either side.
+  const double pixel = testing::BoxGroundPixel(plain->header.geometry, glm::dvec3(-0.5, 0, 0));
+  int differs = 0;
+  for (double d : {-1.0, -0.5, -0.25, -0.1, 0.1, 0.25, 0.5, 1.0}) {
+    for (const glm::dvec3& p : testing::AlongBoxWall(-1, d * pixel)) {
+      const double base = QueryAttenuation(*plain, p);
+      ASSERT_EQ(QueryAttenuation(*none, p), base) << d << " pixels from the wall";
+      differs += QueryAttenuation(*refined, p) != base;
+    }
+  }
+  EXPECT_GT(differs, 0) << "the opted-in contact is refined";
+}
+
+TEST(RefinedBakeBytes, OnlyAReceiverMaySayWhetherItIsRefined) {
+  TempDir dir;
+  std::string json = kBoxOnPlaneJson;
+  const std::string box = "3,7,4, 3,4,0]}}";
+  ASSERT_NE(json.find(box), std::string::npos);
+  json.replace(json.find(box), box.size(),
+               R"(3,7,4, 3,4,0]}, "role": "CASTER_ONLY", "refine": true})");
+  WriteText(dir.File("caster.json"), json);
+  const absl::StatusOr<Scene> scene = LoadSceneFile(dir.File("caster.json"), Refined(4));
+  ASSERT_FALSE(scene.ok());
+  EXPECT_EQ(scene.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(scene.status().message().find("meshes[1].refine"), std::string::npos) << scene.status();
+}
+
 TEST(RefinedBakeBytes, AnUnknownRefinementIsRefusedNamingTheField) {
   TempDir dir;
   const std::string path = dir.File("box_on_plane.json");

@@ -306,28 +306,48 @@ absl::StatusOr<BakePlan> PlanRefinementLevel(const SceneIndex& index, std::optio
   return plan;
 }
 
-void AddLightSpaceReceivers(const Scene& scene, BakePlan* plan) {
-  LightSpaceMesh& receivers = plan->receivers;
-  receivers = LightSpaceMesh{};
+namespace {
+
+// The meshes of `scene` that `keep`, in light space of `frame`, in scene order.
+template <typename Keep>
+LightSpaceMesh LightSpaceMeshOf(const Scene& scene, const LightFrame& frame, Keep keep) {
+  LightSpaceMesh out;
   size_t vertices = 0, indices = 0;
   for (const TriangleMesh& mesh : scene.meshes) {
-    if (!Receives(mesh.role)) continue;
+    if (!keep(mesh)) continue;
     vertices += mesh.positions_world.size();
     indices += mesh.indices.size();
   }
   // Sized first: grown by push_back, a world's 10^6 triangles were copied and page-faulted
   // again at each doubling (perf, 2026-12-06).
-  receivers.positions.reserve(vertices);
-  receivers.indices.reserve(indices);
-  const LightFrame& frame = plan->geometry().frame;
+  out.positions.reserve(vertices);
+  out.indices.reserve(indices);
   for (const TriangleMesh& mesh : scene.meshes) {
-    if (!Receives(mesh.role)) continue;
-    const uint32_t base = static_cast<uint32_t>(receivers.positions.size());
+    if (!keep(mesh)) continue;
+    const uint32_t base = static_cast<uint32_t>(out.positions.size());
     for (const glm::dvec3& p : mesh.positions_world) {
-      receivers.positions.push_back(glm::vec3(frame.LightFromWorld(p)));
+      out.positions.push_back(glm::vec3(frame.LightFromWorld(p)));
     }
-    for (uint32_t i : mesh.indices) receivers.indices.push_back(base + i);
+    for (uint32_t i : mesh.indices) out.indices.push_back(base + i);
   }
+  return out;
+}
+
+}  // namespace
+
+void AddLightSpaceReceivers(const Scene& scene, BakePlan* plan) {
+  const LightFrame& frame = plan->geometry().frame;
+  plan->receivers =
+      LightSpaceMeshOf(scene, frame, [](const TriangleMesh& m) { return Receives(m.role); });
+  plan->some_receivers_unrefined =
+      plan->header.max_refinement > 1 &&
+      std::any_of(scene.meshes.begin(), scene.meshes.end(),
+                  [](const TriangleMesh& m) { return Receives(m.role) && !m.refine; });
+  plan->refinable_receivers =
+      plan->some_receivers_unrefined
+          ? LightSpaceMeshOf(scene, frame,
+                             [](const TriangleMesh& m) { return Receives(m.role) && m.refine; })
+          : LightSpaceMesh{};
 }
 
 int64_t TileCountOf(const BakeSettings& bake) {
@@ -371,6 +391,7 @@ void ReleaseRenderGeometry(BakePlan* plan) {
   // choose their refined pixels, from the receivers.
   if (!plan->header.surfaces_only && plan->header.max_refinement <= 1 && plan->refinement <= 1) {
     plan->receivers = LightSpaceMesh{};
+    plan->refinable_receivers = LightSpaceMesh{};
   } else {
     // Kept for as long as the job runs: without the slack their growth left.
     plan->receivers.positions.shrink_to_fit();

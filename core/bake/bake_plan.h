@@ -76,6 +76,12 @@ struct BakePlan {
   // Every receiver, for a surfaces-only plan (its depth windows); empty otherwise unless
   // AddLightSpaceReceivers was called (the light-view preview draws them).
   LightSpaceMesh receivers;
+  // A refined plan (header.max_refinement > 1) some of whose receiving meshes opt out of
+  // refinement (`refine: false`): true, and refinable_receivers the others, in scene order.
+  // Otherwise false and empty: every receiver may be refined. RefinableReceivers() is what
+  // choosing the refined pixels reads (core/bake/refinement_selection.h).
+  bool some_receivers_unrefined = false;
+  LightSpaceMesh refinable_receivers;
   // A refinement level's plan (PlanRefinementLevel): its factor, and the base map's refined
   // pixels, whose sub-pixels are its only rays (core/bake/scan_windows.h). 1 and null for every
   // other plan.
@@ -83,6 +89,9 @@ struct BakePlan {
   std::shared_ptr<const RefinedPixels> refined;
 
   const PdsmGeometry& geometry() const { return header.geometry; }
+  const LightSpaceMesh& RefinableReceivers() const {
+    return some_receivers_unrefined ? refinable_receivers : receivers;
+  }
   bool has_casters() const { return !casters.indices.empty(); }
   // The index of the tile whose first pixel is (x0, y0). REQUIRES: a tile starts there.
   int TileIndexAt(int x0, int y0) const {
@@ -191,8 +200,9 @@ absl::StatusOr<BakePlan> PlanRefinementLevel(const SceneIndex& index, std::optio
                                              const BakePlan& base,
                                              std::shared_ptr<const RefinedPixels> refined);
 
-// Sets plan->receivers to every receiver of `scene`, in the plan's light space, in scene order.
-// REQUIRES: the plan was made of `scene`.
+// Sets plan->receivers to every receiver of `scene`, in the plan's light space, in scene order,
+// and for a refined plan whose scene has receivers with `refine: false` the refinable ones
+// (some_receivers_unrefined, refinable_receivers). REQUIRES: the plan was made of `scene`.
 void AddLightSpaceReceivers(const Scene& scene, BakePlan* plan);
 
 // Frees what only a shadow-map renderer uses: the casters and their clusters, and the

@@ -82,6 +82,13 @@ std::string PlanFingerprint(const BakePlan& plan) {
     for (const glm::vec3& p : plan.receivers.positions) f.Add(p);
     for (uint32_t i : plan.receivers.indices) f.Add(i);
   }
+  // Which of them choose a refined plan's pixels (only when not all: fingerprints of plans
+  // without `refine: false` are unchanged).
+  if (plan.some_receivers_unrefined) {
+    f.Add(std::string("refinable receivers"));
+    for (const glm::vec3& p : plan.refinable_receivers.positions) f.Add(p);
+    for (uint32_t i : plan.refinable_receivers.indices) f.Add(i);
+  }
   if (plan.refined != nullptr) {  // a refinement level: its rays and their bands
     f.Add(plan.refinement);
     for (int t = 0; t < plan.refined->tiles(); ++t) {

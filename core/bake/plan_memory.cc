@@ -36,7 +36,8 @@ int64_t PlanHeldBytes(const BakePlan& plan) {
   bytes += StringBytes(h.scene_name) + StringBytes(h.light_name) + VectorBytes(h.tile_samples);
   // Tiles and groups are made on demand (BakePlan::tile, group): a bit per tile is all.
   bytes += VectorBytes(plan.samples) + VectorBytes(plan.tile_has_casters);
-  bytes += MeshBytes(plan.casters) + VectorBytes(plan.caster_clusters) + MeshBytes(plan.receivers);
+  bytes += MeshBytes(plan.casters) + VectorBytes(plan.caster_clusters) + MeshBytes(plan.receivers) +
+           MeshBytes(plan.refinable_receivers);
   // Masks are shared with the scene; counted here as if the plan held them alone.
   bytes += VectorBytes(plan.masks);
   for (const auto& mask : plan.masks) bytes += sizeof(AlphaMask) + VectorBytes(mask->alpha);

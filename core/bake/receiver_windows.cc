@@ -139,13 +139,18 @@ TileWindows ComputeReceiverWindows(const BakePlan& plan, const TileRect& tile) {
 
 TileWindows ComputeReceiverWindowsAt(const BakePlan& plan, const TileRect& grid,
                                      const glm::dvec2& offset, double half_pixels) {
+  return ComputeReceiverWindowsAt(plan, plan.receivers, grid, offset, half_pixels);
+}
+
+TileWindows ComputeReceiverWindowsAt(const BakePlan& plan, const LightSpaceMesh& mesh,
+                                     const TileRect& grid, const glm::dvec2& offset,
+                                     double half_pixels) {
   const PdsmGeometry& g = plan.geometry();
   const glm::dvec2 pitch(g.PixelPitchS(), g.PixelPitchT());
   const glm::dvec2 half = half_pixels * pitch;
   std::vector<std::vector<DepthWindow>> per_point(static_cast<size_t>(grid.width) * grid.height);
   // Receivers may lie nearer than any caster: clip only a hair in front of the light plane.
   const double z_min_perspective = 1e-6 * std::abs(g.z_far);
-  const LightSpaceMesh& mesh = plan.receivers;
   for (size_t k = 0; k < mesh.TriangleCount(); ++k) {
     const glm::dvec3 tri[3] = {glm::dvec3(mesh.positions[mesh.indices[3 * k]]),
                                glm::dvec3(mesh.positions[mesh.indices[3 * k + 1]]),

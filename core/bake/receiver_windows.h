@@ -50,6 +50,11 @@ TileWindows ComputeReceiverWindows(const BakePlan& plan, const TileRect& tile);
 // neighbouring rays there, at the points between them: core/bake/refinement_selection.h).
 TileWindows ComputeReceiverWindowsAt(const BakePlan& plan, const TileRect& grid,
                                      const glm::dvec2& offset, double half_pixels);
+// The same over `receivers` (of the plan's light space) instead of plan.receivers: a refined
+// plan's RefinableReceivers().
+TileWindows ComputeReceiverWindowsAt(const BakePlan& plan, const LightSpaceMesh& receivers,
+                                     const TileRect& grid, const glm::dvec2& offset,
+                                     double half_pixels);
 
 }  // namespace pdsm
 

@@ -26,9 +26,13 @@ PairReceivers ComputePairReceivers(const BakePlan& plan, const TileRect& rect) {
   // that ray, padded as every window is.
   constexpr double kSliver = 1.0 / 256;
   const TileRect grown = GrownByOnePixel(plan.geometry(), rect);
-  return PairReceivers{ComputeReceiverWindows(plan, grown),
-                       ComputeReceiverWindowsAt(plan, grown, glm::dvec2(1.0, 0.5), kSliver),
-                       ComputeReceiverWindowsAt(plan, grown, glm::dvec2(0.5, 1.0), kSliver)};
+  // Only the receivers that may be refined (`refine`): the others' shadows keep the base's
+  // resolution, and no band is placed at their depths.
+  const LightSpaceMesh& receivers = plan.RefinableReceivers();
+  return PairReceivers{
+      ComputeReceiverWindowsAt(plan, receivers, grown, glm::dvec2(0.5), 1.0),
+      ComputeReceiverWindowsAt(plan, receivers, grown, glm::dvec2(1.0, 0.5), kSliver),
+      ComputeReceiverWindowsAt(plan, receivers, grown, glm::dvec2(0.5, 1.0), kSliver)};
 }
 
 void MergeBands(std::vector<DepthWindow>* bands) {

@@ -31,6 +31,8 @@ struct TriangleMesh {
   // (core/scene/node_roles.h) gives one TriangleMesh per role, all of the same entry.
   int entry = 0;
   MeshRole role = MeshRole::kCasterAndReceiver;
+  // Adaptive resolution may refine the shadows on its surfaces (the entry's `refine`).
+  bool refine = true;
   std::vector<glm::dvec3> positions_world;  // transformed, double
   std::vector<uint32_t> indices;            // 3 per triangle
   // Alpha-tested triangles, as MeshFileData holds them (core/scene/mesh_file.h): all empty

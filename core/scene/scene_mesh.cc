@@ -175,6 +175,10 @@ absl::StatusOr<std::vector<TriangleMesh>> BuildMesh(const FieldChecker& checks,
     default:
       return checks.Error(field + ".role", absl::StrCat("unknown value (got ", mesh.role(), ")"));
   }
+  if (mesh.has_refine() && entry_role == MeshRole::kCasterOnly) {
+    return checks.Error(field + ".refine",
+                        "a CASTER_ONLY mesh receives no shadow to refine; set it on receivers");
+  }
   if (absl::Status s = BuildTransform(checks, field + ".transform", mesh.transform()).status();
       !s.ok()) {
     return s;  // before the mesh is read: a bad transform is named whatever the file holds
@@ -196,6 +200,7 @@ absl::StatusOr<std::vector<TriangleMesh>> BuildMesh(const FieldChecker& checks,
     TriangleMesh& part = out.emplace_back();
     part.entry = index;
     part.role = data.node_role.value_or(entry_role);
+    part.refine = !mesh.has_refine() || mesh.refine();
     part.label = data.node_role.has_value()
                      ? absl::StrCat(label, " nodes ", MeshRoleName(*data.node_role))
                      : label;

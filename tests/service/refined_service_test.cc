@@ -26,7 +26,8 @@ std::string WriteBox(const ServiceCluster& cluster) {
 }
 
 // The same scene with the box as a mesh file: `pdsm submit` uploads it as an asset, which the
-// coordinator decodes again to plan the level.
+// coordinator decodes again to plan the level; and the ground opted out of refinement
+// (`"refine": false`), which the coordinator's choice of pixels must honour as the local one.
 std::string WriteBoxAsset(const ServiceCluster& cluster) {
   WriteText(cluster.dir().File("box.obj"),
             "v -0.5 0 -0.5\nv 0.5 0 -0.5\nv 0.5 0 0.5\nv -0.5 0 0.5\n"
@@ -37,6 +38,8 @@ std::string WriteBoxAsset(const ServiceCluster& cluster) {
   const size_t box = json.find("    {\"inline\": {\"positions\": [-0.5");
   const size_t end = json.find("]}}\n", box) + 4;
   json.replace(box, end - box, "    {\"path\": \"box.obj\"}\n");
+  const std::string ground = R"("role": "RECEIVER_ONLY"})";
+  json.replace(json.find(ground), ground.size(), R"("role": "RECEIVER_ONLY", "refine": false})");
   const std::string path = cluster.dir().File("box_asset.json");
   WriteText(path, json);
   return path;
