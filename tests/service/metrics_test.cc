@@ -33,11 +33,8 @@ std::optional<double> SampleValue(const std::string& text, const std::string& se
 class CoordinatorMetrics : public ::testing::Test {
  protected:
   void SetUp() override {
-    ClusterOptions options;
-    options.client_token = "client-secret";
-    options.worker_token = "worker-secret";
-    options.coordinator_args = {"--metrics-listen", "127.0.0.1:0", "--samples-per-task", "8"};
-    cluster_ = std::make_unique<ServiceCluster>(options);
+    cluster_ = std::make_unique<ServiceCluster>(
+        WithTokens({"--metrics-listen", "127.0.0.1:0", "--samples-per-task", "8"}));
     ASSERT_TRUE(cluster_->StartCoordinator()) << cluster_->Log("coordinator.log");
     // Line 2 of the ready file: "metrics HOST:PORT".
     std::ifstream ready(cluster_->dir().File("ready"));

@@ -142,10 +142,7 @@ TEST(ServiceRefined, ARestartWhileTheLevelRunsGivesTheSameBytes) {
 // FetchRefinement is a worker call: the worker token, a well-formed job id and light name, and
 // a light whose level runs.
 TEST(ServiceRefined, FetchRefinementRefusesWhatItCannotServe) {
-  ClusterOptions options;
-  options.client_token = "client-secret";
-  options.worker_token = "worker-secret";
-  ServiceCluster cluster(options);
+  ServiceCluster cluster(WithTokens());
   ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
   const auto fetch = [&](const std::string& token, const std::string& job,
                          const std::string& light) {
@@ -162,10 +159,10 @@ TEST(ServiceRefined, FetchRefinementRefusesWhatItCannotServe) {
     return reader->Finish().error_code();
   };
   EXPECT_EQ(fetch("", "0123abcd", ""), grpc::StatusCode::UNAUTHENTICATED);
-  EXPECT_EQ(fetch("client-secret", "0123abcd", ""), grpc::StatusCode::PERMISSION_DENIED);
-  EXPECT_EQ(fetch("worker-secret", "no/such job", ""), grpc::StatusCode::INVALID_ARGUMENT);
-  EXPECT_EQ(fetch("worker-secret", "0123abcd", "bad name!"), grpc::StatusCode::INVALID_ARGUMENT);
-  EXPECT_EQ(fetch("worker-secret", "0123abcd", ""), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_EQ(fetch(kClientToken, "0123abcd", ""), grpc::StatusCode::PERMISSION_DENIED);
+  EXPECT_EQ(fetch(kWorkerToken, "no/such job", ""), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(fetch(kWorkerToken, "0123abcd", "bad name!"), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(fetch(kWorkerToken, "0123abcd", ""), grpc::StatusCode::FAILED_PRECONDITION);
 }
 
 }  // namespace

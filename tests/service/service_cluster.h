@@ -114,6 +114,19 @@ inline ClusterOptions CoordinatorArgs(std::vector<std::string> args) {
   return options;
 }
 
+// The tokens of a cluster made with WithTokens.
+inline constexpr char kClientToken[] = "client-secret";
+inline constexpr char kWorkerToken[] = "worker-secret";
+
+// A cluster that checks a client token (kClientToken) and a worker token (kWorkerToken), whose
+// coordinator gets `args`.
+inline ClusterOptions WithTokens(std::vector<std::string> args = {}) {
+  ClusterOptions options = CoordinatorArgs(std::move(args));
+  options.client_token = kClientToken;
+  options.worker_token = kWorkerToken;
+  return options;
+}
+
 class ServiceCluster {
  public:
   explicit ServiceCluster(ClusterOptions options = {}) : options_(std::move(options)) {

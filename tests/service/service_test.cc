@@ -320,10 +320,7 @@ TEST(Service, WorkerOfAnotherBuildNeverFailsAJob) {
 // non-zero status (so Slurm marks the task failed and Kubernetes shows a crash loop) instead
 // of retrying forever.
 TEST(Service, WorkerWithAWrongTokenExitsAtOnceSayingWhatToFix) {
-  ClusterOptions options;
-  options.client_token = "client-secret";
-  options.worker_token = "worker-secret";
-  ServiceCluster cluster(options);
+  ServiceCluster cluster(WithTokens());
   ASSERT_TRUE(cluster.StartCoordinator());
   WriteText(cluster.dir().File("wrong_token"), "not-the-worker-secret\n");
   const size_t worker = cluster.AddWorker(1, {}, cluster.dir().File("wrong_token"));
@@ -342,10 +339,7 @@ TEST(Service, WorkerWithAWrongTokenExitsAtOnceSayingWhatToFix) {
 // --log-format json: every line either process writes is one JSON object with the four
 // documented fields, whatever the message holds (here a refused token, quoted text and all).
 TEST(Service, JsonLogsAreOneParsableObjectPerLine) {
-  ClusterOptions options = CoordinatorArgs({"--log-format", "json"});
-  options.client_token = "client-secret";
-  options.worker_token = "worker-secret";
-  ServiceCluster cluster(options);
+  ServiceCluster cluster(WithTokens({"--log-format", "json"}));
   ASSERT_TRUE(cluster.StartCoordinator());
   WriteText(cluster.dir().File("wrong_token"), "not-the-worker-secret\n");
   const size_t worker =
@@ -458,11 +452,8 @@ TEST(Service, CancelStopsTheJobAndFreesTheWorkers) {
 }
 
 TEST(Service, BadCallersAndBadJobsGetTheRightStatusAndDisturbNothing) {
-  ClusterOptions options =
-      CoordinatorArgs({"--max-job-pixels", "70000", "--max-message-bytes", "1048576"});
-  options.client_token = "client-secret";
-  options.worker_token = "worker-secret";
-  ServiceCluster cluster(options);
+  ServiceCluster cluster(
+      WithTokens({"--max-job-pixels", "70000", "--max-message-bytes", "1048576"}));
   ASSERT_TRUE(cluster.StartCoordinator());
   cluster.AddWorker();
   const std::string scene = WriteServiceScene(cluster.dir(), 128, 32, 64);
@@ -473,11 +464,11 @@ TEST(Service, BadCallersAndBadJobsGetTheRightStatusAndDisturbNothing) {
   pdsm::v1::Job job;
   EXPECT_EQ(cluster.GetJob(good, &job, "").error_code(), grpc::StatusCode::UNAUTHENTICATED);
   EXPECT_EQ(cluster.GetJob(good, &job, "wrong").error_code(), grpc::StatusCode::UNAUTHENTICATED);
-  EXPECT_EQ(cluster.GetJob(good, &job, "worker-secret").error_code(),
+  EXPECT_EQ(cluster.GetJob(good, &job, kWorkerToken).error_code(),
             grpc::StatusCode::PERMISSION_DENIED);
   {
     grpc::ClientContext context;
-    PrepareCall(&context, "client-secret", seconds(10));
+    PrepareCall(&context, kClientToken, seconds(10));
     pdsm::v1::LeaseTaskRequest request;
     request.set_worker_id("intruder");
     pdsm::v1::LeaseTaskResponse response;
@@ -486,7 +477,7 @@ TEST(Service, BadCallersAndBadJobsGetTheRightStatusAndDisturbNothing) {
   }
   const auto submit = [&](const pdsm::v1::Scene& s) {
     grpc::ClientContext context;
-    PrepareCall(&context, "client-secret", seconds(30));
+    PrepareCall(&context, kClientToken, seconds(30));
     pdsm::v1::SubmitBakeRequest request;
     request.set_idempotency_key("bad-" + std::to_string(rand()));
     *request.mutable_scene() = s;
@@ -561,9 +552,7 @@ TEST(Service, BadCallersAndBadJobsGetTheRightStatusAndDisturbNothing) {
 // The monitoring token follows the farm (job state, lists, watches, stats) and can do nothing
 // else: no submit, cancel, fetch, query or tile read, and nothing on the worker API.
 TEST(Service, MonitoringTokenReadsJobStateAndNothingElse) {
-  ClusterOptions options;
-  options.client_token = "client-secret";
-  options.worker_token = "worker-secret";
+  ClusterOptions options = WithTokens();
   options.monitor_token = "monitor-secret";
   ServiceCluster cluster(options);
   ASSERT_TRUE(cluster.StartCoordinator());
@@ -664,10 +653,8 @@ TEST(Service, CoordinatorRefusesAMonitoringTokenThatWouldRestrictNothing) {
 }
 
 TEST(Service, TlsCarriesTheWholeBakeAndPlaintextClientsAreRefused) {
-  ClusterOptions options = CoordinatorArgs({});
+  ClusterOptions options = WithTokens();
   options.tls = true;
-  options.client_token = "client-secret";
-  options.worker_token = "worker-secret";
   ServiceCluster cluster(options);
   ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
   cluster.AddWorker();
@@ -680,7 +667,7 @@ TEST(Service, TlsCarriesTheWholeBakeAndPlaintextClientsAreRefused) {
   // A client that does not speak TLS gets no answer, let alone a job.
   auto plaintext = pdsm::v1::PdsmJobs::NewStub(*MakeChannel({cluster.address(), ""}));
   grpc::ClientContext context;
-  PrepareCall(&context, "client-secret", seconds(5));
+  PrepareCall(&context, kClientToken, seconds(5));
   pdsm::v1::GetJobRequest request;
   request.set_job_id(job_id);
   pdsm::v1::Job job;
@@ -690,10 +677,7 @@ TEST(Service, TlsCarriesTheWholeBakeAndPlaintextClientsAreRefused) {
 // grpc.health.v1.Health/Check over a generic stub (the health proto is not in our schema):
 // an empty HealthCheckRequest asks about the whole server; SERVING is field 1 = 1.
 TEST(Service, AnswersTheStandardHealthCheckWithoutAToken) {
-  ClusterOptions options = CoordinatorArgs({});
-  options.client_token = "client-secret";
-  options.worker_token = "worker-secret";
-  ServiceCluster cluster(options);
+  ServiceCluster cluster(WithTokens());
   ASSERT_TRUE(cluster.StartCoordinator());
   std::string bytes;
   const grpc::Status status = HealthCheck(cluster, "", &bytes);

@@ -32,10 +32,7 @@ std::string WriteSmallPlates(const TempDir& dir) {
 }
 
 TEST(ViewServer, JobOnTheServiceLooksLikeTheLocalBake) {
-  ClusterOptions options;
-  options.client_token = "client-secret";
-  options.worker_token = "worker-secret";
-  ServiceCluster cluster(options);
+  ServiceCluster cluster(WithTokens());
   ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
   cluster.AddWorker();
   const std::string scene = WriteSmallPlates(cluster.dir());
@@ -236,10 +233,7 @@ TEST(ViewServer, RunningJobShowsItsFinishedTilesAsTheyWillBe) {
 // from GetJob, headless with --partial while the job runs and in a window (Xvfb) that
 // follows it to the end, and shows what the local bake with the same overrides shows.
 TEST(ViewServer, ReadmeSequenceWithOverridesInAWindowAndHeadless) {
-  ClusterOptions options = CoordinatorArgs({"--samples-per-task", "4", "--lease-seconds", "600"});
-  options.client_token = "client-secret";
-  options.worker_token = "worker-secret";
-  ServiceCluster cluster(options);
+  ServiceCluster cluster(WithTokens({"--samples-per-task", "4", "--lease-seconds", "600"}));
   ASSERT_TRUE(cluster.StartCoordinator()) << cluster.Log("coordinator.log");
   // Each tile its own group (the file's, kept by the submit), so that tasks hold one tile each.
   std::string text = ReadBytes(WriteSmallPlates(cluster.dir()));
@@ -263,7 +257,7 @@ TEST(ViewServer, ReadmeSequenceWithOverridesInAWindowAndHeadless) {
   EXPECT_EQ(job.bake().tile_group_size(), 1u);                   // the file's, kept
   EXPECT_EQ(job.plan_fingerprint().size(), 64u);
 
-  TaskHolder holder(&cluster, options.worker_token);
+  TaskHolder holder(&cluster, kWorkerToken);
   ASSERT_TRUE(holder.HoldOneTaskOfEach(job_id, {0, 2, 4, 6, 8})) << cluster.Log("coordinator.log");
   cluster.AddWorker();
   job = cluster.WaitUntil(job_id, std::chrono::seconds(120),
